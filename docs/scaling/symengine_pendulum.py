@@ -12,7 +12,11 @@ processes, CPU time (user + system) of:
 - ours: `generator MODEL.ron -o OUT.rs`, the whole generation (load, derive all four
   formulations, Definition 1, the reduced form, emission), on the model the generator's
   `n_link_pendulum_on_cart(n)` writes (`cargo run --release -p generator --example write_model`);
-  its Kane assembly count and the nodes its simplifier kept "as built" read from its summary;
+  its Kane right-hand side's count (the whole call: where the articulated-body recursion is
+  chosen it has no solve) and the nodes its simplifier kept "as built" read from its summary;
+- ours, the same work as SymEngine's: `generator MODEL.ron --formulations lagrange -o OUT.rs`
+  (load, the mechanics, Lagrange's M and N, CSE, and the emission of that one module), with its
+  assembly count (M and N after CSE: the quantity SymEngine's count measures);
 - SymEngine's: a direct derivation of the same system, positions -> Jacobians J ->
   M = sum m J^T J, F = -sum m J^T (dJ/dt) q' - dV/dq, then `cse([M, F])`, counted by
   `count_ops` over the replacements and the reduced expressions (as docs/scaling/sympy_kane.py
@@ -79,17 +83,39 @@ def children_cpu():
     return usage.children_user + usage.children_system
 
 
-def ours(model_file, out_file):
-    """CPU seconds of the generator's whole generation, its Kane assembly count, and the nodes
-    its simplifier kept as built."""
+def generate(model_file, out_file, *options):
+    """CPU seconds of one generation in a fresh process and its summary."""
     before = children_cpu()
-    done = subprocess.run([str(GENERATOR), str(model_file), "-o", str(out_file)], capture_output=True, text=True)
+    done = subprocess.run([str(GENERATOR), str(model_file), *options, "-o", str(out_file)], capture_output=True, text=True)
     seconds = children_cpu() - before
     if done.returncode != 0:
         raise SystemExit(f"the generator failed on {model_file}:\n{done.stderr}")
-    kane = re.search(r"kane::rhs\s+\d+ lets, assembly (\d+) ops", done.stderr)
-    kept = re.search(r"(\d+) nodes over the term limit \(kept as built\)", done.stderr)
-    return seconds, int(kane.group(1)), int(kept.group(1)) if kept else 0
+    return seconds, done.stderr
+
+
+def rhs_ops(summary, formulation, assembly_only):
+    """A right-hand side's operation count from the summary: its assembly (before the solve),
+    or the whole call (assembly and solve, or the recursion's body where there is no solve)."""
+    found = re.search(formulation + r"::rhs\s+\d+ lets, (assembly )?(\d+) ops[^\n]*?(\+ solve (\d+) ops)?\n", summary)
+    if found is None:
+        raise SystemExit(f"no {formulation}::rhs in the summary:\n{summary}")
+    assembly, solve = int(found.group(2)), int(found.group(4) or 0)
+    return assembly if assembly_only else assembly + solve
+
+
+def ours(model_file, out_file):
+    """CPU seconds of the generator's whole generation, its Kane right-hand side's count, and
+    the nodes its simplifier kept as built."""
+    seconds, summary = generate(model_file, out_file)
+    kept = re.search(r"(\d+) nodes over the term limit \(kept as built\)", summary)
+    return seconds, rhs_ops(summary, "kane", False), int(kept.group(1)) if kept else 0
+
+
+def ours_lagrange(model_file, out_file):
+    """CPU seconds of the generator on Lagrange's form alone, and that form's assembly count
+    (M and N after CSE)."""
+    seconds, summary = generate(model_file, out_file, "--formulations", "lagrange")
+    return seconds, rhs_ops(summary, "lagrange", True)
 
 
 def theirs(n):
@@ -125,27 +151,34 @@ def main():
                 check=True,
             ).stdout
             model.write_text(text)
-            mine, other = [], []
+            mine, same_work, other = [], [], []
             for _ in range(args.repeats):
                 mine.append(ours(model, Path(folder) / "out.rs"))
+                same_work.append(ours_lagrange(model, Path(folder) / "out.rs"))
                 other.append(theirs(n))
             best_ours = min(mine, key=lambda r: r[0])
+            best_lagrange = min(same_work, key=lambda r: r[0])
             best_theirs = min(other, key=lambda r: r[0])
             record = {
                 "n": n,
                 "ours_seconds": best_ours[0],
-                "ours_kane_assembly_ops": best_ours[1],
+                "ours_kane_rhs_ops": best_ours[1],
                 "ours_kept_as_built": best_ours[2],
+                "ours_lagrange_seconds": best_lagrange[0],
+                "ours_lagrange_assembly_ops": best_lagrange[1],
                 "symengine_seconds": best_theirs[0],
                 "symengine_cse_ops": best_theirs[1],
                 "time_ratio": best_ours[0] / best_theirs[0],
-                "ops_ratio": best_ours[1] / best_theirs[1],
+                "lagrange_time_ratio": best_lagrange[0] / best_theirs[0],
+                "ops_ratio": best_lagrange[1] / best_theirs[1],
+                "kane_ops_ratio": best_ours[1] / best_theirs[1],
             }
             records.append(record)
             print(
-                f"n = {n}: ours {record['ours_seconds']:.3f} s, SymEngine {record['symengine_seconds']:.3f} s "
-                f"(ratio {record['time_ratio']:.2f}); Kane assembly {record['ours_kane_assembly_ops']} ops, "
-                f"SymEngine's cse {record['symengine_cse_ops']} (ratio {record['ops_ratio']:.2f}); "
+                f"n = {n}: ours {record['ours_seconds']:.3f} s (Lagrange alone {record['ours_lagrange_seconds']:.3f} s), "
+                f"SymEngine {record['symengine_seconds']:.3f} s (ratios {record['time_ratio']:.2f}, {record['lagrange_time_ratio']:.2f}); "
+                f"Lagrange assembly {record['ours_lagrange_assembly_ops']} ops, Kane rhs {record['ours_kane_rhs_ops']}, "
+                f"SymEngine's cse {record['symengine_cse_ops']} (ratios {record['ops_ratio']:.2f}, {record['kane_ops_ratio']:.2f}); "
                 f"kept as built {record['ours_kept_as_built']}",
                 file=sys.stderr,
                 flush=True,

@@ -528,124 +528,122 @@ pub fn constraint_residuals(
     let rF = params.rF;
     let x0 = f64::cos(phi);
     let x1 = x0 * x0;
-    let x2 = f64::cos(psi);
-    let x3 = f64::sqrt(x1);
-    let x4 = x3 - x0;
-    let x5 = psi_dot * x4;
-    let x6 = f64::sin(phi);
-    let x7 = thR_dot + theta_dot;
-    let x8 = f64::sin(psi);
-    let x9 = x0 * x8;
-    let x10 = x6 * x8;
-    let x11 = rF * thF_dot;
+    let x2 = f64::sqrt(x1);
+    let x3 = x2 - x0;
+    let x4 = f64::sin(psi);
+    let x5 = f64::cos(psi);
+    let x6 = psi_dot * x3;
+    let x7 = f64::sin(phi);
+    let x8 = thR_dot + theta_dot;
+    let x9 = x7 * x4;
+    let x10 = f64::sin(thF);
+    let x11 = f64::cos(theta);
     let x12 = f64::cos(lam);
-    let x13 = f64::cos(theta);
-    let x14 = f64::sin(theta);
-    let x15 = x2 * x6;
-    let x16 = x13 * x8 + x14 * x15;
-    let x17 = x12 * x16;
-    let x18 = f64::sin(lam);
-    let x19 = x14 * x8;
-    let x20 = x15 * x13;
-    let x21 = x19 - x20;
-    let x22 = x17 + x18 * x21;
-    let x23 = f64::sin(delta);
-    let x24 = f64::cos(delta);
-    let x25 = x24 * x0;
-    let x26 = x25 * x2 - x22 * x23;
-    let x27 = x18 * c_ + rF * x12;
-    let x28 = x20 - x19;
-    let x29 = x18 * x16;
-    let x30 = x28 * x12 + x29;
-    let x31 = x18 * rF - c_ * x12;
-    let x32 = x18 * x28;
-    let x33 = x23 * x0;
-    let x34 = x2 * x33;
-    let x35 = c_ + w_;
-    let x36 = x24 * x6;
-    let x37 = x18 * x13;
-    let x38 = x14 * x12;
+    let x13 = x11 * x12;
+    let x14 = f64::sin(lam);
+    let x15 = f64::sin(theta);
+    let x16 = x14 * x15;
+    let x17 = x13 + x16;
+    let x18 = x17 * x0;
+    let x19 = f64::cos(thF);
+    let x20 = f64::cos(delta);
+    let x21 = x20 * x0;
+    let x22 = x14 * x11;
+    let x23 = x15 * x12;
+    let x24 = x22 - x23;
+    let x25 = f64::sin(delta);
+    let x26 = x25 * x7;
+    let x27 = x21 * x24 + x26;
+    let x28 = x18 * x19 + x10 * x27;
+    let x29 = x27 * x19 - x10 * x18;
+    let x30 = x20 * x7;
+    let x31 = x25 * x0;
+    let x32 = x30 - x24 * x31;
+    let x33 = (x10 * x28 + x29 * x19) * x25 + x20 * x32;
+    let x34 = x5 * x7;
+    let x35 = x11 * x4 + x15 * x34;
+    let x36 = x12 * x35;
+    let x37 = x15 * x4;
+    let x38 = x34 * x11;
     let x39 = x37 - x38;
-    let x40 = x36 - x39 * x33;
-    let x41 = x40 * x40;
-    let x42 = 1.0 - x41;
-    let x43 = x13 * x12;
-    let x44 = x18 * x14;
-    let x45 = x43 + x44;
-    let x46 = x45 * x0;
-    let x47 = f64::cos(thF);
-    let x48 = f64::sin(thF);
-    let x49 = x23 * x6;
-    let x50 = x25 * x39 + x49;
-    let x51 = x46 * x47 + x48 * x50;
-    let x52 = x50 * x47 - x48 * x46;
-    let x53 = x51 * x51 + x41 + x52 * x52;
-    let x54 = x40 * x26;
-    let x55 = x21 * x12 - x29;
-    let x56 = x34 + x22 * x24;
-    let x57 = x55 * x47 + x48 * x56;
-    let x58 = x56 * x47 - x48 * x55;
-    let x59 = x13 * x10;
-    let x60 = x14 * x2;
-    let x61 = x59 + x60;
-    let x62 = x31 * x24;
-    let x63 = x2 * x13 - x14 * x10;
-    let x64 = x18 * x63;
-    let x65 = x12 * x61;
-    let x66 = x18 * x61 + x12 * x63;
-    let x67 = (x48 * x51 + x52 * x47) * x23 + x24 * x40;
-    let x68 = x45 * x27;
-    let x69 = x14 * x35;
-    let x70 = x38 - x37;
-    let x71 = x45 * x24;
-    let x72 = x47 * x71 - x48 * x70;
-    let x73 = x45 * x23;
-    let x74 = x48 * x71 + x70 * x47;
-    let x75 = x72 * x52 - x73 * x40 + x74 * x51;
-    let x76 = x23 * x66 + x25 * x8;
-    let x77 = (x48 * x48 + x47 * x47) * x42;
-    let x78 = x44 * x0 + x43 * x0;
-    let x79 = x24 * x66 - x33 * x8;
-    let x80 = x65 - x64;
-    let x81 = x48 * x79 + x80 * x47;
-    let x82 = x79 * x47 - x80 * x48;
-    let x83 = -(x76 * x40);
-    let x84 = (x13 - 1.0) * rR - x68 + x69;
-    let x85 = rF * x40;
+    let x40 = x36 + x14 * x39;
+    let x41 = x21 * x5 - x40 * x25;
+    let x42 = x32 * x41;
+    let x43 = x32 * x32;
+    let x44 = 1.0 - x43;
+    let x45 = x44 * x0;
+    let x46 = c_ + w_;
+    let x47 = x11 * x9;
+    let x48 = x15 * x5;
+    let x49 = x47 + x48;
+    let x50 = x14 * rF - c_ * x12;
+    let x51 = x50 * x20;
+    let x52 = x5 * x11 - x15 * x9;
+    let x53 = x14 * x52;
+    let x54 = x12 * x49;
+    let x55 = x14 * c_ + rF * x12;
+    let x56 = x14 * x49 + x12 * x52;
+    let x57 = rF * thF_dot;
+    let x58 = x38 - x37;
+    let x59 = x14 * x35;
+    let x60 = x58 * x12 + x59;
+    let x61 = x14 * x58;
+    let x62 = x5 * x31;
+    let x63 = x28 * x28 + x43 + x29 * x29;
+    let x64 = x39 * x12 - x59;
+    let x65 = x62 + x40 * x20;
+    let x66 = x64 * x19 + x10 * x65;
+    let x67 = x65 * x19 - x10 * x64;
+    let x68 = x17 * x55;
+    let x69 = x15 * x46;
+    let x70 = x23 - x22;
+    let x71 = x17 * x20;
+    let x72 = x19 * x71 - x10 * x70;
+    let x73 = x17 * x25;
+    let x74 = x10 * x71 + x70 * x19;
+    let x75 = x72 * x29 - x73 * x32 + x74 * x28;
+    let x76 = x25 * x56 + x21 * x4;
+    let x77 = (x10 * x10 + x19 * x19) * x44;
+    let x78 = x16 * x0 + x13 * x0;
+    let x79 = x20 * x56 - x31 * x4;
+    let x80 = x54 - x53;
+    let x81 = x10 * x79 + x80 * x19;
+    let x82 = x79 * x19 - x80 * x10;
+    let x83 = -(x76 * x32);
+    let x84 = (x11 - 1.0) * rR - x68 + x69;
+    let x85 = rF * x32;
     [
-        f64::sqrt(x1) * x_dot + rR * (x2 * (x5 * x6 - x7 * x0) + phi_dot * x4 * x9),
-        rR * (x5 * x10 + ((x0 - x3) * x2 * phi_dot - x7 * x8) * x0)
+        rR * (phi_dot * x3 * x0 * x4 + x5 * (x6 * x7 - x8 * x0)) + f64::sqrt(x1) * x_dot,
+        rR * (x6 * x9 + ((x0 - x2) * x5 * phi_dot - x8 * x4) * x0)
             + f64::sqrt(x1) * y_dot,
-        psi_dot
-            * ((x27 * x30 + x31 * (x24 * (x32 - x17) - x34) + rR * (x21 + x15)
-                - x35 * x16) * f64::sqrt(x42)
-                - rF * (x53 * x54 + (x54 + x51 * x57 + x58 * x52) * x42)) - x11 * x26
-            + theta_dot
-                * (f64::sqrt(x42)
-                    * (x62 * (x64 - x65) - x35 * x61 - rR * x63 + x27 * x66)
-                    - rF * (x42 * x2 * x0 + x67 * x54))
-            + (((x68 + rR * (1.0 - x13) - x69) * x0 + x31 * x50) * f64::sqrt(x42) * x8
-                - rF * (x75 * x54 + x42 * (x74 * x57 + x72 * x58 - x73 * x26))) * phi_dot
-            + f64::sqrt(x42) * x_dot
-            + delta_dot * (-f64::sqrt(x42) * x31 * x76 - rF * (x55 * x77 + x78 * x54)),
-        ((x42 * (x76 * x73 + x81 * x74 + x72 * x82) + x83 * x75) * rF
-            + f64::sqrt(x42) * x2 * (x84 * x0 + x31 * (x25 * x70 - x49))) * phi_dot
-            + psi_dot
-                * ((rR * (x10 - x59 - x60) + x80 * x27 + x35 * x63 + x31 * x79)
-                    * f64::sqrt(x42)
-                    + rF * (x42 * (x82 * x52 + x83 + x81 * x51) + x83 * x53))
-            + f64::sqrt(x42) * y_dot
-            + delta_dot * (rF * (x78 * x83 + x80 * x77) + f64::sqrt(x42) * x31 * x26)
-            - x11 * x76
-            + theta_dot
-                * (f64::sqrt(x42)
-                    * (x35 * x28 + x27 * (x17 - x32) - rR * x16 + x62 * x30)
-                    - rF * (x42 * x9 - x67 * x83)),
         theta_dot
-            * (x39 * x27 - x45 * (x62 - x23 * x85 / f64::sqrt(x42)) + x14 * rR
-                - x35 * x13) * x0 + delta_dot * (x31 - rF * x50 / f64::sqrt(x42)) * x40
-            + (x84 * x6 + x31 * (x33 + x36 * x70)
-                + (x25 - x70 * x49) * x85 / f64::sqrt(x42)) * phi_dot,
+            * (f64::sqrt(x44) * (x51 * (x53 - x54) - x46 * x49 - rR * x52 + x55 * x56)
+                - rF * (x33 * x42 + x5 * x45)) - x57 * x41
+            + psi_dot
+                * ((x55 * x60 + x50 * (x20 * (x61 - x36) - x62) + rR * (x39 + x34)
+                    - x46 * x35) * f64::sqrt(x44)
+                    - rF * (x63 * x42 + (x42 + x28 * x66 + x67 * x29) * x44))
+            + (((x68 + rR * (1.0 - x11) - x69) * x0 + x50 * x27) * f64::sqrt(x44) * x4
+                - rF * (x75 * x42 + x44 * (x74 * x66 + x72 * x67 - x73 * x41))) * phi_dot
+            + f64::sqrt(x44) * x_dot
+            + delta_dot * (-f64::sqrt(x44) * x50 * x76 - rF * (x64 * x77 + x78 * x42)),
+        ((x44 * (x76 * x73 + x81 * x74 + x72 * x82) + x83 * x75) * rF
+            + f64::sqrt(x44) * x5 * (x84 * x0 + x50 * (x21 * x70 - x26))) * phi_dot
+            + psi_dot
+                * ((rR * (x9 - x47 - x48) + x80 * x55 + x46 * x52 + x50 * x79)
+                    * f64::sqrt(x44)
+                    + rF * (x44 * (x82 * x29 + x83 + x81 * x28) + x83 * x63))
+            + f64::sqrt(x44) * y_dot
+            + delta_dot * (rF * (x78 * x83 + x80 * x77) + f64::sqrt(x44) * x50 * x41)
+            + theta_dot
+                * (f64::sqrt(x44)
+                    * (x46 * x58 + x55 * (x36 - x61) - rR * x35 + x51 * x60)
+                    - (x45 * x4 - x33 * x83) * rF) - x57 * x76,
+        theta_dot
+            * (x24 * x55 - x17 * (x51 - x25 * x85 / f64::sqrt(x44)) + x15 * rR
+                - x46 * x11) * x0 + delta_dot * (x50 - rF * x27 / f64::sqrt(x44)) * x32
+            + (x84 * x7 + x50 * (x31 + x30 * x70)
+                + (x21 - x70 * x26) * x85 / f64::sqrt(x44)) * phi_dot,
     ]
 }
 ///Position-level residuals of the holonomic constraints.
@@ -893,390 +891,389 @@ pub mod lagrange {
         let x111 = x81 - x110;
         let x112 = mF * (x16 * (x105 * x27 + x106 * x24) - x25 * x104)
             + mH * (x16 * (x107 * x19 + x66 * x22) - x25 * x108) + x111 * x18;
-        let x113 = x78 - x9 * x47;
-        let x114 = x85 * x15;
-        let x115 = x113 - x114;
-        let x116 = x15 * x23;
-        let x117 = x10 * x47;
-        let x118 = -x69 - x117;
-        let x119 = x118 + x84;
-        let x120 = x116 * x119 - x0 * x115;
-        let x121 = x0 * x15;
-        let x122 = x121 * x119 + x115 * x23;
-        let x123 = x69 + x117;
-        let x124 = x123 - x82 - x83;
+        let x113 = x10 * x47;
+        let x114 = x69 + x113;
+        let x115 = x114 - x82 - x83;
+        let x116 = x16 * x115;
+        let x117 = -x69 - x113;
+        let x118 = x15 * (x117 + x84);
+        let x119 = x78 - x9 * x47;
+        let x120 = x85 * x15;
+        let x121 = x119 - x120;
+        let x122 = x0 * x118 + x121 * x23;
+        let x123 = x118 * x23 - x0 * x121;
+        let x124 = x114 - x48 + x49;
         let x125 = x16 * x124;
-        let x126 = x123 - x48 + x49;
-        let x127 = x16 * x126;
-        let x128 = x65 * x15;
-        let x129 = x113 - x128;
-        let x130 = (x118 + x50) * x15;
-        let x131 = (-x13 * xB - x8 * x92) * mB
-            + mF * (x27 * x120 + x122 * x24 - x25 * x125)
-            + (x22 * x129 - x127 * x25 + x130 * x19) * mH;
-        let x132 = x65 * mH;
-        let x133 = x85 * mF;
-        let x134 = x132 + x133;
-        let x135 = -(x25 * x134);
-        let x136 = x17 * x17;
-        let x137 = f64::sqrt(x136);
-        let x138 = x75 * x75;
-        let x139 = 1.0 - x138;
-        let x140 = f64::sqrt(x139);
-        let x141 = x42 * x42;
-        let x142 = x81 * x4 + mB * (x94 * x37 + (x31 * x96 + x35 * x97) * x2)
+        let x126 = x65 * x15;
+        let x127 = x119 - x126;
+        let x128 = (x117 + x50) * x15;
+        let x129 = (-x13 * xB - x8 * x92) * mB
+            + mF * (x24 * x122 - x25 * x116 + x123 * x27)
+            + (x22 * x127 - x125 * x25 + x128 * x19) * mH;
+        let x130 = x65 * mH;
+        let x131 = x85 * mF;
+        let x132 = x130 + x131;
+        let x133 = -(x25 * x132);
+        let x134 = x17 * x17;
+        let x135 = f64::sqrt(x134);
+        let x136 = x75 * x75;
+        let x137 = 1.0 - x136;
+        let x138 = f64::sqrt(x137);
+        let x139 = x42 * x42;
+        let x140 = x81 * x4 + mB * (x94 * x37 + (x31 * x96 + x35 * x97) * x2)
             + mH * (x80 * x41 + x77 * x39 + x72 * x42)
             + mF * (x90 * x45 + x87 * x42 + x44 * x91);
-        let x143 = (x104 * x42 + x16 * (x105 * x45 + x44 * x106)) * mF
+        let x141 = (x104 * x42 + x16 * (x105 * x45 + x44 * x106)) * mF
             + (x16 * (x66 * x41 + x39 * x107) + x108 * x42) * mH + (x110 - x81) * x37;
-        let x144 = mF * (x45 * x120 + x44 * x122 + x125 * x42)
-            + (x127 * x42 + x39 * x130 + x41 * x129) * mH + mB * (-x35 * xB - x31 * x92);
-        let x145 = x134 * x42;
-        let x146 = x1 * IBxz;
-        let x147 = f64::cos(thR);
-        let x148 = f64::sin(thR);
-        let x149 = x1 * x147 + x148 * x6;
-        let x150 = x147 * x6 - x1 * x148;
-        let x151 = IRxx * (x149 * x149 + x150 * x150);
-        let x152 = x6 * IBxz;
-        let x153 = x10 * x9 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
-        let x154 = x63 * x17;
-        let x155 = IHxz * x9;
-        let x156 = x9 * x9;
-        let x157 = x10 * (2.0 * x155 + x10 * IHxx) + x156 * IHzz;
-        let x158 = x153 * x56 + x154 * x157;
-        let x159 = IHyy + IFyy;
-        let x160 = x2 * x2;
-        let x161 = IRyy + IByy;
-        let x162 = x154 * x23 + x0 * x56;
-        let x163 = x56 * x23 - x0 * x154;
-        let x164 = x162 * x162 + x163 * x163;
-        let x165 = x81 * rR;
-        let x166 = 2.0 * phi;
-        let x167 = x10 * (x10 * IHzz - 2.0 * x155) + x156 * IHxx;
-        let x168 = x56 * x167 + x154 * x153;
-        let x169 = x63 * x15;
-        let x170 = x103 * x153;
-        let x171 = x167 * x169 + x170;
-        let x172 = x23 * x169 - x0 * x103;
-        let x173 = x103 * x23;
-        let x174 = x173 + x0 * x169;
-        let x175 = x172 * x163 + x162 * x174;
-        let x176 = x1 * IBzz - x152;
-        let x177 = x103 * x157 + x153 * x169;
-        let x178 = x6 * IBxx - x146;
-        let x179 = x63 * x16;
-        let x180 = x179 * x75;
-        let x181 = mF * (x87 * x104 + x16 * (x91 * x106 + x105 * x90)) + x171 * x56
-            + x175 * IFxx + (x110 * x93 + x176 * x6 + x63 * x177 - x1 * x178) * x17
-            + (x16 * (x66 * x80 + x77 * x107) + x72 * x108) * mH - x180 * x159;
-        let x182 = x0 * x162 + x163 * x23;
-        let x183 = x15 * x75;
-        let x184 = (x80 * x129 + x77 * x130 + x127 * x72) * mH
-            + ((-xB * x97 - x92 * x96) * mB + x161) * x2
-            + (x90 * x120 + x125 * x87 + x122 * x91) * mF + x16 * (x182 * IFxx + x168)
-            + x183 * x159;
-        let x185 = x2 * IRyy;
-        let x186 = x72 * x132 + x158 + (x162 * x23 - x0 * x163) * IFxx + x87 * x133;
-        let x187 = x75 * IFyy;
-        let x188 = x137 - x17;
-        let x189 = rR * x188;
-        let x190 = x29 * x189;
-        let x191 = x4 * x189;
-        let x192 = x34 - x33;
-        let x193 = x192 * x9 + x40;
-        let x194 = x10 * x192;
-        let x195 = x194 - x32;
-        let x196 = x193 * x84 - x31 * x47 + rR * (x35 + x29) + x85 * (x195 * x15 - x38);
-        let x197 = x75 * x42;
-        let x198 = x162 * x44 + x45 * x163 + x197;
-        let x199 = x138 + x164;
-        let x200 = x196 * f64::sqrt(x139) - rF * (x139 * x198 + x199 * x197);
-        let x201 = x22 * x84 + rR * (x4 - x11 - x12) + x8 * x47 + x85 * x19;
-        let x202 = -(x25 * x75);
-        let x203 = x27 * x163 + x202 + x162 * x24;
-        let x204 = f64::sqrt(x139) * x201 + rF * (x203 * x139 + x199 * x202);
-        let x205 = x16 * x16;
-        let x206 = (mH * (x107 * x130 + x66 * x129 + x126 * x108)
-            + IFxx * (x172 * x23 + x0 * x174)
-            + (x104 * x124 + x122 * x106 + x105 * x120) * mF + x170
-            + (x167 - IHyy - IFyy) * x169) * x16;
-        let x207 = x177 + x104 * x133 + x132 * x108 + (x174 * x23 - x0 * x172) * IFxx;
-        let x208 = -(x179 * IFyy);
-        let x209 = x18 * x189;
-        let x210 = x17 - x137;
-        let x211 = rR * x37;
-        let x212 = x210 * x211;
-        let x213 = 1.0 - x6;
-        let x214 = (rR * x213 + x99 - x100) * x17 + x85 * x56;
-        let x215 = x214 * x3;
-        let x216 = x44 * x174 - x179 * x42 + x172 * x45;
-        let x217 = x175 - x180;
-        let x218 = x215 * f64::sqrt(x139) - rF * (x139 * x216 + x217 * x197);
-        let x219 = x172 * x27 + x174 * x24 + x25 * x179;
-        let x220 = (x85 * (x51 * x103 - x55) + x102 * x17) * x5;
-        let x221 = rF * (x202 * x217 + x219 * x139) + x220 * f64::sqrt(x139);
-        let x222 = x51 - x103 * x55;
-        let x223 = rF * x75;
-        let x224 = x74 + x73 * x103;
-        let x225 = x102 * x2 + x85 * x224;
-        let x226 = x222 * x223 / f64::sqrt(x139) + x225;
-        let x227 = x0 * x0 + x23 * x23;
-        let x228 = x227 * IFxx;
-        let x229 = (x126 * x132 + x124 * x133 + x153) * x16;
-        let x230 = x15 * IFyy;
-        let x231 = -x211;
-        let x232 = -(rR * x18);
-        let x233 = x182 * x16 + x183;
-        let x234 = x20 - x21;
-        let x235 = x234 * x114 - x13 * x47 - rR * x8 + x14 * x84;
-        let x236 = f64::sqrt(x139) * x235 - rF * (x233 * x197 + x139 * x37);
-        let x237 = x192 * x47 - rR * x31 + x114 * x193 + (x32 - x194) * x84;
-        let x238 = x237 * f64::sqrt(x139) - rF * (x139 * x18 - x202 * x233);
-        let x239 = x114 - x16 * x223 / f64::sqrt(x139);
-        let x240 = x58 - x57;
-        let x241 = x240 + x54 * x84;
-        let x242 = x241 - x63 * x239;
-        let x243 = x242 * x17;
-        let x244 = x62 * x17 + x61 * x17;
-        let x245 = x227 * x139;
-        let x246 = -x25 * x85 * f64::sqrt(x139) - rF * (x244 * x197 + x41 * x245);
-        let x247 = x85 * f64::sqrt(x139) * x42 + rF * (x244 * x202 + x22 * x245);
-        let x248 = x85 - rF * x56 / f64::sqrt(x139);
-        let x249 = x248 * x75;
-        let x250 = -(rF * x42);
-        let x251 = -(x25 * rF);
-        let x252 = psi_dot * x2;
-        let x253 = x252 + theta_dot;
-        let x254 = x252 * x58;
-        let x255 = x254 - xB * x253;
-        let x256 = x1 * psi_dot;
-        let x257 = x6 * phi_dot;
-        let x258 = x257 - x256 * x17;
-        let x259 = x6 * psi_dot;
-        let x260 = x1 * phi_dot;
-        let x261 = x259 * x17 + x260;
-        let x262 = x92 * x258 + x261 * xB - rR * phi_dot;
-        let x263 = theta_dot * x2;
-        let x264 = phi_dot * x17;
-        let x265 = x253 * x255 - x262 * x261 + psi_dot * (x264 * x96 - x263 * x58);
-        let x266 = x263 * x95;
-        let x267 = x252 * x95 - x253 * x92;
-        let x268 = x262 * x258 + psi_dot * (x266 + x264 * x97) - x253 * x267;
-        let x269 = theta_dot * x17;
-        let x270 = (theta_dot - x252) * x257 - x256 * x269;
-        let x271 = x260 * (x252 - theta_dot) - x259 * x269;
-        let x272 = x270 * xB - x255 * x258 + x271 * x92 + x261 * x267;
-        let x273 = rR * x271 + x270 * x47;
-        let x274 = x261 * x47 + rR * (x258 - phi_dot);
-        let x275 = x254 - x253 * x47;
-        let x276 = x252 * x6 - x252 - theta_dot;
-        let x277 = x10 * x275 + x276 * x69;
-        let x278 = x15 * x274 - x277 * x16;
-        let x279 = x68 * x264 - x1 * x263;
-        let x280 = x266 + x264 * x67;
-        let x281 = (x69 * x279 + x10 * x280) * psi_dot;
-        let x282 = (x16 * x273 + delta_dot * x278) + x281 * x15;
-        let x283 = x271 * x9 + x10 * x270;
-        let x284 = x264 * psi_dot;
-        let x285 = x10 * x261 + x9 * x258;
-        let x286 = x16 * x253 + x285 * x15;
-        let x287 = x284 * x15 - x16 * x283 - delta_dot * x286;
-        let x288 = x282 + x287 * x84;
-        let x289 = x15 * x253 - x16 * x285;
-        let x290 = x9 * x275 - x276 * x78;
-        let x291 = x290 - x85 * x289;
-        let x292 = x16 * x274 + x277 * x15;
-        let x293 = x292 + x289 * x84;
-        let x294 = x291 * x23 + x0 * x293;
-        let x295 = (x9 * x280 - x78 * x279) * psi_dot;
-        let x296 = x295 - x85 * x287;
-        let x297 = delta_dot - x10 * x258 + x261 * x9;
-        let x298 = x85 * x297 - x286 * x84 + x278;
-        let x299 = x297 * x23 + x0 * x286;
-        let x300 = x23 * x288 + x294 * x289 - x0 * x296 - x298 * x299;
-        let x301 = x286 * x23 - x0 * x297;
-        let x302 = x293 * x23 - x291 * x0;
-        let x303 = x298 * x301 + x0 * x288 + x296 * x23 - x302 * x289;
-        let x304 = (delta_dot * x289 + x15 * x283) + x284 * x16;
-        let x305 = x304 * x84;
-        let x306 = x281 * x16;
-        let x307 = delta_dot * x292;
-        let x308 = x15 * x273;
-        let x309 = (x308 - x307) - x306;
-        let x310 = x301 * x294;
-        let x311 = x10 * x271;
-        let x312 = x270 * x9;
-        let x313 = x312 - x311;
-        let x314 = x85 * x313;
-        let x315 = x299 * x302;
-        let x316 = x309 - x305 - x310 + x314 + x315;
-        let x317 = x65 * x297 - x286 * x50 + x278;
-        let x318 = x292 + x289 * x50;
-        let x319 = x295 + x286 * x317 - x318 * x289 - x65 * x287;
-        let x320 = x318 * x297;
-        let x321 = x304 * x50;
-        let x322 = x290 - x65 * x289;
-        let x323 = x286 * x322;
-        let x324 = x65 * x313;
-        let x325 = x320 + x309 - x321 - x323 + x324;
-        let x326 = x282 - x317 * x297 + x50 * x287 + x289 * x322;
-        let x327 = psi_dot * psi_dot;
-        let x328 = phi_dot * phi_dot + x327;
-        let x329 = psi_dot * phi_dot;
-        let x330 = psi_dot * x18;
-        let x331 = x297 * x157 + x286 * x153;
-        let x332 = (x304 * x167 + (x331 - IHyy * x297) * x289) + x153 * x313;
-        let x333 = IBxx * x258;
-        let x334 = x261 * IBxz;
-        let x335 = x261 * (x333 - x334);
-        let x336 = IBzz * x261 - IBxz * x258;
-        let x337 = x336 * x258;
-        let x338 = x286 * x167;
-        let x339 = x153 * x297;
-        let x340 = x338 + x339;
-        let x341 = x297 * x340;
-        let x342 = IFyy * x287;
-        let x343 = x286 * x331;
-        let x344 = IHyy * x287;
-        let x345 = x343 - x341 - x342 - x344;
-        let x346 = thF_dot + x289;
-        let x347 = thF_dot * x286;
-        let x348 = x304 - thF_dot * x297;
-        let x349 = x301 * (IFyy - IFxx) * x346
-            + IFxx * ((x347 + x313) * x23 + x0 * x348);
-        let x350 = x165 * f64::sin(x166);
-        let x351 = (x348 * x23 + x0 * (x311 - x347 - x312)) * IFxx
-            + x299 * x346 * (IFxx - IFyy);
-        let x352 = x271 * IBxx - x270 * IBxz + (x336 - x261 * IByy) * x253;
-        let x353 = x147 * x261 + x148 * x258;
-        let x354 = thR_dot + x253;
-        let x355 = (x147 * x271 - x270 * x148 - thR_dot * x353) * IRxx
-            + x353 * x354 * (IRxx - IRyy);
-        let x356 = x147 * x258 - x261 * x148;
-        let x357 = (x270 * x147 + x148 * x271 + thR_dot * x356) * IRxx
-            + x356 * x354 * (IRyy - IRxx);
-        let x358 = x270 * IBzz - x271 * IBxz + (IByy * x258 - x333 + x334) * x253;
-        let x359 = x2 * phi_dot;
-        let x360 = x313 * x157;
-        let x361 = x286 * IHyy;
-        let x362 = x304 * x153;
-        let x363 = x360 + x289 * (x361 - x338 - x339) + x362;
-        let x364 = (x307 + x306) + (-g * x75 - x308);
-        let x365 = psi_dot * x4;
-        let x366 = (x188 - x160 / f64::sqrt(x136)) * x17 + x160;
-        let x367 = x5 * phi_dot;
-        let x368 = thR_dot + theta_dot;
-        let x369 = x359 * x3;
-        let x370 = x17 / f64::sqrt(x136);
-        let x371 = x5 * psi_dot;
-        let x372 = x359 * x17;
-        let x373 = psi_dot * x188;
-        let x374 = x359 * x5;
-        let x375 = x263 + psi_dot;
-        let x376 = x375 * x7;
-        let x377 = phi_dot * x37;
-        let x378 = x253 * x3;
-        let x379 = x376 + x1 * (x377 - x378);
-        let x380 = x10 * x379;
-        let x381 = x30 * x253;
-        let x382 = x264 * x6;
-        let x383 = x375 * x1;
-        let x384 = x381 + (x383 - x382) * x5;
-        let x385 = x384 * x9;
-        let x386 = x385 - x380;
-        let x387 = x63 * x269;
-        let x388 = x359 * x103 - x387;
-        let x389 = delta_dot * x2 + x388;
-        let x390 = delta_dot * x54;
-        let x391 = phi_dot - x390;
-        let x392 = x51 * x391 - x16 * x389;
-        let x393 = x227 * x392;
-        let x394 = x10 * x2;
-        let x395 = x9 * x17;
-        let x396 = x10 * x17;
-        let x397 = x9 * x2;
-        let x398 = 0.5
-            * ((theta_dot + phi_dot) * (x1 * (x394 + x395) + (x397 - x396) * x6))
-            + 0.5 * ((theta_dot - phi_dot) * (x1 * (x395 - x394) - (x396 + x397) * x6));
-        let x399 = x379 * x9;
-        let x400 = delta_dot * x37;
-        let x401 = x10 * x384 + (x399 + x400);
-        let x402 = x374 + x330;
-        let x403 = x402 + delta_dot * x36;
-        let x404 = -x16 * x401 - x403 * x15;
-        let x405 = x392 * x42;
-        let x406 = x75 * x392;
-        let x407 = x5 * x253;
-        let x408 = phi_dot * x18;
-        let x409 = -x407 - x408;
-        let x410 = x1 * x409 - x375 * x30;
-        let x411 = x9 * x410;
-        let x412 = delta_dot * x18;
-        let x413 = x375 * x33;
-        let x414 = (x407 + x408) * x6;
-        let x415 = x414 - x413;
-        let x416 = x10 * x415;
-        let x417 = x369 - psi_dot * x37;
-        let x418 = x417 - delta_dot * x14;
-        let x419 = x16 * (x412 - x411 - x416) + x15 * x418;
-        let x420 = x10 * x410;
-        let x421 = x6 * x409 + x413;
-        let x422 = delta_dot * x16;
-        let x423 = psi_dot - phi_dot;
-        let x424 = psi_dot + phi_dot;
-        let x425 = x0 * x16;
-        let x426 = x16 * x23;
-        let x427 = (0.5 * (delta_dot * (x121 + x426))
-            - 0.5 * ((x426 - x121) * delta_dot)) * x23
-            - x0
-                * (0.5 * (delta_dot * (x425 + x116))
-                    + 0.5 * (delta_dot * (x116 - x425)));
-        let x428 = x63 * x359;
-        let x429 = thF_dot * x56 + (x54 * x269 - x428);
-        let x430 = x389 * x15;
-        let x431 = x430 - thF_dot * x154 + x391 * x74;
-        let x432 = x431 * x23 - x0 * x429;
-        let x433 = delta_dot * x75;
-        let x434 = x0 * x431 + x429 * x23;
-        let x435 = x15 * (x182 * delta_dot + x392)
+        let x142 = (x125 * x42 + x39 * x128 + x41 * x127) * mH
+            + mF * (x123 * x45 + x44 * x122 + x116 * x42) + mB * (-x35 * xB - x31 * x92);
+        let x143 = x132 * x42;
+        let x144 = x1 * IBxz;
+        let x145 = f64::cos(thR);
+        let x146 = f64::sin(thR);
+        let x147 = x1 * x145 + x146 * x6;
+        let x148 = x145 * x6 - x1 * x146;
+        let x149 = IRxx * (x147 * x147 + x148 * x148);
+        let x150 = x6 * IBxz;
+        let x151 = x10 * x9 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
+        let x152 = x63 * x17;
+        let x153 = IHxz * x9;
+        let x154 = x9 * x9;
+        let x155 = x10 * (2.0 * x153 + x10 * IHxx) + x154 * IHzz;
+        let x156 = x151 * x56 + x152 * x155;
+        let x157 = IHyy + IFyy;
+        let x158 = x2 * x2;
+        let x159 = IRyy + IByy;
+        let x160 = x152 * x23 + x0 * x56;
+        let x161 = x56 * x23 - x0 * x152;
+        let x162 = x160 * x160 + x161 * x161;
+        let x163 = x81 * rR;
+        let x164 = 2.0 * phi;
+        let x165 = x10 * (x10 * IHzz - 2.0 * x153) + x154 * IHxx;
+        let x166 = x56 * x165 + x152 * x151;
+        let x167 = x63 * x15;
+        let x168 = x103 * x151;
+        let x169 = x165 * x167 + x168;
+        let x170 = x23 * x167 - x0 * x103;
+        let x171 = x103 * x23;
+        let x172 = x171 + x0 * x167;
+        let x173 = x170 * x161 + x160 * x172;
+        let x174 = x1 * IBzz - x150;
+        let x175 = x103 * x155 + x151 * x167;
+        let x176 = x6 * IBxx - x144;
+        let x177 = x63 * x16;
+        let x178 = x177 * x75;
+        let x179 = mF * (x87 * x104 + x16 * (x91 * x106 + x105 * x90)) + x169 * x56
+            + x173 * IFxx + (x110 * x93 + x174 * x6 + x63 * x175 - x1 * x176) * x17
+            + (x16 * (x66 * x80 + x77 * x107) + x72 * x108) * mH - x178 * x157;
+        let x180 = x15 * x157;
+        let x181 = x0 * x160 + x161 * x23;
+        let x182 = (x80 * x127 + x77 * x128 + x125 * x72) * mH
+            + ((-xB * x97 - x92 * x96) * mB + x159) * x2 + x180 * x75
+            + x16 * (x181 * IFxx + x166) + mF * (x91 * x122 + x123 * x90 + x116 * x87);
+        let x183 = x2 * IRyy;
+        let x184 = x72 * x130 + x156 + (x160 * x23 - x0 * x161) * IFxx + x87 * x131;
+        let x185 = x75 * IFyy;
+        let x186 = x135 - x17;
+        let x187 = rR * x186;
+        let x188 = x29 * x187;
+        let x189 = x4 * x187;
+        let x190 = x34 - x33;
+        let x191 = x190 * x9 + x40;
+        let x192 = x10 * x190;
+        let x193 = x192 - x32;
+        let x194 = x191 * x84 - x31 * x47 + rR * (x35 + x29) + x85 * (x193 * x15 - x38);
+        let x195 = x75 * x42;
+        let x196 = x160 * x44 + x45 * x161 + x195;
+        let x197 = x136 + x162;
+        let x198 = x194 * f64::sqrt(x137) - rF * (x137 * x196 + x197 * x195);
+        let x199 = x22 * x84 + rR * (x4 - x11 - x12) + x8 * x47 + x85 * x19;
+        let x200 = -(x25 * x75);
+        let x201 = x27 * x161 + x200 + x160 * x24;
+        let x202 = f64::sqrt(x137) * x199 + rF * (x201 * x137 + x197 * x200);
+        let x203 = x16 * x16;
+        let x204 = x16
+            * (mF * (x106 * x122 + x104 * x115 + x123 * x105)
+                + mH * (x107 * x128 + x66 * x127 + x124 * x108)
+                + IFxx * (x170 * x23 + x0 * x172) + x168 + (x165 - IHyy - IFyy) * x167);
+        let x205 = x175 + x104 * x131 + x130 * x108 + (x172 * x23 - x0 * x170) * IFxx;
+        let x206 = -(x177 * IFyy);
+        let x207 = x18 * x187;
+        let x208 = x17 - x135;
+        let x209 = rR * x37;
+        let x210 = x208 * x209;
+        let x211 = 1.0 - x6;
+        let x212 = (rR * x211 + x99 - x100) * x17 + x85 * x56;
+        let x213 = x212 * x3;
+        let x214 = x44 * x172 - x177 * x42 + x170 * x45;
+        let x215 = x173 - x178;
+        let x216 = x213 * f64::sqrt(x137) - rF * (x137 * x214 + x215 * x195);
+        let x217 = x170 * x27 + x172 * x24 + x25 * x177;
+        let x218 = (x85 * (x51 * x103 - x55) + x102 * x17) * x5;
+        let x219 = rF * (x200 * x215 + x217 * x137) + x218 * f64::sqrt(x137);
+        let x220 = x51 - x103 * x55;
+        let x221 = rF * x75;
+        let x222 = x74 + x73 * x103;
+        let x223 = x102 * x2 + x85 * x222;
+        let x224 = x220 * x221 / f64::sqrt(x137) + x223;
+        let x225 = x0 * x0 + x23 * x23;
+        let x226 = x225 * IFxx;
+        let x227 = (x124 * x130 + x115 * x131 + x151) * x16;
+        let x228 = x15 * IFyy;
+        let x229 = -x209;
+        let x230 = -(rR * x18);
+        let x231 = x20 - x21;
+        let x232 = x231 * x120 - x13 * x47 - rR * x8 + x14 * x84;
+        let x233 = x181 * x16 + x15 * x75;
+        let x234 = f64::sqrt(x137) * x232 - (x233 * x195 + x137 * x37) * rF;
+        let x235 = x190 * x47 - rR * x31 + x120 * x191 + (x32 - x192) * x84;
+        let x236 = x235 * f64::sqrt(x137) - rF * (x137 * x18 - x233 * x200);
+        let x237 = x120 - x16 * x221 / f64::sqrt(x137);
+        let x238 = x58 - x57;
+        let x239 = x238 + x54 * x84;
+        let x240 = x239 - x63 * x237;
+        let x241 = x240 * x17;
+        let x242 = x62 * x17 + x61 * x17;
+        let x243 = x225 * x137;
+        let x244 = -x25 * x85 * f64::sqrt(x137) - rF * (x242 * x195 + x41 * x243);
+        let x245 = x85 * f64::sqrt(x137) * x42 + rF * (x242 * x200 + x22 * x243);
+        let x246 = x85 - rF * x56 / f64::sqrt(x137);
+        let x247 = x246 * x75;
+        let x248 = -(rF * x42);
+        let x249 = -(x25 * rF);
+        let x250 = x6 * psi_dot;
+        let x251 = x1 * phi_dot;
+        let x252 = x250 * x17 + x251;
+        let x253 = x6 * phi_dot;
+        let x254 = x253 - x1 * psi_dot * x17;
+        let x255 = delta_dot + x252 * x9 - x10 * x254;
+        let x256 = x10 * x252 + x9 * x254;
+        let x257 = psi_dot * x2;
+        let x258 = x257 + theta_dot;
+        let x259 = x256 * x15 + x16 * x258;
+        let x260 = x257 * x58;
+        let x261 = x260 - x258 * x47;
+        let x262 = x250 * x2;
+        let x263 = x262 - x257 - theta_dot;
+        let x264 = x10 * x261 + x263 * x69;
+        let x265 = x252 * x47 + rR * (x254 - phi_dot);
+        let x266 = x15 * x265 - x264 * x16;
+        let x267 = x255 * x65 - x259 * x50 + x266;
+        let x268 = theta_dot * x2;
+        let x269 = phi_dot * x17;
+        let x270 = x68 * x269 - x1 * x268;
+        let x271 = x268 * x95;
+        let x272 = x271 + x269 * x67;
+        let x273 = (x69 * x270 + x10 * x272) * psi_dot;
+        let x274 = theta_dot * x17;
+        let x275 = x251 * (x257 - theta_dot) - x250 * x274;
+        let x276 = x1 * x274;
+        let x277 = (theta_dot - x257) * x253 - x276 * psi_dot;
+        let x278 = rR * x275 + x277 * x47;
+        let x279 = x273 * x15 + (x16 * x278 + delta_dot * x266);
+        let x280 = x15 * x258 - x16 * x256;
+        let x281 = x9 * x261 - x263 * x78;
+        let x282 = x281 - x65 * x280;
+        let x283 = x269 * psi_dot;
+        let x284 = x275 * x9 + x10 * x277;
+        let x285 = x283 * x15 - x16 * x284 - delta_dot * x259;
+        let x286 = x279 - x255 * x267 + x282 * x280 + x285 * x50;
+        let x287 = (delta_dot * x280 + x15 * x284) + x283 * x16;
+        let x288 = x287 * x50;
+        let x289 = x10 * x275;
+        let x290 = x9 * x277;
+        let x291 = x290 - x289;
+        let x292 = x65 * x291;
+        let x293 = x259 * x282;
+        let x294 = x16 * x265 + x264 * x15;
+        let x295 = x294 + x280 * x50;
+        let x296 = x255 * x295;
+        let x297 = x273 * x16;
+        let x298 = x15 * x278;
+        let x299 = delta_dot * x294;
+        let x300 = (x298 - x299) - x297;
+        let x301 = x292 - x288 - x293 + x296 + x300;
+        let x302 = (x9 * x272 - x78 * x270) * psi_dot;
+        let x303 = x259 * x267 + x302 - x285 * x65 - x295 * x280;
+        let x304 = x302 - x85 * x285;
+        let x305 = x279 + x285 * x84;
+        let x306 = x255 * x85 - x259 * x84 + x266;
+        let x307 = x0 * x259 + x255 * x23;
+        let x308 = x281 - x85 * x280;
+        let x309 = x280 * x84 + x294;
+        let x310 = x308 * x23 + x0 * x309;
+        let x311 = x305 * x23 - x0 * x304 - x306 * x307 + x280 * x310;
+        let x312 = x309 * x23 - x0 * x308;
+        let x313 = x312 * x307;
+        let x314 = x259 * x23 - x0 * x255;
+        let x315 = x310 * x314;
+        let x316 = x85 * x291;
+        let x317 = x287 * x84;
+        let x318 = x313 - x315 + x316 + x300 - x317;
+        let x319 = x304 * x23 + x0 * x305 - x312 * x280 + x306 * x314;
+        let x320 = rR * x262 - x258 * x92;
+        let x321 = x260 - xB * x258;
+        let x322 = x320 * x252 - x254 * x321 + x275 * x92 + xB * x277;
+        let x323 = x254 * x92 + x252 * xB - rR * phi_dot;
+        let x324 = x323 * x254 + psi_dot * (x271 + x269 * x97) - x320 * x258;
+        let x325 = x258 * x321 - x323 * x252 + psi_dot * (x269 * x96 - x268 * x58);
+        let x326 = psi_dot * psi_dot;
+        let x327 = phi_dot * phi_dot + x326;
+        let x328 = psi_dot * phi_dot;
+        let x329 = psi_dot * x18;
+        let x330 = x255 * x155 + x259 * x151;
+        let x331 = x291 * x151 + (x287 * x165 + x280 * (x330 - x255 * IHyy));
+        let x332 = x255 * x151;
+        let x333 = x259 * x165;
+        let x334 = x332 + x333;
+        let x335 = x255 * x334;
+        let x336 = x285 * IHyy;
+        let x337 = x285 * IFyy;
+        let x338 = x259 * x330;
+        let x339 = x338 - x335 - x336 - x337;
+        let x340 = x287 - x255 * thF_dot;
+        let x341 = x259 * thF_dot;
+        let x342 = thF_dot + x280;
+        let x343 = IFxx * (x23 * x340 + x0 * (x289 - x341 - x290))
+            + x307 * x342 * (IFxx - IFyy);
+        let x344 = thR_dot + x258;
+        let x345 = x145 * x252 + x146 * x254;
+        let x346 = x344 * x345 * (IRxx - IRyy)
+            + (x145 * x275 - x146 * x277 - thR_dot * x345) * IRxx;
+        let x347 = x145 * x254 - x252 * x146;
+        let x348 = x347 * x344 * (IRyy - IRxx)
+            + IRxx * (thR_dot * x347 + x145 * x277 + x146 * x275);
+        let x349 = x2 * phi_dot;
+        let x350 = x254 * IBxx;
+        let x351 = x252 * IBxz;
+        let x352 = (x254 * IByy - x350 + x351) * x258 - x275 * IBxz + IBzz * x277;
+        let x353 = IBzz * x252 - x254 * IBxz;
+        let x354 = x275 * IBxx - x277 * IBxz + (x353 - x252 * IByy) * x258;
+        let x355 = x259 * IHyy;
+        let x356 = x287 * x151;
+        let x357 = x291 * x155;
+        let x358 = x280 * (x355 - x332 - x333) + x356 + x357;
+        let x359 = ((x341 + x291) * x23 + x0 * x340) * IFxx
+            + (IFyy - IFxx) * x314 * x342;
+        let x360 = x353 * x254;
+        let x361 = x252 * (x350 - x351);
+        let x362 = x163 * f64::sin(x164);
+        let x363 = (-x298 - g * x75) + (x297 + x299);
+        let x364 = psi_dot * x4;
+        let x365 = ((x186 - x158 / f64::sqrt(x134)) * x17 + x158) * phi_dot;
+        let x366 = thR_dot + theta_dot;
+        let x367 = psi_dot * x186;
+        let x368 = x349 * x3;
+        let x369 = x17 / f64::sqrt(x134);
+        let x370 = x349 * x17;
+        let x371 = x349 * x5;
+        let x372 = x268 + psi_dot;
+        let x373 = x372 * x7;
+        let x374 = phi_dot * x37;
+        let x375 = x258 * x3;
+        let x376 = x373 + x1 * (x374 - x375);
+        let x377 = x10 * x376;
+        let x378 = x30 * x258;
+        let x379 = x269 * x6;
+        let x380 = x372 * x1;
+        let x381 = x378 + (x380 - x379) * x5;
+        let x382 = x381 * x9;
+        let x383 = x382 - x377;
+        let x384 = x63 * x274;
+        let x385 = x349 * x103 - x384;
+        let x386 = delta_dot * x2 + x385;
+        let x387 = delta_dot * x54;
+        let x388 = phi_dot - x387;
+        let x389 = x51 * x388 - x16 * x386;
+        let x390 = x225 * x389;
+        let x391 = x10 * x2;
+        let x392 = x9 * x17;
+        let x393 = x10 * x17;
+        let x394 = x9 * x2;
+        let x395 = 0.5
+            * ((theta_dot + phi_dot) * (x1 * (x391 + x392) + (x394 - x393) * x6))
+            + 0.5 * ((theta_dot - phi_dot) * (x1 * (x392 - x391) - (x393 + x394) * x6));
+        let x396 = x376 * x9;
+        let x397 = delta_dot * x37;
+        let x398 = x10 * x381 + (x396 + x397);
+        let x399 = x371 + x329;
+        let x400 = x399 + delta_dot * x36;
+        let x401 = -x16 * x398 - x400 * x15;
+        let x402 = x389 * x42;
+        let x403 = x75 * x389;
+        let x404 = x5 * x258;
+        let x405 = phi_dot * x18;
+        let x406 = -x404 - x405;
+        let x407 = x1 * x406 - x372 * x30;
+        let x408 = x9 * x407;
+        let x409 = delta_dot * x18;
+        let x410 = x372 * x33;
+        let x411 = (x404 + x405) * x6;
+        let x412 = x411 - x410;
+        let x413 = x10 * x412;
+        let x414 = x368 - psi_dot * x37;
+        let x415 = x414 - delta_dot * x14;
+        let x416 = x16 * (x409 - x408 - x413) + x15 * x415;
+        let x417 = x15 * x398 - thF_dot * x41 - x16 * x400;
+        let x418 = thF_dot * x39;
+        let x419 = x0 * x417 + (x383 + x418) * x23;
+        let x420 = x0 * (x377 - x418 - x382) + x417 * x23;
+        let x421 = x386 * x15;
+        let x422 = x421 - thF_dot * x152 + x388 * x74;
+        let x423 = x63 * x349;
+        let x424 = thF_dot * x56 + (x54 * x274 - x423);
+        let x425 = x0 * x422 + x424 * x23;
+        let x426 = x422 * x23 - x0 * x424;
+        let x427 = 2.0 * (x160 * x425) + 2.0 * (x426 * x161) + 2.0 * x403;
+        let x428 = x5 * (x379 - x380);
+        let x429 = x428 - x378;
+        let x430 = x9 * x429;
+        let x431 = x1 * (x375 - x374) - x373;
+        let x432 = x10 * x429;
+        let x433 = theta_dot * x6;
+        let x434 = x29 * psi_dot;
+        let x435 = theta_dot * x3;
+        let x436 = x5 * psi_dot;
+        let x437 = delta_dot * x16;
+        let x438 = theta_dot + thF_dot * x15;
+        let x439 = thF_dot + theta_dot * x15;
+        let x440 = x63 * (-x437 * x23 - x0 * x438) - x171 * x439;
+        let x441 = delta_dot * x167;
+        let x442 = x63 * x438 * x23 + x0 * (-x439 * x103 - delta_dot * x177);
+        let x443 = theta_dot * x103;
+        let x444 = delta_dot * x75;
+        let x445 = x170 * x426 + x16 * (x75 * x443 - x63 * x389) + x425 * x172
+            + x161 * x440 + x160 * x442 - x444 * x167;
+        let x446 = x10 * x407;
+        let x447 = x6 * x406 + x410;
+        let x448 = x15 * (x181 * delta_dot + x389)
             + x16
-                * ((x432 + thF_dot * x162) * x23 - x433 + x0 * (x434 - thF_dot * x163));
-        let x436 = x15 * x401 - thF_dot * x41 - x16 * x403;
-        let x437 = thF_dot * x39;
-        let x438 = x0 * x436 + (x386 + x437) * x23;
-        let x439 = x0 * (x380 - x437 - x385) + x436 * x23;
-        let x440 = 2.0 * (x162 * x434) + 2.0 * (x432 * x163) + 2.0 * x406;
-        let x441 = x5 * (x382 - x383);
-        let x442 = x441 - x381;
-        let x443 = x9 * x442;
-        let x444 = x1 * (x378 - x377) - x376;
-        let x445 = x10 * x442;
-        let x446 = theta_dot * x6;
-        let x447 = x29 * psi_dot;
-        let x448 = theta_dot * x3;
-        let x449 = theta_dot + thF_dot * x15;
-        let x450 = thF_dot + theta_dot * x15;
-        let x451 = x63 * (-x422 * x23 - x0 * x449) - x173 * x450;
-        let x452 = delta_dot * x169;
-        let x453 = x63 * x449 * x23 + x0 * (-x450 * x103 - delta_dot * x179);
-        let x454 = theta_dot * x103;
-        let x455 = x172 * x432 + x16 * (x75 * x454 - x63 * x392) + x434 * x174
-            + x163 * x451 + x162 * x453 - x433 * x169;
+                * ((x426 + thF_dot * x160) * x23 - x444 + x0 * (x425 - thF_dot * x161));
+        let x449 = x16 * x23;
+        let x450 = x0 * x15;
+        let x451 = x0 * x16;
+        let x452 = x15 * x23;
+        let x453 = (0.5 * ((x449 + x450) * delta_dot)
+            - 0.5 * (delta_dot * (x449 - x450))) * x23
+            - x0
+                * (0.5 * (delta_dot * (x451 + x452))
+                    + 0.5 * (delta_dot * (x452 - x451)));
+        let x454 = psi_dot - phi_dot;
+        let x455 = psi_dot + phi_dot;
         let x456 = rF * thF_dot;
-        let x457 = x9 * x415;
-        let x458 = x457 - x420;
-        let x459 = -(x25 * x392);
-        let x460 = x428 + x103 * x269;
-        let x461 = delta_dot * x103 + phi_dot;
-        let x462 = x16 * x418 + x15 * (x411 - x412 + x416);
-        let x463 = x462 - thF_dot * x22;
-        let x464 = thF_dot * x19;
-        let x465 = x23 * x463 + x0 * (x420 - x457 - x464);
-        let x466 = x0 * x463 + (x458 + x464) * x23;
-        let x467 = 1.0 / f64::sqrt(x139) + x138 / f64::powf(x139, 1.5);
-        let x468 = x392 * x467;
-        let x469 = x63 * x263 + (delta_dot * x17 + x264 * x103);
+        let x457 = x9 * x412;
+        let x458 = x457 - x446;
+        let x459 = -(x25 * x389);
+        let x460 = x16 * x415 + x15 * (x408 - x409 + x413);
+        let x461 = x460 - thF_dot * x22;
+        let x462 = thF_dot * x19;
+        let x463 = x0 * x461 + (x458 + x462) * x23;
+        let x464 = x23 * x461 + x0 * (x446 - x457 - x462);
+        let x465 = x423 + x103 * x274;
+        let x466 = delta_dot * x103 + phi_dot;
+        let x467 = 1.0 / f64::sqrt(x137) + x136 / f64::powf(x137, 1.5);
+        let x468 = x389 * x467;
+        let x469 = x63 * x268 + (delta_dot * x17 + x269 * x103);
         Assembly {
             qdot: [
                 x_dot,
@@ -1295,272 +1292,272 @@ pub mod lagrange {
                     x46,
                     x98,
                     x112,
-                    x131,
+                    x129,
+                    0.0,
+                    x133,
                     0.0,
                     x135,
                     0.0,
-                    x137,
-                    0.0,
-                    x140,
+                    x138,
                     0.0,
                     0.0,
                 ],
                 [
                     x46,
-                    (x41 * x41 + x141 + x39 * x39) * mH + x28
-                        + mF * (x45 * x45 + x141 + x44 * x44),
-                    x142,
-                    x143,
-                    x144,
-                    0.0,
-                    x145,
-                    0.0,
-                    0.0,
-                    x137,
-                    0.0,
+                    (x41 * x41 + x139 + x39 * x39) * mH + x28
+                        + mF * (x45 * x45 + x139 + x44 * x44),
                     x140,
+                    x141,
+                    x142,
+                    0.0,
+                    x143,
+                    0.0,
+                    0.0,
+                    x135,
+                    0.0,
+                    x138,
                     0.0,
                 ],
                 [
                     x98,
-                    x142,
+                    x140,
                     mH * (x80 * x80 + x77 * x77 + x72 * x72)
-                        + (((x146 + IBzz * x6) * x6 + x151 + x1 * (x152 + x1 * IBxx))
-                            * x17 + x63 * x158) * x17
-                        + mF * (x90 * x90 + x91 * x91 + x87 * x87) + x138 * x159
-                        + x160 * x161 + ((x97 * x97 + x96 * x96) * x160 + x94 * x94) * mB
-                        + IFxx * x164 + x165 * (0.5 - 0.5 * f64::cos(x166)) + x56 * x168,
-                    x181,
+                        + (((x144 + IBzz * x6) * x6 + x149 + x1 * (x150 + x1 * IBxx))
+                            * x17 + x63 * x156) * x17
+                        + mF * (x90 * x90 + x91 * x91 + x87 * x87) + x136 * x157
+                        + x158 * x159 + ((x97 * x97 + x96 * x96) * x158 + x94 * x94) * mB
+                        + IFxx * x162 + x163 * (0.5 - 0.5 * f64::cos(x164)) + x56 * x166,
+                    x179,
+                    x182,
+                    x183,
                     x184,
                     x185,
-                    x186,
-                    x187,
-                    x190,
-                    x191,
-                    x200,
-                    x204,
+                    x188,
+                    x189,
+                    x198,
+                    x202,
                     0.0,
                 ],
                 [
                     x112,
-                    x143,
-                    x181,
-                    x6 * x178 + x110 * x109 + x177 * x103 + x1 * x176 + x165 + x151
-                        + mH * (x108 * x108 + x205 * (x66 * x66 + x107 * x107))
-                        + (x174 * x174 + x172 * x172) * IFxx
-                        + mF * ((x106 * x106 + x105 * x105) * x205 + x104 * x104)
-                        + x63 * (x16 * x179 * x159 + x15 * x171),
-                    x206,
+                    x141,
+                    x179,
+                    x6 * x176 + x110 * x109 + x175 * x103 + x1 * x174 + x163 + x149
+                        + mH * (x108 * x108 + x203 * (x66 * x66 + x107 * x107))
+                        + (x172 * x172 + x170 * x170) * IFxx
+                        + mF * ((x106 * x106 + x105 * x105) * x203 + x104 * x104)
+                        + x63 * (x16 * x177 * x157 + x15 * x169),
+                    x204,
                     0.0,
+                    x205,
+                    x206,
                     x207,
-                    x208,
-                    x209,
-                    x212,
-                    x218,
-                    x221,
-                    x226,
+                    x210,
+                    x216,
+                    x219,
+                    x224,
                 ],
                 [
-                    x131,
-                    x144,
-                    x184,
-                    x206,
-                    (x130 * x130 + x129 * x129 + x126 * x126 * x205) * mH
-                        + (x92 * x92 + xB * xB) * mB + x15 * x15 * x159
-                        + (x228 + x167) * x205 + x161
-                        + mF * (x205 * x124 * x124 + x122 * x122 + x120 * x120),
+                    x129,
+                    x142,
+                    x182,
+                    x204,
+                    (x92 * x92 + xB * xB) * mB
+                        + (x125 * x125 + x128 * x128 + x127 * x127) * mH
+                        + (x226 + x165) * x203
+                        + mF * (x122 * x122 + x116 * x116 + x123 * x123) + x159
+                        + x180 * x15,
                     IRyy,
+                    x227,
+                    x228,
                     x229,
                     x230,
-                    x231,
-                    x232,
+                    x234,
                     x236,
-                    x238,
-                    x243,
+                    x241,
                 ],
-                [0.0, 0.0, x185, 0.0, IRyy, IRyy, 0.0, 0.0, x231, x232, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x183, 0.0, IRyy, IRyy, 0.0, 0.0, x229, x230, 0.0, 0.0, 0.0],
                 [
-                    x135,
-                    x145,
-                    x186,
-                    x207,
-                    x229,
+                    x133,
+                    x143,
+                    x184,
+                    x205,
+                    x227,
                     0.0,
-                    x228 + x65 * x132 + x157 + x85 * x133,
+                    x226 + x65 * x130 + x155 + x85 * x131,
                     0.0,
                     0.0,
                     0.0,
-                    x246,
+                    x244,
+                    x245,
                     x247,
-                    x249,
                 ],
-                [0.0, 0.0, x187, x208, x230, 0.0, 0.0, IFyy, 0.0, 0.0, x250, x251, 0.0],
-                [x137, 0.0, x190, x209, x231, x231, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x137, x191, x212, x232, x232, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x140, 0.0, x200, x218, x236, 0.0, x246, x250, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x140, x204, x221, x238, 0.0, x247, x251, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, x226, x243, 0.0, x249, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x185, x206, x228, 0.0, 0.0, IFyy, 0.0, 0.0, x248, x249, 0.0],
+                [x135, 0.0, x188, x207, x229, x229, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x135, x189, x210, x230, x230, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x138, 0.0, x198, x216, x234, 0.0, x244, x248, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x138, x202, x219, x236, 0.0, x245, x249, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, x224, x241, 0.0, x247, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             force: [
-                -((x8 * x265 + x268 * x13 - x272 * x18) * mB
-                    + mF * (x300 * x27 + x303 * x24 - x25 * x316)
-                    + (x319 * x22 - x25 * x325 + x326 * x19) * mH
-                    + x81 * (2.0 * (x329 * x37) - x4 * x328)),
-                -((x325 * x42 + x319 * x41 + x326 * x39) * mH
-                    + x81 * (2.0 * (phi_dot * x330) + x29 * x328)
-                    + mF * (x45 * x300 + x44 * x303 + x316 * x42)
-                    + (x272 * x37 + x35 * x268 + x265 * x31) * mB),
-                x345 * x75 - x332 * x56 - (x335 + x284 * IByy - x337) * x2 - x162 * x349
-                    - (x72 * x325 + x77 * x326 + x319 * x80) * mH
-                    - (x94 * x272 + x2 * (x268 * x97 + x265 * x96)) * mB - x329 * x350
-                    - mF * (x303 * x91 + x87 * x316 + x90 * x300) - x163 * x351
-                    + (x1 * x352 + x355 * x149 - x150 * x357 - x6 * x358
-                        - x359 * psi_dot * IRyy - x63 * x363) * x17,
-                x63 * (x16 * (x341 + x342 - x343 + x344) - x332 * x15) - x149 * x357
-                    - x363 * x103 - x172 * x351
-                    + g * (x2 * x111 - x225 * mF - (x107 * x2 + x224 * x65) * mH)
-                    + 0.5 * (x350 * x327) - x355 * x150
-                    - (x104 * x316 + x16 * (x303 * x106 + x105 * x300)) * mF
-                    - x174 * x349 - x1 * x358 - x352 * x6
-                    - mH * (x16 * (x326 * x107 + x319 * x66) + x325 * x108)
-                    - x110 * x272,
-                x345 * x15 - x16 * (x351 * x23 + x0 * x349 + x332) - x335
-                    - mF * (x122 * x303 + x300 * x120 + x125 * x316)
-                    - mB * (-x268 * xB - x265 * x92)
-                    - mH * (x127 * x325 + x319 * x129 + x326 * x130)
+                -((x286 * x19 - x25 * x301 + x303 * x22) * mH
+                    + mF * (x27 * x311 - x25 * x318 + x319 * x24)
+                    + mB * (x13 * x324 - x322 * x18 + x8 * x325)
+                    + x81 * (2.0 * (x328 * x37) - x4 * x327)),
+                -(mF * (x45 * x311 + x319 * x44 + x318 * x42)
+                    + mH * (x301 * x42 + x303 * x41 + x286 * x39)
+                    + x81 * (2.0 * (phi_dot * x329) + x29 * x327)
+                    + (x35 * x324 + x31 * x325 + x322 * x37) * mB),
+                x339 * x75 - x331 * x56 - (x301 * x72 + x286 * x77 + x303 * x80) * mH
+                    - x343 * x161
+                    + (x346 * x147 - x148 * x348 - x349 * psi_dot * IRyy - x6 * x352
+                        + x1 * x354 - x63 * x358) * x17 - x160 * x359
+                    - (x361 - x360 + x283 * IByy) * x2
+                    - (x94 * x322 + x2 * (x324 * x97 + x96 * x325)) * mB
+                    - mF * (x318 * x87 + x90 * x311 + x319 * x91) - x328 * x362,
+                x63 * (x16 * (x335 + x336 + x337 - x338) - x331 * x15) - x170 * x343
+                    - x1 * x352 - x6 * x354 - x172 * x359
+                    + g * (x2 * x111 - x223 * mF - (x107 * x2 + x222 * x65) * mH)
+                    - (x301 * x108 + x16 * (x303 * x66 + x286 * x107)) * mH
+                    + 0.5 * (x362 * x326) - x346 * x148 - x322 * x110 - x358 * x103
+                    - x147 * x348
+                    - (x318 * x104 + x16 * (x105 * x311 + x319 * x106)) * mF,
+                x15 * x339 - x16 * (x0 * x359 + x343 * x23 + x331)
+                    - (-x92 * x325 - xB * x324) * mB + x360 - x361
+                    - mF * (x116 * x318 + x319 * x122 + x123 * x311)
                     + x17
-                        * (-x329 * x161
+                        * (-x328 * x159
                             - g
-                                * (mF * (x241 - x63 * x114) - mB * x93
-                                    + mH * (x240 + x54 * x50 - x63 * x128))) + x337,
-                -(x284 * IRyy),
-                (x321 - x320 + x323 - x324 + x364) * x132 - x360 - x349 * x23
-                    + x289 * (x340 - x361) - x362
-                    + (x305 + x310 - x314 - x315 + x364) * x133 + x0 * x351,
-                -x342,
+                                * (mF * (x239 - x63 * x120) - mB * x93
+                                    + mH * (x238 + x54 * x50 - x63 * x126)))
+                    - mH * (x286 * x128 + x303 * x127 + x125 * x301),
+                -(x283 * IRyy),
+                (x334 - x355) * x280 - x356 - x357 - x359 * x23
+                    + x131 * (x363 - x313 + x315 - x316 + x317)
+                    + (x363 + x288 - x292 + x293 - x296) * x130 + x0 * x343,
+                -x337,
                 rR
-                    * (psi_dot * (-x210 * x365 - x366 * x367 - x368 * x18)
-                        + (x369 * f64::sqrt(x136)
-                            - x17 * (x369 * (2.0 - x370) + x371 * x188) - x368 * x29)
-                            * phi_dot) + x372 * x_dot / f64::sqrt(x136),
-                (psi_dot * (x368 * x37 - x366 * phi_dot * x3 - x29 * x373)
-                    + (-x368 * x4 - f64::sqrt(x136) * x374
-                        - ((x370 - 2.0) * x374 + x373 * x3) * x17) * phi_dot) * rR
-                    + x372 * y_dot / f64::sqrt(x136),
-                x_dot * x406 / f64::sqrt(x139)
+                    * ((-x208 * x364 - x5 * x365 - x366 * x18) * psi_dot
+                        + (x368 * f64::sqrt(x134) - x366 * x29
+                            - (x5 * x367 + x368 * (2.0 - x369)) * x17) * phi_dot)
+                    + x370 * x_dot / f64::sqrt(x134),
+                x370 * y_dot / f64::sqrt(x134)
+                    + rR
+                        * ((-x366 * x4 - f64::sqrt(x134) * x371
+                            - ((x369 - 2.0) * x371 + x367 * x3) * x17) * phi_dot
+                            + (x366 * x37 - x365 * x3 - x29 * x367) * psi_dot),
+                x_dot * x403 / f64::sqrt(x137)
                     - delta_dot
-                        * ((x25 * x406 / f64::sqrt(x139) + f64::sqrt(x139) * x419) * x85
+                        * ((x25 * x403 / f64::sqrt(x137) + f64::sqrt(x137) * x416) * x85
                             - rF
-                                * (x386 * x245
-                                    + x75 * (x244 * x404 - 2.0 * (x393 * x41) - x398 * x42)
-                                    + x244 * x405))
-                    - (f64::sqrt(x139)
-                        * (x85 * (x15 * (x420 + x421 * x9) - x422 * x234)
-                            + (x411 - x421 * x10) * x84 + x421 * x47 - rR * x410)
-                        - x235 * x406 / f64::sqrt(x139)
-                        - rF
-                            * (x405 * x233
-                                + x139
-                                    * (x41 * x427 - 0.5 * ((x18 - x29) * x423)
-                                        - 0.5 * ((x29 + x18) * x424))
-                                + (x233 * x404 + x435 * x42 - 2.0 * (x392 * x37)) * x75))
-                        * theta_dot
+                                * (x383 * x243
+                                    + x75 * (x242 * x401 - 2.0 * (x390 * x41) - x395 * x42)
+                                    + x242 * x402))
                     - psi_dot
-                        * (((x443 - x10 * x444) * x84 + rR * (x381 - x441 + x377 - x365)
-                            + x444 * x47
+                        * (((x430 - x10 * x431) * x84 + rR * (x378 - x428 + x374 - x364)
+                            + x431 * x47
                             + x85
-                                * (x16 * (x402 - x195 * delta_dot)
-                                    + x15 * (x445 - x400 + x444 * x9))) * f64::sqrt(x139)
-                            - x196 * x406 / f64::sqrt(x139)
+                                * (x16 * (x399 - x193 * delta_dot)
+                                    + x15 * (x432 - x397 + x431 * x9))) * f64::sqrt(x137)
+                            - x194 * x403 / f64::sqrt(x137)
                             - rF
-                                * (x199 * x405
-                                    + x139
-                                        * (x162 * x438 + x405 + x163 * x439 + x44 * x434
-                                            + x432 * x45 + x75 * x404)
-                                    + (x199 * x404 - 2.0 * (x392 * x198) + x440 * x42) * x75))
-                    - (f64::sqrt(x139)
-                        * ((x417 * x1 - x446 * x18) * x47
+                                * (x197 * x402
+                                    + x137
+                                        * (x160 * x419 + x402 + x161 * x420 + x44 * x425
+                                            + x426 * x45 + x75 * x401)
+                                    + (x197 * x401 - 2.0 * (x389 * x196) + x427 * x42) * x75))
+                    - (f64::sqrt(x137)
+                        * ((x414 * x1 - x433 * x18) * x47
                             + x85
-                                * (x16 * (x391 * x18 + x447)
+                                * (x16 * (x388 * x18 + x434)
                                     + x15
-                                        * (x369 * x103 + (x54 * x371 - x63 * x448) * x17
+                                        * (x368 * x103 + (x54 * x436 - x63 * x435) * x17
                                             + delta_dot * x4))
-                            + ((x448 * x54 + x63 * x371) * x17 - x369 * x63) * x84
-                            + rR * (x369 * x68 + (x371 * x213 + theta_dot * x33) * x17))
-                        - x215 * x406 / f64::sqrt(x139)
+                            + ((x435 * x54 + x63 * x436) * x17 - x368 * x63) * x84
+                            + rR * (x368 * x68 + (x436 * x211 + theta_dot * x33) * x17))
+                        - x213 * x403 / f64::sqrt(x137)
                         - rF
-                            * (x405 * x217
-                                + (x45 * x451 - x452 * x42 + x438 * x174 + x44 * x453
-                                    + x172 * x439 + x16 * (x454 * x42 - x63 * x404)) * x139
-                                + (x217 * x404 + x455 * x42 - 2.0 * (x392 * x216)) * x75))
-                        * phi_dot + x456 * x404,
-                y_dot * x406 / f64::sqrt(x139)
-                    - delta_dot
-                        * (x85 * (f64::sqrt(x139) * x404 - x406 * x42 / f64::sqrt(x139))
-                            - ((2.0 * (x393 * x22) - x244 * x419 - x25 * x398) * x75
-                                - x458 * x245 - x244 * x459) * rF)
-                    - ((rR * ((x359 * x213 - x1 * x269) * x5 + x213 * x330)
-                        + (x5 * x460 + x63 * x330) * x84 + (x446 * x37 - x1 * x402) * x47
-                        + x85
-                            * (x16 * (x365 - x461 * x37)
-                                + x15
-                                    * (x54 * x330 - delta_dot * x29
-                                        + (x387 + x359 * x54) * x5))) * f64::sqrt(x139)
-                        - x220 * x406 / f64::sqrt(x139)
-                        - rF
-                            * (x75 * (x25 * x455 - x217 * x419 + 2.0 * (x219 * x392))
-                                - x217 * x459
-                                - (x172 * x465 + x27 * x451 + x25 * x452 + x466 * x174
-                                    + x16 * (-x25 * x454 - x63 * x419) + x453 * x24) * x139))
+                            * (x402 * x215
+                                + (x45 * x440 - x441 * x42 + x419 * x172 + x44 * x442
+                                    + x170 * x420 + x16 * (x443 * x42 - x63 * x401)) * x137
+                                + (x215 * x401 + x445 * x42 - 2.0 * (x389 * x214)) * x75))
                         * phi_dot
-                    - psi_dot
-                        * ((rR * (x413 - x414 + x408 + x447) + x410 * x47 + x85 * x462
-                            + x458 * x84) * f64::sqrt(x139)
-                            - rF
-                                * ((x25 * x440 - x199 * x419 + 2.0 * (x203 * x392)) * x75
-                                    - x199 * x459
-                                    - x139
-                                        * (x434 * x24 + x466 * x162 + x465 * x163 + x459
-                                            + x432 * x27 + x75 * x419)) - x406 * x201 / f64::sqrt(x139))
                     - theta_dot
-                        * ((x85 * (x15 * (x443 + x380) - x422 * x193) - rR * x379
-                            + x442 * x47 + (x399 - x445) * x84) * f64::sqrt(x139)
-                            - x237 * x406 / f64::sqrt(x139)
+                        * (f64::sqrt(x137)
+                            * (x85 * (x15 * (x446 + x447 * x9) - x437 * x231)
+                                + (x408 - x447 * x10) * x84 + x447 * x47 - rR * x407)
+                            - x232 * x403 / f64::sqrt(x137)
+                            - ((x233 * x401 + x448 * x42 - 2.0 * (x389 * x37)) * x75
+                                + (x453 * x41 - 0.5 * ((x18 - x29) * x454)
+                                    - 0.5 * ((x29 + x18) * x455)) * x137 + x233 * x402) * rF)
+                    + x456 * x401,
+                y_dot * x403 / f64::sqrt(x137)
+                    - delta_dot
+                        * (x85 * (f64::sqrt(x137) * x401 - x403 * x42 / f64::sqrt(x137))
+                            - ((2.0 * (x390 * x22) - x242 * x416 - x25 * x395) * x75
+                                - x458 * x243 - x242 * x459) * rF)
+                    - theta_dot
+                        * ((x85 * (x15 * (x430 + x377) - x437 * x191) - rR * x376
+                            + x429 * x47 + (x396 - x432) * x84) * f64::sqrt(x137)
+                            - x235 * x403 / f64::sqrt(x137)
                             - rF
-                                * (-(x233 * x419 - x25 * x435 + 2.0 * (x392 * x18)) * x75
-                                    - x139
-                                        * (x22 * x427 - 0.5 * ((x37 - x4) * x424)
-                                            - 0.5 * ((x4 + x37) * x423)) - x459 * x233)) - x456 * x419,
+                                * (-(x453 * x22 - 0.5 * ((x37 - x4) * x455)
+                                    - 0.5 * ((x4 + x37) * x454)) * x137
+                                    - x75 * (x233 * x416 - x25 * x448 + 2.0 * (x389 * x18))
+                                    - x233 * x459))
+                    - psi_dot
+                        * ((rR * (x410 - x411 + x405 + x434) + x407 * x47 + x85 * x460
+                            + x458 * x84) * f64::sqrt(x137)
+                            - rF
+                                * ((x25 * x427 - x197 * x416 + 2.0 * (x201 * x389)) * x75
+                                    - x197 * x459
+                                    - x137
+                                        * (x425 * x24 + x463 * x160 + x464 * x161 + x459
+                                            + x426 * x27 + x75 * x416)) - x403 * x199 / f64::sqrt(x137))
+                    - (((x5 * x465 + x63 * x329) * x84 + (x433 * x37 - x1 * x399) * x47
+                        + rR * ((x349 * x211 - x276) * x5 + x211 * x329)
+                        + x85
+                            * (x16 * (x364 - x466 * x37)
+                                + x15
+                                    * (x54 * x329 - delta_dot * x29
+                                        + (x384 + x349 * x54) * x5))) * f64::sqrt(x137)
+                        - x218 * x403 / f64::sqrt(x137)
+                        - rF
+                            * (x75 * (x25 * x445 - x215 * x416 + 2.0 * (x217 * x389))
+                                - x215 * x459
+                                - (x170 * x464 + x27 * x440 + x25 * x441 + x463 * x172
+                                    + x16 * (-x25 * x443 - x63 * x416) + x442 * x24) * x137))
+                        * phi_dot - x456 * x416,
                 -(delta_dot
-                    * (x85 * x392
+                    * (x85 * x389
                         + rF
-                            * (((x390 - phi_dot) * x74 - x430) * x75 / f64::sqrt(x139)
+                            * (((x387 - phi_dot) * x74 - x421) * x75 / f64::sqrt(x137)
                                 - x56 * x468))
                     + theta_dot
                         * ((theta_dot * (x100 + x95)
                             - x63
-                                * (rF * (-x433 * x15 / f64::sqrt(x139) - x16 * x392 * x467)
-                                    - x422 * x85)) * x17 + x388 * x84 + x239 * x460
-                            + x359 * x59)
-                    + ((x263 * x103 - x63 * x264) * x84 + x263 * x59
-                        + x85 * (x15 * x469 - x461 * x55) + x264 * x101
-                        + (x222 * x468
-                            + (-x16 * x469 - x461 * x73) * x75 / f64::sqrt(x139)) * rF)
+                                * (rF * (-x444 * x15 / f64::sqrt(x137) - x16 * x389 * x467)
+                                    - x437 * x85)) * x17 + x385 * x84 + x237 * x465
+                            + x349 * x59)
+                    + ((x268 * x103 - x63 * x269) * x84 + x268 * x59
+                        + x85 * (x15 * x469 - x466 * x55) + x269 * x101
+                        + (x220 * x468
+                            + (-x16 * x469 - x466 * x73) * x75 / f64::sqrt(x137)) * rF)
                         * phi_dot),
             ],
             checks: [],
             residuals: [
-                f64::sqrt(x136) * x_dot
-                    + rR * (x188 * x408 + x5 * (x252 * x188 - x368 * x17)),
-                rR * (x4 * x373 + (x210 * x367 - x368 * x3) * x17)
-                    + f64::sqrt(x136) * y_dot,
-                x200 * psi_dot - x456 * x42 + delta_dot * x246 + x236 * theta_dot
-                    + x218 * phi_dot + x_dot * f64::sqrt(x139),
-                x221 * phi_dot - x25 * x456 + theta_dot * x238 + psi_dot * x204
-                    + f64::sqrt(x139) * y_dot + delta_dot * x247,
-                x242 * x269 + x433 * x248 + x226 * phi_dot,
+                f64::sqrt(x134) * x_dot
+                    + rR * (x186 * x405 + x5 * (x2 * x367 - x366 * x17)),
+                rR * (x4 * x367 + (x208 * x5 * phi_dot - x366 * x3) * x17)
+                    + f64::sqrt(x134) * y_dot,
+                x198 * psi_dot - x456 * x42 + delta_dot * x244 + theta_dot * x234
+                    + x216 * phi_dot + x_dot * f64::sqrt(x137),
+                x219 * phi_dot - x25 * x456 + psi_dot * x202 + theta_dot * x236
+                    + f64::sqrt(x137) * y_dot + delta_dot * x245,
+                x240 * x274 + x444 * x246 + x224 * phi_dot,
             ],
-            positions: [0.0, 0.0, 0.0, 0.0, x214 - rF * f64::sqrt(x139)],
+            positions: [0.0, 0.0, 0.0, 0.0, x212 - rF * f64::sqrt(x137)],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -2161,2050 +2158,2044 @@ pub mod lagrange {
         let x57 = x28 * x47;
         let x58 = x49 * x25;
         let x59 = mF * (x51 + x53 - x56) + (x57 + x58 - x56) * mH;
-        let x60 = rR * mR;
-        let x61 = x9 - 1.0;
-        let x62 = x13 * rR;
-        let x63 = -c_ - w_;
-        let x64 = x4 * rR;
-        let x65 = x63 + x64;
-        let x66 = x12 * x65 - x61 * x62;
-        let x67 = x66 * x5;
-        let x68 = x13 * rF - c_ * x12;
-        let x69 = x13 * x9;
-        let x70 = x4 * x12;
-        let x71 = x69 - x70;
-        let x72 = x19 * x1;
-        let x73 = x71 * x72;
-        let x74 = x0 * x5;
-        let x75 = x74 - x73;
-        let x76 = x68 * x75;
-        let x77 = x67 - x76;
-        let x78 = c_ + w_;
-        let x79 = x9 * x78;
-        let x80 = x79 - x64;
-        let x81 = x80 * x72;
+        let x60 = c_ + w_;
+        let x61 = x13 * (x60 - xH);
+        let x62 = x12 * zH;
+        let x63 = x61 - x62;
+        let x64 = x0 * x1;
+        let x65 = x13 * x9;
+        let x66 = x4 * x12;
+        let x67 = x65 - x66;
+        let x68 = x64 * x67;
+        let x69 = x19 * x5;
+        let x70 = x68 + x69;
+        let x71 = x63 * x70;
+        let x72 = -c_ - w_;
+        let x73 = x12 * (x72 + xH) - x13 * zH;
+        let x74 = x9 * x12 + x13 * x4;
+        let x75 = x73 * x74;
+        let x76 = x75;
+        let x77 = x4 * rR;
+        let x78 = x9 * x60;
+        let x79 = x78 - x77;
+        let x80 = x79 * x0;
+        let x81 = x9 - 1.0;
         let x82 = rR * x12;
-        let x83 = x61 * x82 + x13 * x65;
-        let x84 = x74 * x83;
-        let x85 = x81 + x84;
-        let x86 = x13 * c_;
-        let x87 = rF * x12;
-        let x88 = x86 + x87;
-        let x89 = x75 * x88;
-        let x90 = x85 + x89;
-        let x91 = x77 * x29 + x22 * x90;
-        let x92 = x0 * x1;
-        let x93 = x92 * x71;
-        let x94 = x19 * x5;
-        let x95 = x93 + x94;
-        let x96 = x95 * x88;
-        let x97 = x13 * x4;
-        let x98 = x97 + x9 * x12;
-        let x99 = x68 * x98;
-        let x100 = x80 * x0;
-        let x101 = x83 * x94;
-        let x102 = (x99 + x100) * x1 - x96 - x101;
-        let x103 = x90 * x29 - x22 * x77;
-        let x104 = x13 * (x78 - xH);
-        let x105 = x12 * zH;
-        let x106 = x104 - x105;
-        let x107 = x85 + x75 * x106;
-        let x108 = x95 * x106;
-        let x109 = x12 * (x63 + xH) - x13 * zH;
-        let x110 = x109 * x98;
-        let x111 = x110;
-        let x112 = (x111 + x100) * x1 - x108 - x101;
-        let x113 = x67 - x109 * x75;
-        let x114 = x9 * xB;
-        let x115 = rR + zB;
-        let x116 = x4 * x115;
-        let x117 = x114 - x116;
-        let x118 = x1 * x117;
-        let x119 = x64 - xB;
-        let x120 = rR * x9;
-        let x121 = x120 - rR - zB;
-        let x122 = x119 * x16 + x121 * x11;
-        let x123 = x60 * x35 + (x31 * x91 - x20 * x102 + x103 * x30) * mF
-            + (x107 * x28 - x20 * x112 + x113 * x25) * mH + mB * (x5 * x122 - x118 * x3);
-        let x124 = x9 * x115;
-        let x125 = x4 * xB;
-        let x126 = x124 + x125;
-        let x127 = x126 - rR;
-        let x128 = mB * x127;
-        let x129 = x60 - x128;
-        let x130 = x4 * x78;
-        let x131 = x61 * rR;
+        let x83 = x72 + x77;
+        let x84 = x81 * x82 + x13 * x83;
+        let x85 = x84 * x69;
+        let x86 = (x76 + x80) * x1 - x71 - x85;
+        let x87 = x13 * rR;
+        let x88 = x12 * x83 - x81 * x87;
+        let x89 = x88 * x5;
+        let x90 = x0 * x5;
+        let x91 = x19 * x1;
+        let x92 = x67 * x91;
+        let x93 = x90 - x92;
+        let x94 = x89 - x73 * x93;
+        let x95 = x79 * x91;
+        let x96 = x90 * x84;
+        let x97 = x95 + x96;
+        let x98 = x97 + x93 * x63;
+        let x99 = rR * mR;
+        let x100 = x13 * rF - c_ * x12;
+        let x101 = x100 * x93;
+        let x102 = x89 - x101;
+        let x103 = x13 * c_;
+        let x104 = rF * x12;
+        let x105 = x103 + x104;
+        let x106 = x93 * x105;
+        let x107 = x97 + x106;
+        let x108 = x107 * x29 - x22 * x102;
+        let x109 = x70 * x105;
+        let x110 = x100 * x74;
+        let x111 = (x110 + x80) * x1 - x109 - x85;
+        let x112 = x102 * x29 + x22 * x107;
+        let x113 = x9 * xB;
+        let x114 = rR + zB;
+        let x115 = x4 * x114;
+        let x116 = x113 - x115;
+        let x117 = x1 * x116;
+        let x118 = x77 - xB;
+        let x119 = rR * x9;
+        let x120 = x119 - rR - zB;
+        let x121 = x118 * x16 + x120 * x11;
+        let x122 = (x25 * x94 - x20 * x86 + x98 * x28) * mH + x99 * x35
+            + (x108 * x30 - x111 * x20 + x31 * x112) * mF + mB * (x5 * x121 - x117 * x3);
+        let x123 = x9 * x114;
+        let x124 = x4 * xB;
+        let x125 = x123 + x124;
+        let x126 = x125 - rR;
+        let x127 = mB * x126;
+        let x128 = x99 - x127;
+        let x129 = x74 * x63;
+        let x130 = x4 * x60;
+        let x131 = x81 * rR;
         let x132 = x130 + x131;
-        let x133 = x106 * x98;
-        let x134 = x132 - x133;
-        let x135 = x25 * x111 + x134 * x28;
-        let x136 = x70 - x69;
-        let x137 = x109 * x136;
-        let x138 = x137 + x134 * x0;
-        let x139 = x98 * x88;
-        let x140 = x132 - x139;
-        let x141 = x22 * x68;
-        let x142 = x140 * x29 - x141 * x98;
-        let x143 = x98 * x29;
-        let x144 = x22 * x140 + x68 * x143;
-        let x145 = x30 * x142 + x31 * x144;
-        let x146 = x68 * x136;
-        let x147 = x0 * x140 + x146;
-        let x148 = x129 * x3 + (x19 * x135 - x20 * x138) * mH
-            + (x19 * x145 - x20 * x147) * mF;
-        let x149 = x13 * x78;
-        let x150 = x82 + x149;
-        let x151 = x150 - x86 - x87;
-        let x152 = x19 * x151;
-        let x153 = x62 - x12 * x78;
-        let x154 = x68 * x0;
-        let x155 = x153 - x154;
-        let x156 = x0 * x29;
-        let x157 = -x82 - x149;
-        let x158 = x157 + x88;
-        let x159 = x156 * x158 - x22 * x155;
-        let x160 = x22 * x0;
-        let x161 = x160 * x158 + x155 * x29;
-        let x162 = x150 - x104 + x105;
-        let x163 = x19 * x162;
-        let x164 = x157 + x106;
-        let x165 = x164 * x0;
-        let x166 = x153 - x109 * x0;
-        let x167 = (-x16 * xB - x11 * x115) * mB
-            + mF * (x30 * x159 - x20 * x152 + x31 * x161)
-            + mH * (x165 * x28 - x163 * x20 + x25 * x166);
-        let x168 = x109 * mH;
-        let x169 = x68 * mF;
-        let x170 = x168 + x169;
-        let x171 = -(x20 * x170);
-        let x172 = x1 * x1;
-        let x173 = f64::sqrt(x172);
-        let x174 = x75 * x75;
-        let x175 = 1.0 - x174;
-        let x176 = f64::sqrt(x175);
-        let x177 = x55 * x55;
-        let x178 = x60 * x6;
-        let x179 = x121 * x37;
-        let x180 = x41 * x119 + x179;
-        let x181 = x118 * x45;
-        let x182 = x178 + (x180 * x5 + x181) * mB
-            + mH * (x112 * x55 + x113 * x49 + x107 * x47)
-            + mF * (x50 * x91 + x52 * x103 + x102 * x55);
-        let x183 = x128 - x60;
-        let x184 = x49 * x111 + x134 * x47;
-        let x185 = x144 * x50 + x52 * x142;
-        let x186 = x183 * x45 + (x19 * x184 + x138 * x55) * mH
-            + mF * (x147 * x55 + x19 * x185);
-        let x187 = x37 * x115;
-        let x188 = (x163 * x55 + x165 * x47 + x49 * x166) * mH
-            + mF * (x52 * x159 + x152 * x55 + x50 * x161) + mB * (-x41 * xB - x187);
-        let x189 = x170 * x55;
-        let x190 = x121 * x121;
-        let x191 = x119 * x119;
-        let x192 = x5 * x5;
-        let x193 = x98 * x1;
-        let x194 = x13 * x12 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
-        let x195 = x193 * x194;
-        let x196 = IHxz * x12;
-        let x197 = x13 * (x13 * IHzz - 2.0 * x196);
-        let x198 = x12 * x12;
-        let x199 = x198 * IHxx;
-        let x200 = x197 + x199;
-        let x201 = x95 * x200;
-        let x202 = x195 + x201;
-        let x203 = x13 * (2.0 * x196 + x13 * IHxx);
-        let x204 = x198 * IHzz;
-        let x205 = x203 + x204;
-        let x206 = x95 * x194 + x193 * x205;
-        let x207 = x206 * x98;
-        let x208 = x9 * IBxz;
-        let x209 = x4 * IBxx;
-        let x210 = x208 + x209;
-        let x211 = x4 * IBxz;
-        let x212 = IBzz * x9;
-        let x213 = x211 + x212;
-        let x214 = f64::sin(thR);
-        let x215 = x4 * x214;
-        let x216 = f64::cos(thR);
-        let x217 = x216 * x9;
-        let x218 = x217 - x215;
-        let x219 = x4 * x216;
-        let x220 = x214 * x9;
-        let x221 = x219 + x220;
-        let x222 = x221 * x221;
-        let x223 = IRxx * (x218 * x218 + x222);
-        let x224 = IRyy + IByy;
-        let x225 = x193 * x29 + x22 * x95;
-        let x226 = x95 * x29 - x22 * x193;
-        let x227 = x225 * x225 + x226 * x226;
-        let x228 = IHyy + IFyy;
-        let x229 = x60 * rR;
-        let x230 = 2.0 * phi;
-        let x231 = f64::cos(x230);
-        let x232 = x0 * x98;
-        let x233 = x232 * x29 - x22 * x136;
-        let x234 = x29 * x136;
-        let x235 = x22 * x232 + x234;
-        let x236 = x226 * x233 + x235 * x225;
-        let x237 = x113 * x111 + x134 * x107;
-        let x238 = x19 * x98;
-        let x239 = x75 * x238;
-        let x240 = x4 * IBzz;
-        let x241 = x240 - x208;
-        let x242 = x241 * x9;
-        let x243 = x128 * x117;
-        let x244 = x194 * x232 + x205 * x136;
-        let x245 = x244 * x98;
-        let x246 = x9 * IBxx;
-        let x247 = x246 - x211;
-        let x248 = x4 * x247;
-        let x249 = x232 * x200;
-        let x250 = x194 * x136;
-        let x251 = x249 + x250;
-        let x252 = x144 * x91 + x103 * x142;
-        let x253 = x236 * IFxx + (x138 * x112 + x19 * x237) * mH - x239 * x228
-            + (x242 + x243 + x245 - x248) * x1 + x251 * x95
-            + mF * (x19 * x252 + x147 * x102);
-        let x254 = x22 * x225;
-        let x255 = x226 * x29;
-        let x256 = x254 + x255;
-        let x257 = IFxx * x256;
-        let x258 = x202 + x257;
-        let x259 = x224 + (-x119 * xB - x121 * x115) * mB;
-        let x260 = x75 * x0;
-        let x261 = x260 * x228;
-        let x262 = mH * (x113 * x166 + x107 * x165 + x163 * x112)
-            + mF * (x152 * x102 + x103 * x159 + x161 * x91) + x19 * x258 + x259 * x5
-            + x261;
-        let x263 = x5 * IRyy;
-        let x264 = x168 * x112 + x102 * x169 + x206 + IFxx * (x225 * x29 - x22 * x226);
-        let x265 = x75 * IFyy;
-        let x266 = x173 - x1;
-        let x267 = rR * x266;
-        let x268 = x35 * x267;
-        let x269 = x6 * x267;
-        let x270 = x75 * x55;
-        let x271 = x270 + x50 * x225 + x52 * x226;
-        let x272 = x227 + x174;
-        let x273 = x40 - x39;
-        let x274 = x273 * x12 + x48;
-        let x275 = x274 * x88 - x37 * x78;
-        let x276 = x13 * x273;
-        let x277 = x276 - x38;
-        let x278 = x277 * x0 - x46;
-        let x279 = rR * (x41 + x35) + x275 + x68 * x278;
-        let x280 = f64::sqrt(x175) * x279;
-        let x281 = x280 - (x175 * x271 + x270 * x272) * rF;
-        let x282 = -(x20 * x75);
-        let x283 = x226 * x30;
-        let x284 = x31 * x225;
-        let x285 = x282 + x283 + x284;
-        let x286 = rF * (x282 * x272 + x175 * x285);
-        let x287 = x25 * x88 + rR * (x6 - x14 - x15) + x68 * x28 + x11 * x78;
-        let x288 = x286 + f64::sqrt(x175) * x287;
-        let x289 = x19 * x238;
-        let x290 = x251 * x0;
-        let x291 = (x289 * x228 + x290) * x98;
-        let x292 = x19 * x19;
-        let x293 = x111 * x111;
-        let x294 = x134 * x134;
-        let x295 = x142 * x142;
-        let x296 = x144 * x144;
-        let x297 = x200 - IHyy;
-        let x298 = x297 - IFyy;
-        let x299 = x233 * x29;
-        let x300 = x235 * x22;
-        let x301 = x299 + x300;
-        let x302 = x250 + x301 * IFxx;
-        let x303 = x162 * x138 + x134 * x165 + x111 * x166;
-        let x304 = x142 * x159 + x144 * x161 + x147 * x151;
-        let x305 = x19 * (x298 * x232 + x302 + x303 * mH + mF * x304);
-        let x306 = x147 * x169 + IFxx * (x235 * x29 - x22 * x233) + x244 + x138 * x168;
-        let x307 = -(x238 * IFyy);
-        let x308 = x3 * x267;
-        let x309 = rR * x45;
-        let x310 = x1 - x173;
-        let x311 = x309 * x310;
-        let x312 = x52 * x233 - x238 * x55 + x235 * x50;
-        let x313 = x236 - x239;
-        let x314 = x68 * x95;
-        let x315 = 1.0 - x9;
-        let x316 = rR * x315;
-        let x317 = x139 - x130;
-        let x318 = x316 + x317;
-        let x319 = x314 + x318 * x1;
-        let x320 = x319 * x2;
-        let x321 = f64::sqrt(x175) * x320;
-        let x322 = x321 - rF * (x175 * x312 + x270 * x313);
-        let x323 = x140 * x1;
-        let x324 = x92 * x136 - x94;
-        let x325 = x68 * x324;
-        let x326 = x323 + x325;
-        let x327 = x8 * x326;
-        let x328 = x20 * x238 + x233 * x30 + x235 * x31;
-        let x329 = (x282 * x313 + x175 * x328) * rF;
-        let x330 = x327 * f64::sqrt(x175) + x329;
-        let x331 = x92 - x94 * x136;
-        let x332 = x75 * x331;
-        let x333 = x72 + x74 * x136;
-        let x334 = x140 * x5 + x68 * x333;
-        let x335 = rF * x332 / f64::sqrt(x175) + x334;
-        let x336 = x22 * x22;
-        let x337 = x29 * x29;
-        let x338 = x336 + x337;
-        let x339 = x338 * IFxx;
-        let x340 = x0 * x0;
-        let x341 = x162 * x168 + x151 * x169 + x194;
-        let x342 = x341 * x19;
-        let x343 = x0 * IFyy;
-        let x344 = -x309;
-        let x345 = rR * x3;
-        let x346 = -x345;
-        let x347 = x23 - x24;
-        let x348 = x347 * x154 - x16 * x78 - rR * x11 + x18 * x88;
-        let x349 = f64::sqrt(x175) * x348;
-        let x350 = x175 * x45;
-        let x351 = x19 * x256;
-        let x352 = x351 + x260;
-        let x353 = x349 - rF * (x350 + x270 * x352);
-        let x354 = rR * x37;
-        let x355 = x38 - x276;
-        let x356 = x273 * x78 - x354 + x154 * x274 + x355 * x88;
-        let x357 = x282 * x352;
-        let x358 = x175 * x3;
-        let x359 = f64::sqrt(x175) * x356 - rF * (x358 - x357);
-        let x360 = x19 * x75;
-        let x361 = x360 * rF / f64::sqrt(x175);
-        let x362 = x154 - x361;
-        let x363 = x362 * x98;
-        let x364 = x64 - x79;
-        let x365 = x364 + x71 * x88;
-        let x366 = (x365 - x363) * x1;
-        let x367 = x20 * f64::sqrt(x175) * x68;
-        let x368 = x12 * x1;
-        let x369 = x97 * x1 + x368 * x9;
-        let x370 = x175 * x338;
-        let x371 = -x367 - rF * (x270 * x369 + x49 * x370);
-        let x372 = (x25 * x370 + x282 * x369) * rF;
-        let x373 = x372 + f64::sqrt(x175) * x68 * x55;
-        let x374 = x75 * (x68 - rF * x95 / f64::sqrt(x175));
+        let x133 = x132 - x129;
+        let x134 = x133 * x28 + x76 * x25;
+        let x135 = x66 - x65;
+        let x136 = x73 * x135;
+        let x137 = x136 + x133 * x0;
+        let x138 = x74 * x105;
+        let x139 = x132 - x138;
+        let x140 = x139 * x0 + x100 * x135;
+        let x141 = x100 * x29;
+        let x142 = x74 * x141 + x22 * x139;
+        let x143 = x22 * x100;
+        let x144 = x139 * x29 - x74 * x143;
+        let x145 = x31 * x142 + x30 * x144;
+        let x146 = x128 * x3 + (x134 * x19 - x20 * x137) * mH
+            + mF * (x19 * x145 - x20 * x140);
+        let x147 = x13 * x60;
+        let x148 = x82 + x147;
+        let x149 = x148 - x103 - x104;
+        let x150 = x19 * x149;
+        let x151 = x87 - x12 * x60;
+        let x152 = x100 * x0;
+        let x153 = x151 - x152;
+        let x154 = x0 * x29;
+        let x155 = -x82 - x147;
+        let x156 = x155 + x105;
+        let x157 = x154 * x156 - x22 * x153;
+        let x158 = x22 * x0;
+        let x159 = x158 * x156 + x153 * x29;
+        let x160 = x148 - x61 + x62;
+        let x161 = x19 * x160;
+        let x162 = x155 + x63;
+        let x163 = x162 * x0;
+        let x164 = x151 - x73 * x0;
+        let x165 = (-x16 * xB - x11 * x114) * mB
+            + mF * (x30 * x157 - x20 * x150 + x31 * x159)
+            + mH * (x163 * x28 - x161 * x20 + x25 * x164);
+        let x166 = x73 * mH;
+        let x167 = x100 * mF;
+        let x168 = x166 + x167;
+        let x169 = -(x20 * x168);
+        let x170 = x1 * x1;
+        let x171 = f64::sqrt(x170);
+        let x172 = x93 * x93;
+        let x173 = 1.0 - x172;
+        let x174 = f64::sqrt(x173);
+        let x175 = x55 * x55;
+        let x176 = x99 * x6;
+        let x177 = x120 * x37;
+        let x178 = x41 * x118 + x177;
+        let x179 = x117 * x45;
+        let x180 = (x98 * x47 + x49 * x94 + x86 * x55) * mH
+            + mF * (x111 * x55 + x112 * x50 + x52 * x108) + x176
+            + (x178 * x5 + x179) * mB;
+        let x181 = x127 - x99;
+        let x182 = x50 * x142 + x52 * x144;
+        let x183 = x76 * x49 + x133 * x47;
+        let x184 = x181 * x45 + mF * (x19 * x182 + x140 * x55)
+            + (x137 * x55 + x19 * x183) * mH;
+        let x185 = x37 * x114;
+        let x186 = (x161 * x55 + x163 * x47 + x49 * x164) * mH
+            + mF * (x52 * x157 + x150 * x55 + x50 * x159) + mB * (-x41 * xB - x185);
+        let x187 = x168 * x55;
+        let x188 = x74 * x1;
+        let x189 = x188 * x29 + x22 * x70;
+        let x190 = x70 * x29 - x22 * x188;
+        let x191 = x189 * x189 + x190 * x190;
+        let x192 = x120 * x120;
+        let x193 = x118 * x118;
+        let x194 = x5 * x5;
+        let x195 = x9 * IBxz;
+        let x196 = x4 * IBxx;
+        let x197 = x195 + x196;
+        let x198 = x4 * IBxz;
+        let x199 = IBzz * x9;
+        let x200 = x198 + x199;
+        let x201 = f64::sin(thR);
+        let x202 = x4 * x201;
+        let x203 = f64::cos(thR);
+        let x204 = x203 * x9;
+        let x205 = x204 - x202;
+        let x206 = x4 * x203;
+        let x207 = x201 * x9;
+        let x208 = x206 + x207;
+        let x209 = x208 * x208;
+        let x210 = IRxx * (x205 * x205 + x209);
+        let x211 = x13 * x12 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
+        let x212 = IHxz * x12;
+        let x213 = x13 * (2.0 * x212 + x13 * IHxx);
+        let x214 = x12 * x12;
+        let x215 = x214 * IHzz;
+        let x216 = x213 + x215;
+        let x217 = x211 * x70 + x188 * x216;
+        let x218 = x74 * x217;
+        let x219 = IHyy + IFyy;
+        let x220 = IRyy + IByy;
+        let x221 = x99 * rR;
+        let x222 = 2.0 * phi;
+        let x223 = f64::cos(x222);
+        let x224 = x188 * x211;
+        let x225 = x13 * (x13 * IHzz - 2.0 * x212);
+        let x226 = x214 * IHxx;
+        let x227 = x225 + x226;
+        let x228 = x70 * x227;
+        let x229 = x224 + x228;
+        let x230 = x19 * x74;
+        let x231 = x93 * x230;
+        let x232 = x74 * x0;
+        let x233 = x232 * x227;
+        let x234 = x135 * x211;
+        let x235 = x233 + x234;
+        let x236 = x133 * x98 + x76 * x94;
+        let x237 = x4 * IBzz;
+        let x238 = x237 - x195;
+        let x239 = x238 * x9;
+        let x240 = x127 * x116;
+        let x241 = x232 * x211 + x135 * x216;
+        let x242 = x74 * x241;
+        let x243 = x9 * IBxx;
+        let x244 = x243 - x198;
+        let x245 = x4 * x244;
+        let x246 = x232 * x29 - x22 * x135;
+        let x247 = x135 * x29;
+        let x248 = x247 + x22 * x232;
+        let x249 = x190 * x246 + x248 * x189;
+        let x250 = x112 * x142 + x108 * x144;
+        let x251 = x235 * x70 - x231 * x219 + mH * (x19 * x236 + x137 * x86)
+            + (x239 + x240 + x242 - x245) * x1 + x249 * IFxx
+            + (x111 * x140 + x19 * x250) * mF;
+        let x252 = x220 + (-x118 * xB - x120 * x114) * mB;
+        let x253 = x0 * x93;
+        let x254 = x253 * x219;
+        let x255 = x22 * x189;
+        let x256 = x190 * x29;
+        let x257 = x255 + x256;
+        let x258 = x257 * IFxx;
+        let x259 = x258 + x229;
+        let x260 = (x98 * x163 + x94 * x164 + x161 * x86) * mH + x252 * x5
+            + (x108 * x157 + x112 * x159 + x111 * x150) * mF + x254 + x19 * x259;
+        let x261 = x5 * IRyy;
+        let x262 = x86 * x166 + x111 * x167 + IFxx * (x189 * x29 - x22 * x190) + x217;
+        let x263 = x93 * IFyy;
+        let x264 = x171 - x1;
+        let x265 = rR * x264;
+        let x266 = x35 * x265;
+        let x267 = x6 * x265;
+        let x268 = x40 - x39;
+        let x269 = x268 * x12 + x48;
+        let x270 = x269 * x105 - x37 * x60;
+        let x271 = x13 * x268;
+        let x272 = x271 - x38;
+        let x273 = x272 * x0 - x46;
+        let x274 = rR * (x41 + x35) + x270 + x100 * x273;
+        let x275 = f64::sqrt(x173) * x274;
+        let x276 = x172 + x191;
+        let x277 = x93 * x55;
+        let x278 = x189 * x50 + x190 * x52 + x277;
+        let x279 = x275 - rF * (x276 * x277 + x173 * x278);
+        let x280 = x25 * x105 + rR * (x6 - x14 - x15) + x100 * x28 + x11 * x60;
+        let x281 = -(x20 * x93);
+        let x282 = x190 * x30;
+        let x283 = x31 * x189;
+        let x284 = x282 + x281 + x283;
+        let x285 = rF * (x276 * x281 + x284 * x173);
+        let x286 = f64::sqrt(x173) * x280 + x285;
+        let x287 = x235 * x0;
+        let x288 = x19 * x230;
+        let x289 = (x287 + x288 * x219) * x74;
+        let x290 = x19 * x19;
+        let x291 = x142 * x142;
+        let x292 = x144 * x144;
+        let x293 = x76 * x76;
+        let x294 = x133 * x133;
+        let x295 = x133 * x163 + x76 * x164 + x137 * x160;
+        let x296 = x246 * x29;
+        let x297 = x22 * x248;
+        let x298 = x296 + x297;
+        let x299 = x234 + IFxx * x298;
+        let x300 = x227 - IHyy;
+        let x301 = x300 - IFyy;
+        let x302 = x149 * x140 + x144 * x157 + x159 * x142;
+        let x303 = (x295 * mH + x299 + x232 * x301 + mF * x302) * x19;
+        let x304 = x167 * x140 + IFxx * (x248 * x29 - x22 * x246) + x137 * x166 + x241;
+        let x305 = -(IFyy * x230);
+        let x306 = x3 * x265;
+        let x307 = rR * x45;
+        let x308 = x1 - x171;
+        let x309 = x307 * x308;
+        let x310 = x249 - x231;
+        let x311 = x52 * x246 - x230 * x55 + x248 * x50;
+        let x312 = 1.0 - x9;
+        let x313 = rR * x312;
+        let x314 = x138 - x130;
+        let x315 = x313 + x314;
+        let x316 = x100 * x70;
+        let x317 = x315 * x1 + x316;
+        let x318 = x317 * x2;
+        let x319 = f64::sqrt(x173) * x318;
+        let x320 = x319 - (x310 * x277 + x173 * x311) * rF;
+        let x321 = x0 * x135;
+        let x322 = x321 * x1 - x69;
+        let x323 = x100 * x322;
+        let x324 = x139 * x1;
+        let x325 = x323 + x324;
+        let x326 = x325 * x8;
+        let x327 = x31 * x248 + x246 * x30 + x20 * x230;
+        let x328 = rF * (x281 * x310 + x327 * x173);
+        let x329 = f64::sqrt(x173) * x326 + x328;
+        let x330 = x5 * x321 + x91;
+        let x331 = x139 * x5 + x330 * x100;
+        let x332 = x64 - x135 * x69;
+        let x333 = x332 * x93;
+        let x334 = x331 + x333 * rF / f64::sqrt(x173);
+        let x335 = x22 * x22;
+        let x336 = x29 * x29;
+        let x337 = x335 + x336;
+        let x338 = x337 * IFxx;
+        let x339 = x0 * x0;
+        let x340 = x160 * x166 + x149 * x167 + x211;
+        let x341 = x340 * x19;
+        let x342 = x0 * IFyy;
+        let x343 = -x307;
+        let x344 = rR * x3;
+        let x345 = -x344;
+        let x346 = x173 * x45;
+        let x347 = x257 * x19;
+        let x348 = x347 + x253;
+        let x349 = x23 - x24;
+        let x350 = x349 * x152 - x16 * x60 - rR * x11 + x18 * x105;
+        let x351 = f64::sqrt(x173) * x350;
+        let x352 = x351 - (x346 + x348 * x277) * rF;
+        let x353 = rR * x37;
+        let x354 = x38 - x271;
+        let x355 = x268 * x60 - x353 + x152 * x269 + x354 * x105;
+        let x356 = x281 * x348;
+        let x357 = x173 * x3;
+        let x358 = x355 * f64::sqrt(x173) - rF * (x357 - x356);
+        let x359 = x19 * x93;
+        let x360 = rF * x359 / f64::sqrt(x173);
+        let x361 = x152 - x360;
+        let x362 = x74 * x361;
+        let x363 = x77 - x78;
+        let x364 = x67 * x105 + x363;
+        let x365 = (x364 - x362) * x1;
+        let x366 = x20 * x100 * f64::sqrt(x173);
+        let x367 = x337 * x173;
+        let x368 = x13 * x1;
+        let x369 = x12 * x1;
+        let x370 = x4 * x368 + x369 * x9;
+        let x371 = -x366 - (x49 * x367 + x370 * x277) * rF;
+        let x372 = rF * (x281 * x370 + x25 * x367);
+        let x373 = x372 + x100 * f64::sqrt(x173) * x55;
+        let x374 = (x100 - rF * x70 / f64::sqrt(x173)) * x93;
         let x375 = -(rF * x55);
         let x376 = -(x20 * rF);
-        let x377 = phi_dot * phi_dot + psi_dot * psi_dot;
-        let x378 = psi_dot * x45;
-        let x379 = psi_dot * x1;
-        let x380 = x9 * phi_dot;
-        let x381 = x380 - x4 * x379;
-        let x382 = rR * psi_dot;
-        let x383 = x5 * x382;
-        let x384 = x4 * x383;
-        let x385 = psi_dot * x5;
-        let x386 = theta_dot + x385;
-        let x387 = x386 * xB;
-        let x388 = x384 - x387;
-        let x389 = x385 - theta_dot;
-        let x390 = x389 * x4;
-        let x391 = theta_dot * x9;
-        let x392 = x390 * phi_dot - x391 * x379;
-        let x393 = x9 * x5;
-        let x394 = x393 * x382;
-        let x395 = x386 * x115;
-        let x396 = x394 - x395;
-        let x397 = x4 * phi_dot;
-        let x398 = x9 * x379;
-        let x399 = x397 + x398;
-        let x400 = theta_dot - x385;
-        let x401 = x9 * x400;
-        let x402 = x4 * theta_dot;
-        let x403 = x379 * x402;
-        let x404 = x401 * phi_dot - x403;
-        let x405 = x392 * x115 - x381 * x388 + x396 * x399 + x404 * xB;
-        let x406 = phi_dot * x1;
-        let x407 = rR * x5;
-        let x408 = xB * x399;
-        let x409 = x381 * x115;
-        let x410 = x408 + x409;
-        let x411 = rR * phi_dot;
-        let x412 = x410 - x411;
-        let x413 = x412 * x399;
-        let x414 = psi_dot * (x121 * x406 - x407 * x402) + x386 * x388 - x413;
-        let x415 = x412 * x381;
-        let x416 = x391 * x407;
-        let x417 = (x416 + x406 * x119) * psi_dot - x396 * x386;
-        let x418 = x415 + x417;
-        let x419 = x416 + x406 * x65;
-        let x420 = x5 * x402;
-        let x421 = x61 * x406 - x420;
-        let x422 = x419 * x12 - x421 * x62;
-        let x423 = psi_dot * x422;
-        let x424 = x406 * psi_dot;
-        let x425 = x19 * x386;
-        let x426 = x381 * x12;
-        let x427 = x13 * x399;
-        let x428 = x426 + x427;
-        let x429 = x0 * x428;
-        let x430 = x425 + x429;
-        let x431 = x392 * x12;
-        let x432 = x13 * x404 + x431;
-        let x433 = x424 * x0 - delta_dot * x430 - x19 * x432;
-        let x434 = x19 * x428;
-        let x435 = x386 * x0;
-        let x436 = x435 - x434;
-        let x437 = x384 - x386 * x78;
-        let x438 = x393 * psi_dot - theta_dot - x385;
-        let x439 = x13 * x437 + x438 * x82;
-        let x440 = x439 * x0;
-        let x441 = rR * (x381 - phi_dot) + x399 * x78;
-        let x442 = x19 * x441;
-        let x443 = x440 + x442;
-        let x444 = x436 * x106 + x443;
-        let x445 = x430 * x106;
-        let x446 = x12 * x399;
-        let x447 = x13 * x381;
-        let x448 = delta_dot + x446 - x447;
-        let x449 = x448 * x109 - x445;
-        let x450 = x439 * x19;
-        let x451 = x0 * x441;
+        let x377 = psi_dot * x1;
+        let x378 = x9 * phi_dot;
+        let x379 = x378 - x4 * x377;
+        let x380 = x379 * x12;
+        let x381 = x4 * phi_dot;
+        let x382 = x9 * x377;
+        let x383 = x381 + x382;
+        let x384 = x13 * x383;
+        let x385 = x380 + x384;
+        let x386 = x19 * x385;
+        let x387 = psi_dot * x5;
+        let x388 = x387 + theta_dot;
+        let x389 = x0 * x388;
+        let x390 = x389 - x386;
+        let x391 = x73 * x390;
+        let x392 = rR * psi_dot;
+        let x393 = x5 * x392;
+        let x394 = x4 * x393;
+        let x395 = x394 - x388 * x60;
+        let x396 = x12 * x395;
+        let x397 = x387 * x9 - x387 - theta_dot;
+        let x398 = x397 * x87;
+        let x399 = x396 - x398;
+        let x400 = x399 - x391;
+        let x401 = x19 * x388;
+        let x402 = x0 * x385;
+        let x403 = x401 + x402;
+        let x404 = x400 * x403;
+        let x405 = theta_dot - x387;
+        let x406 = x9 * x405;
+        let x407 = x4 * theta_dot;
+        let x408 = x377 * x407;
+        let x409 = x406 * phi_dot - x408;
+        let x410 = x409 * x12;
+        let x411 = x387 - theta_dot;
+        let x412 = x4 * x411;
+        let x413 = theta_dot * x9;
+        let x414 = x412 * phi_dot - x413 * x377;
+        let x415 = x13 * x414;
+        let x416 = x410 - x415;
+        let x417 = x73 * x416;
+        let x418 = phi_dot * x1;
+        let x419 = x413 * rR;
+        let x420 = x419 * x5;
+        let x421 = x418 * x83 + x420;
+        let x422 = x5 * x407;
+        let x423 = x81 * x418 - x422;
+        let x424 = x13 * x421 + x82 * x423;
+        let x425 = x424 * x19;
+        let x426 = x425 * psi_dot;
+        let x427 = x397 * x82 + x13 * x395;
+        let x428 = x0 * x427;
+        let x429 = rR * (x379 - phi_dot) + x383 * x60;
+        let x430 = x19 * x429;
+        let x431 = x428 + x430;
+        let x432 = delta_dot * x431;
+        let x433 = rR * x414 + x409 * x60;
+        let x434 = x0 * x433;
+        let x435 = (x434 - x432) - x426;
+        let x436 = x12 * x414;
+        let x437 = x436 + x13 * x409;
+        let x438 = x437 * x0;
+        let x439 = delta_dot * x390;
+        let x440 = x418 * psi_dot;
+        let x441 = x440 * x19;
+        let x442 = (x438 + x439) + x441;
+        let x443 = x442 * x63;
+        let x444 = x12 * x383;
+        let x445 = x13 * x379;
+        let x446 = delta_dot + x444 - x445;
+        let x447 = x63 * x390 + x431;
+        let x448 = x446 * x447;
+        let x449 = x417 - x404 + x435 - x443 + x448;
+        let x450 = x19 * x427;
+        let x451 = x0 * x429;
         let x452 = x451 - x450;
-        let x453 = x449 + x452;
-        let x454 = x423 - x433 * x109 - x444 * x436 + x453 * x430;
-        let x455 = x404 * x12;
-        let x456 = x13 * x392;
-        let x457 = x455 - x456;
-        let x458 = x457 * x109;
-        let x459 = x109 * x436;
-        let x460 = x12 * x437;
-        let x461 = x62 * x438;
-        let x462 = x460 - x461;
-        let x463 = x462 - x459;
-        let x464 = x430 * x463;
-        let x465 = x448 * x444;
-        let x466 = x404 * x78 + rR * x392;
-        let x467 = x466 * x0;
-        let x468 = delta_dot * x443;
-        let x469 = x13 * x419 + x421 * x82;
-        let x470 = x19 * x469;
-        let x471 = psi_dot * x470;
-        let x472 = (x467 - x468) - x471;
-        let x473 = x424 * x19;
-        let x474 = delta_dot * x436;
-        let x475 = x0 * x432;
-        let x476 = x473 + (x474 + x475);
-        let x477 = x476 * x106;
-        let x478 = x458 - x464 + x465 + x472 - x477;
-        let x479 = delta_dot * x452;
-        let x480 = x479 - x453 * x448;
-        let x481 = x433 * x106;
-        let x482 = x463 * x436;
-        let x483 = x0 * x469;
-        let x484 = psi_dot * x483;
-        let x485 = x19 * x466;
-        let x486 = x484 + x485;
-        let x487 = (x481 + x482) + x486;
-        let x488 = x480 + x487;
-        let x489 = x436 * x88;
-        let x490 = x489 + x443;
-        let x491 = x462 - x68 * x436;
-        let x492 = x22 * x490 + x29 * x491;
-        let x493 = x430 * x88;
-        let x494 = x68 * x448 - x493 + x452;
-        let x495 = x448 * x29;
-        let x496 = x22 * x430;
+        let x453 = x63 * x403;
+        let x454 = x446 * x73 - x453;
+        let x455 = x452 + x454;
+        let x456 = delta_dot * x452;
+        let x457 = x456 - x446 * x455;
+        let x458 = x19 * x433;
+        let x459 = x424 * x0;
+        let x460 = psi_dot * x459;
+        let x461 = x458 + x460;
+        let x462 = x440 * x0 - delta_dot * x403 - x437 * x19;
+        let x463 = x462 * x63;
+        let x464 = x400 * x390;
+        let x465 = x461 + (x463 + x464);
+        let x466 = x457 + x465;
+        let x467 = x12 * x421 - x87 * x423;
+        let x468 = x467 * psi_dot;
+        let x469 = x403 * x455 + x468 - x73 * x462 - x447 * x390;
+        let x470 = x390 * x105;
+        let x471 = x470 + x431;
+        let x472 = x399 - x100 * x390;
+        let x473 = x22 * x471 + x472 * x29;
+        let x474 = x462 * x105;
+        let x475 = x461 + x474;
+        let x476 = x475 + x456;
+        let x477 = x468 - x100 * x462;
+        let x478 = x403 * x105;
+        let x479 = x452 - x478 + x100 * x446;
+        let x480 = x22 * x403;
+        let x481 = x446 * x29;
+        let x482 = x480 + x481;
+        let x483 = x473 * x390 + (x476 * x29 - x22 * x477) - x479 * x482;
+        let x484 = x403 * x29;
+        let x485 = x484 - x22 * x446;
+        let x486 = x471 * x29 - x22 * x472;
+        let x487 = x477 * x29 + x485 * x479 + x22 * x476 - x486 * x390;
+        let x488 = x100 * x416;
+        let x489 = x485 * x473;
+        let x490 = x442 * x105;
+        let x491 = x486 * x482;
+        let x492 = x488 - x489 - x490 + x435 + x491;
+        let x493 = phi_dot * phi_dot + psi_dot * psi_dot;
+        let x494 = psi_dot * x45;
+        let x495 = xB * x383;
+        let x496 = x379 * x114;
         let x497 = x495 + x496;
-        let x498 = x423 - x433 * x68;
-        let x499 = x433 * x88;
-        let x500 = x486 + x499;
-        let x501 = x479 + x500;
-        let x502 = x436 * x492 - x494 * x497 + (x501 * x29 - x22 * x498);
-        let x503 = x430 * x29;
-        let x504 = x503 - x22 * x448;
-        let x505 = x490 * x29 - x22 * x491;
-        let x506 = x498 * x29 + x22 * x501 + x504 * x494 - x505 * x436;
-        let x507 = x457 * x68;
-        let x508 = x505 * x497;
-        let x509 = x476 * x88;
-        let x510 = x504 * x492;
-        let x511 = x507 + x508 + x472 - x509 - x510;
-        let x512 = -(x60 * (2.0 * (x378 * phi_dot) - x377 * x6)
-            + mB * (x11 * x414 - x405 * x3 + x16 * x418)
-            + mH * (x454 * x25 - x20 * x478 + x28 * x488)
-            + mF * (x30 * x502 + x31 * x506 - x20 * x511));
-        let x513 = x377 * x35;
-        let x514 = psi_dot * x3;
-        let x515 = phi_dot * x514;
-        let x516 = x405 * x45;
-        let x517 = x37 * x414;
-        let x518 = x430 * thF_dot;
-        let x519 = x448 * thF_dot;
-        let x520 = x476 - x519;
-        let x521 = thF_dot + x436;
-        let x522 = x521 * (IFyy - IFxx);
-        let x523 = ((x457 + x518) * x29 + x22 * x520) * IFxx + x504 * x522;
-        let x524 = x60 * x382;
-        let x525 = f64::sin(x230);
-        let x526 = x524 * x525;
-        let x527 = x381 * IBxz;
-        let x528 = IBzz * x399 - x527;
-        let x529 = x399 * IByy;
-        let x530 = x528 - x529;
-        let x531 = (x530 * x386 - x404 * IBxz) + x392 * IBxx;
-        let x532 = x4 * x531;
-        let x533 = x404 * x216;
-        let x534 = x392 * x214;
-        let x535 = x214 * x399;
-        let x536 = x216 * x381;
-        let x537 = x536 - x535;
-        let x538 = thR_dot + theta_dot;
-        let x539 = x385 + x538;
-        let x540 = IRyy - IRxx;
-        let x541 = x539 * x540;
-        let x542 = (x533 + x534 + thR_dot * x537) * IRxx + x541 * x537;
-        let x543 = x392 * x216;
-        let x544 = x216 * x399;
-        let x545 = x214 * x381;
-        let x546 = x544 + x545;
-        let x547 = (x543 - thR_dot * x546 - x404 * x214) * IRxx;
-        let x548 = IRxx - IRyy;
-        let x549 = x539 * x548;
-        let x550 = x546 * x549;
-        let x551 = x547 + x550;
-        let x552 = x551 * x221;
-        let x553 = x5 * phi_dot;
-        let x554 = x553 * psi_dot * IRyy;
-        let x555 = x476 * x194;
-        let x556 = x457 * x205;
-        let x557 = x430 * IHyy;
-        let x558 = x448 * x194;
-        let x559 = x430 * x200;
-        let x560 = x557 + (-x558 - x559);
-        let x561 = x555 + x556 + x436 * x560;
-        let x562 = x561 * x98;
-        let x563 = x381 * IByy;
-        let x564 = x381 * IBxx;
-        let x565 = x399 * IBxz;
-        let x566 = x565 - x564;
-        let x567 = x563 + x566;
-        let x568 = x386 * x567;
-        let x569 = x404 * IBzz;
-        let x570 = x568 + x569;
-        let x571 = x392 * IBxz;
-        let x572 = x570 - x571;
-        let x573 = x572 * x9;
-        let x574 = x558 + x559;
-        let x575 = x574 * x448;
-        let x576 = x433 * IHyy;
-        let x577 = x430 * x194;
-        let x578 = x448 * x205;
-        let x579 = x577 + x578;
-        let x580 = x430 * x579;
-        let x581 = x433 * IFyy;
-        let x582 = x580 - x575 - x576 - x581;
-        let x583 = x121 * x414 + x119 * x418;
-        let x584 = x521 * (IFxx - IFyy);
-        let x585 = x497 * x584;
-        let x586 = x456 - x455 - x518;
-        let x587 = (x22 * x586 + x29 * x520) * IFxx;
-        let x588 = x585 + x587;
-        let x589 = x528 * x381;
-        let x590 = x564 - x565;
-        let x591 = x399 * x590;
-        let x592 = x591 - x589 + x424 * IByy;
-        let x593 = x448 * IHyy;
-        let x594 = x579 - x593;
-        let x595 = (x476 * x200 + x594 * x436) + x457 * x194;
-        let x596 = x506 * x144 + x502 * x142;
-        let x597 = x134 * x488 + x454 * x111;
-        let x598 = (x575 + x576) + (x581 - x580);
-        let x599 = (x19 * x598 - x595 * x0) * x98;
-        let x600 = x129 * x5;
-        let x601 = x595 + (x588 * x29 + x22 * x523);
-        let x602 = -(mB * x117);
-        let x603 = x365 - x154 * x98;
-        let x604 = -(x0 * x98);
-        let x605 = -(phi_dot * x224);
-        let x606 = (-x467 - x75 * g) + (x471 + x468);
-        let x607 = x574 - x557;
-        let x608 = x406 * x5;
-        let x609 = x192 / f64::sqrt(x172);
-        let x610 = (x266 - x609) * x1;
-        let x611 = x610 + x192;
-        let x612 = x8 * phi_dot;
-        let x613 = psi_dot * x6;
-        let x614 = x538 * x3;
-        let x615 = x6 * phi_dot;
-        let x616 = x8 * psi_dot;
-        let x617 = x1 / f64::sqrt(x172);
-        let x618 = 2.0 - x617;
-        let x619 = x538 * x35;
-        let x620 = rR
-            * (psi_dot * (-x611 * x612 - x310 * x613 - x614)
+        let x498 = rR * phi_dot;
+        let x499 = x497 - x498;
+        let x500 = x499 * x379;
+        let x501 = x388 * x114;
+        let x502 = x393 * x9;
+        let x503 = x502 - x501;
+        let x504 = psi_dot * (x420 + x418 * x118) - x388 * x503;
+        let x505 = x500 + x504;
+        let x506 = xB * x388;
+        let x507 = x394 - x506;
+        let x508 = x499 * x383;
+        let x509 = x507 * x388 - x508 + psi_dot * (x120 * x418 - x422 * rR);
+        let x510 = x409 * xB + x383 * x503 - x507 * x379 + x414 * x114;
+        let x511 = -(mH * (x466 * x28 - x449 * x20 + x25 * x469)
+            + mF * (x483 * x30 + x31 * x487 - x20 * x492)
+            + x99 * (2.0 * (x494 * phi_dot) - x493 * x6)
+            + mB * (x505 * x16 + x11 * x509 - x510 * x3));
+        let x512 = x510 * x45;
+        let x513 = x509 * x37;
+        let x514 = x493 * x35;
+        let x515 = psi_dot * x3;
+        let x516 = phi_dot * x515;
+        let x517 = IBzz * x409;
+        let x518 = x379 * IByy;
+        let x519 = x379 * IBxx;
+        let x520 = x383 * IBxz;
+        let x521 = x520 - x519;
+        let x522 = x518 + x521;
+        let x523 = x388 * x522;
+        let x524 = x517 + x523;
+        let x525 = IBxz * x414;
+        let x526 = x524 - x525;
+        let x527 = x9 * x526;
+        let x528 = x5 * phi_dot;
+        let x529 = x528 * psi_dot * IRyy;
+        let x530 = x203 * x383;
+        let x531 = x201 * x379;
+        let x532 = x530 + x531;
+        let x533 = x203 * x414;
+        let x534 = (x533 - thR_dot * x532 - x201 * x409) * IRxx;
+        let x535 = IRxx - IRyy;
+        let x536 = thR_dot + theta_dot;
+        let x537 = x387 + x536;
+        let x538 = x535 * x537;
+        let x539 = x532 * x538;
+        let x540 = x534 + x539;
+        let x541 = x540 * x208;
+        let x542 = x416 * x216;
+        let x543 = x442 * x211;
+        let x544 = x446 * x211;
+        let x545 = x403 * x227;
+        let x546 = IHyy * x403;
+        let x547 = (-x544 - x545) + x546;
+        let x548 = x542 + x543 + x547 * x390;
+        let x549 = x74 * x548;
+        let x550 = x201 * x414;
+        let x551 = x203 * x409;
+        let x552 = x201 * x383;
+        let x553 = x203 * x379;
+        let x554 = x553 - x552;
+        let x555 = IRyy - IRxx;
+        let x556 = x555 * x537;
+        let x557 = (x550 + x551 + thR_dot * x554) * IRxx + x554 * x556;
+        let x558 = x379 * IBxz;
+        let x559 = IBzz * x383 - x558;
+        let x560 = x383 * IByy;
+        let x561 = x559 - x560;
+        let x562 = x414 * IBxx + (x561 * x388 - x409 * IBxz);
+        let x563 = x562 * x4;
+        let x564 = thF_dot + x390;
+        let x565 = (IFyy - IFxx) * x564;
+        let x566 = thF_dot * x403;
+        let x567 = x446 * thF_dot;
+        let x568 = x442 - x567;
+        let x569 = x485 * x565 + IFxx * ((x566 + x416) * x29 + x22 * x568);
+        let x570 = x99 * x392;
+        let x571 = f64::sin(x222);
+        let x572 = x570 * x571;
+        let x573 = x505 * x118 + x120 * x509;
+        let x574 = x415 - x410 - x566;
+        let x575 = (x22 * x574 + x568 * x29) * IFxx;
+        let x576 = (IFxx - IFyy) * x564;
+        let x577 = x482 * x576;
+        let x578 = x575 + x577;
+        let x579 = x446 * IHyy;
+        let x580 = x211 * x403;
+        let x581 = x446 * x216;
+        let x582 = x580 + x581;
+        let x583 = x582 - x579;
+        let x584 = (x583 * x390 + x442 * x227) + x211 * x416;
+        let x585 = x559 * x379;
+        let x586 = x519 - x520;
+        let x587 = x383 * x586;
+        let x588 = x587 - x585 + x440 * IByy;
+        let x589 = x462 * IHyy;
+        let x590 = x582 * x403;
+        let x591 = x462 * IFyy;
+        let x592 = x544 + x545;
+        let x593 = x446 * x592;
+        let x594 = x590 - x589 - x591 - x593;
+        let x595 = x128 * x5;
+        let x596 = x483 * x144 + x487 * x142;
+        let x597 = x133 * x466 + x76 * x469;
+        let x598 = (x591 - x590) + (x589 + x593);
+        let x599 = x74 * (x19 * x598 - x0 * x584);
+        let x600 = -(phi_dot * x220);
+        let x601 = -(mB * x116);
+        let x602 = -(x74 * x0);
+        let x603 = x602 * x100 + x364;
+        let x604 = (x578 * x29 + x22 * x569) + x584;
+        let x605 = x592 - x546;
+        let x606 = (-g * x93 - x434) + (x432 + x426);
+        let x607 = x418 * x5;
+        let x608 = x194 / f64::sqrt(x170);
+        let x609 = (x264 - x608) * x1;
+        let x610 = x609 + x194;
+        let x611 = x8 * phi_dot;
+        let x612 = psi_dot * x6;
+        let x613 = x536 * x3;
+        let x614 = x6 * phi_dot;
+        let x615 = x8 * psi_dot;
+        let x616 = x1 / f64::sqrt(x170);
+        let x617 = 2.0 - x616;
+        let x618 = x536 * x35;
+        let x619 = rR
+            * (psi_dot * (-x610 * x611 - x308 * x612 - x613)
                 + phi_dot
-                    * (f64::sqrt(x172) * x615 - (x616 * x266 + x618 * x615) * x1
-                        - x619));
-        let x621 = x35 * psi_dot;
-        let x622 = x538 * x45;
-        let x623 = phi_dot * x2;
-        let x624 = x538 * x6;
-        let x625 = x35 * phi_dot;
-        let x626 = f64::sqrt(x172) * x625;
-        let x627 = x617 - 2.0;
-        let x628 = psi_dot * x2;
-        let x629 = delta_dot * x5;
-        let x630 = -(x98 * x1);
-        let x631 = theta_dot * x630;
-        let x632 = x631 + x553 * x136;
-        let x633 = x629 + x632;
-        let x634 = x19 * x633;
-        let x635 = delta_dot * x71;
-        let x636 = phi_dot - x635;
-        let x637 = x92 * x636;
-        let x638 = x637 - x634;
-        let x639 = x75 * x638;
-        let x640 = x348 * x639;
-        let x641 = theta_dot * x5;
-        let x642 = x641 + psi_dot;
-        let x643 = x642 * x39;
-        let x644 = x8 * x386;
-        let x645 = phi_dot * x3;
-        let x646 = -x644 - x645;
-        let x647 = x643 + x646 * x9;
+                    * (f64::sqrt(x170) * x614 - (x615 * x264 + x617 * x614) * x1
+                        - x618));
+        let x620 = x35 * psi_dot;
+        let x621 = x536 * x45;
+        let x622 = phi_dot * x2;
+        let x623 = x536 * x6;
+        let x624 = x35 * phi_dot;
+        let x625 = f64::sqrt(x170) * x624;
+        let x626 = x616 - 2.0;
+        let x627 = psi_dot * x2;
+        let x628 = delta_dot * x5;
+        let x629 = -(x74 * x1);
+        let x630 = theta_dot * x629;
+        let x631 = x630 + x528 * x135;
+        let x632 = x628 + x631;
+        let x633 = x19 * x632;
+        let x634 = delta_dot * x67;
+        let x635 = phi_dot - x634;
+        let x636 = x64 * x635;
+        let x637 = x636 - x633;
+        let x638 = x637 * x93;
+        let x639 = x638 * x350;
+        let x640 = x8 * x388;
+        let x641 = phi_dot * x3;
+        let x642 = -x640 - x641;
+        let x643 = psi_dot + theta_dot * x5;
+        let x644 = x39 * x643;
+        let x645 = x9 * x642 + x644;
+        let x646 = x36 * x643;
+        let x647 = x4 * x642 - x646;
         let x648 = x13 * x647;
-        let x649 = x642 * x36;
-        let x650 = x4 * x646 - x649;
-        let x651 = x12 * x650;
-        let x652 = x651 - x648;
+        let x649 = x645 * x12;
+        let x650 = x648 + x649;
+        let x651 = x349 * x19;
+        let x652 = x650 * x0 - delta_dot * x651;
         let x653 = x12 * x647;
-        let x654 = x13 * x650;
-        let x655 = x653 + x654;
-        let x656 = x347 * x19;
-        let x657 = x655 * x0 - delta_dot * x656;
-        let x658 = x88 * x652 - rR * x650 + x68 * x657 + x647 * x78;
-        let x659 = f64::sqrt(x175) * x658;
-        let x660 = x659 - x640 / f64::sqrt(x175);
-        let x661 = psi_dot - phi_dot;
-        let x662 = (x3 - x35) * x661;
-        let x663 = psi_dot + phi_dot;
-        let x664 = (x35 + x3) * x663;
-        let x665 = x22 * x19;
-        let x666 = delta_dot * (x665 + x156);
-        let x667 = delta_dot * (x156 - x665);
-        let x668 = x19 * x29;
-        let x669 = delta_dot * (x160 + x668);
-        let x670 = delta_dot * (x668 - x160);
-        let x671 = (0.5 * x669 - 0.5 * x670) * x29 - x22 * (0.5 * x666 + 0.5 * x667);
-        let x672 = x49 * x671 - 0.5 * x662 - 0.5 * x664;
-        let x673 = x625 + x514;
-        let x674 = delta_dot * x43 + x673;
-        let x675 = x386 * x36;
-        let x676 = x406 * x9;
-        let x677 = x642 * x4;
-        let x678 = x675 + (x677 - x676) * x8;
-        let x679 = x13 * x678;
-        let x680 = x642 * x10;
-        let x681 = phi_dot * x45;
-        let x682 = x386 * x2;
-        let x683 = x680 + x4 * (x681 - x682);
-        let x684 = x683 * x12;
-        let x685 = delta_dot * x45;
-        let x686 = x679 + (x684 + x685);
-        let x687 = -x674 * x0 - x19 * x686;
-        let x688 = x352 * x687;
-        let x689 = x638 * x45;
-        let x690 = theta_dot * x1;
-        let x691 = x553 * x98;
-        let x692 = x71 * x690 - x691;
-        let x693 = x95 * thF_dot;
-        let x694 = x692 + x693;
-        let x695 = x694 * x29;
-        let x696 = x72 * x636;
-        let x697 = x193 * thF_dot;
-        let x698 = x696 - x697;
-        let x699 = x0 * x633;
-        let x700 = x698 + x699;
-        let x701 = x22 * x700;
-        let x702 = x695 + x701;
-        let x703 = x700 * x29 - x22 * x694;
-        let x704 = x22 * (x702 - thF_dot * x226) + (thF_dot * x225 + x703) * x29;
-        let x705 = delta_dot * x75;
-        let x706 = x19 * (x704 - x705) + x0 * (delta_dot * x256 + x638);
-        let x707 = x706 * x55;
-        let x708 = x707 - 2.0 * x689;
-        let x709 = x638 * x55;
-        let x710 = x175 * x672 + (x75 * (x688 + x708) + x352 * x709);
-        let x711 = x320 * x639;
-        let x712 = x615 - x378;
-        let x713 = x4 * x712 - x391 * x3;
-        let x714 = x713 * x78;
-        let x715 = x3 * x636 + x621;
-        let x716 = x19 * x715;
-        let x717 = theta_dot * x2;
-        let x718 = x717 * x98;
-        let x719 = (x71 * x616 - x718) * x1 + x615 * x136;
-        let x720 = delta_dot * x6;
-        let x721 = x719 + x720;
-        let x722 = x98 * x615;
-        let x723 = x616 * x98;
-        let x724 = x402 * x2;
-        let x725 = x714 + x68 * (x716 + x0 * x721)
-            + ((x717 * x71 + x723) * x1 - x722) * x88
-            + rR * (x61 * x615 + (x616 * x315 + x724) * x1);
-        let x726 = f64::sqrt(x175) * x725;
-        let x727 = x726 - x711 / f64::sqrt(x175);
-        let x728 = thF_dot + theta_dot * x0;
-        let x729 = x728 * x136;
-        let x730 = delta_dot * x238;
-        let x731 = thF_dot * x0;
-        let x732 = theta_dot + x731;
-        let x733 = x732 * x143;
-        let x734 = x22 * (-x729 - x730) + x733;
-        let x735 = theta_dot * x136;
-        let x736 = thF_dot * x47;
-        let x737 = x678 * x12;
-        let x738 = x13 * x683;
-        let x739 = x737 - x738;
-        let x740 = thF_dot * x49;
-        let x741 = x19 * x674;
-        let x742 = x0 * x686;
-        let x743 = x742 - x740 - x741;
-        let x744 = (x736 + x739) * x29 + x22 * x743;
-        let x745 = delta_dot * x0;
-        let x746 = x745 * x98;
-        let x747 = x738 - x736 - x737;
-        let x748 = x22 * x747 + x743 * x29;
-        let x749 = x22 * x732;
-        let x750 = delta_dot * x19;
-        let x751 = x750 * x29;
-        let x752 = (-x749 - x751) * x98 - x234 * x728;
-        let x753 = x734 * x50 + x19 * (x735 * x55 - x687 * x98) + x235 * x744
-            - x746 * x55 + x748 * x233 + x52 * x752;
-        let x754 = x687 * x313;
-        let x755 = x312 * x638;
-        let x756 = x226 * x752 + x734 * x225;
-        let x757 = x756 - x746 * x75 + x19 * (x735 * x75 - x638 * x98) + x235 * x702
-            + x703 * x233;
-        let x758 = x757 * x55;
-        let x759 = x754 - 2.0 * x755 + x758;
-        let x760 = x313 * x709 + (x753 * x175 + x759 * x75);
-        let x761 = x279 * x639;
-        let x762 = x761 / f64::sqrt(x175);
-        let x763 = x8 * (x676 - x677);
-        let x764 = x4 * (x682 - x681) - x680;
-        let x765 = x13 * x764;
-        let x766 = x763 - x675;
-        let x767 = x766 * x12;
-        let x768 = x767 - x765;
-        let x769 = x764 * x78 + x768 * x88;
-        let x770 = x13 * x766;
-        let x771 = x12 * x764;
-        let x772 = x770 + x771;
-        let x773 = x673 - x277 * delta_dot;
-        let x774 = x0 * (x772 - x685) + x19 * x773;
-        let x775 = rR * (x681 - x763 + x675 - x613) + x769 + x68 * x774;
-        let x776 = f64::sqrt(x175) * x775;
-        let x777 = x776 - x762;
-        let x778 = x703 * x226;
-        let x779 = x702 * x225;
-        let x780 = 2.0 * x778 + 2.0 * x779 + 2.0 * x639;
-        let x781 = x780 * x55;
-        let x782 = x271 * x638;
-        let x783 = x687 * x272;
-        let x784 = x781 - 2.0 * x782 + x783;
-        let x785 = x75 * x687;
-        let x786 = x785 + x709;
-        let x787 = x786 + x748 * x226 + x702 * x50 + x225 * x744 + x703 * x52;
-        let x788 = x709 * x272 + (x784 * x75 + x175 * x787);
-        let x789 = rF * thF_dot;
-        let x790 = delta_dot * x18;
-        let x791 = x712 - x790;
-        let x792 = x644 + x645;
-        let x793 = x792 * x9;
-        let x794 = x793 - x643;
-        let x795 = x794 * x13;
-        let x796 = delta_dot * x3;
-        let x797 = x796 - x795 - x651;
-        let x798 = x0 * x791 + x19 * x797;
-        let x799 = x68 * (x20 * x639 / f64::sqrt(x175) + x798 * f64::sqrt(x175));
-        let x800 = x49 * x338;
-        let x801 = x800 * x638;
-        let x802 = x687 * x369;
-        let x803 = x13 * x5;
-        let x804 = x368 - x803;
-        let x805 = x13 * x1;
-        let x806 = x12 * x5;
-        let x807 = x805 + x806;
-        let x808 = theta_dot - phi_dot;
-        let x809 = x368 + x803;
-        let x810 = x806 - x805;
-        let x811 = theta_dot + phi_dot;
-        let x812 = 0.5 * ((x4 * x804 - x807 * x9) * x808)
-            + 0.5 * ((x4 * x809 + x810 * x9) * x811);
-        let x813 = x812 * x55;
-        let x814 = (x75 * (x802 - 2.0 * x801 - x813) + x369 * x709) + x739 * x370;
-        let x815 = x798 * x789;
-        let x816 = x20 * x757;
-        let x817 = x328 * x638;
-        let x818 = x798 * x313;
-        let x819 = x816 + 2.0 * x817 - x818;
-        let x820 = thF_dot * x25;
-        let x821 = x19 * x791;
-        let x822 = x0 * (x795 - x796 + x651);
-        let x823 = x821 + x822;
-        let x824 = x823 - x820;
-        let x825 = thF_dot * x28;
-        let x826 = x794 * x12;
-        let x827 = x826 - x654;
-        let x828 = x22 * x824 + (x825 + x827) * x29;
-        let x829 = x654 - x825 - x826;
-        let x830 = x22 * x829 + x824 * x29;
-        let x831 = x20 * x746 + x19 * (-x20 * x735 - x798 * x98) + x734 * x31
-            + x30 * x752 + x235 * x828 + x830 * x233;
-        let x832 = x175 * x831;
-        let x833 = -(x20 * x638);
-        let x834 = x833 * x313;
-        let x835 = (x819 * x75 - x832 - x834) * rF;
-        let x836 = x691 + x735 * x1;
-        let x837 = x4 * x673;
-        let x838 = x391 * x45;
-        let x839 = x838 - x837;
-        let x840 = x402 * x1;
-        let x841 = x553 * x315 - x840;
-        let x842 = delta_dot * x136 + phi_dot;
-        let x843 = x19 * (x613 - x842 * x45);
-        let x844 = delta_dot * x35;
-        let x845 = x553 * x71;
-        let x846 = x193 * theta_dot;
-        let x847 = x845 + x846;
-        let x848 = x71 * x514 + x847 * x8;
-        let x849 = (x514 * x98 + x8 * x836) * x88 + x839 * x78
-            + rR * (x8 * x841 + x315 * x514) + x68 * (x843 + x0 * (x848 - x844));
-        let x850 = f64::sqrt(x175) * x849;
-        let x851 = (x798 * x352 + 2.0 * (x638 * x3)) - x706 * x20;
-        let x852 = x75 * x851;
-        let x853 = (x45 - x6) * x663;
-        let x854 = (x6 + x45) * x661;
-        let x855 = x25 * x671 - 0.5 * x853 - 0.5 * x854;
-        let x856 = x855 * x175;
-        let x857 = x352 * x833;
-        let x858 = (-x856 - x857) - x852;
-        let x859 = x356 * x639;
-        let x860 = x684 - x770;
-        let x861 = x738 + x767;
-        let x862 = x19 * x274;
-        let x863 = x861 * x0 - delta_dot * x862;
-        let x864 = x860 * x88 - rR * x683 + x766 * x78 + x68 * x863;
-        let x865 = f64::sqrt(x175) * x864;
-        let x866 = x639 * x55;
-        let x867 = x827 * x370;
-        let x868 = x833 * x369;
-        let x869 = x25 * x338;
-        let x870 = x869 * x638;
-        let x871 = x798 * x369;
-        let x872 = x20 * x812;
-        let x873 = 2.0 * x870 - x871 - x872;
-        let x874 = (-x867 - x868) + x75 * x873;
-        let x875 = x798 * x75;
-        let x876 = x875 + x833;
-        let x877 = x226 * x830 + x702 * x31 + x876 + x703 * x30 + x828 * x225;
-        let x878 = x175 * x877;
-        let x879 = x833 * x272;
-        let x880 = x798 * x272;
-        let x881 = x638 * x285;
-        let x882 = x20 * x780;
-        let x883 = 2.0 * x881 - x880 + x882;
-        let x884 = (x75 * x883 - x879) - x878;
-        let x885 = x621 + x645;
-        let x886 = x827 * x88 + x650 * x78 + x823 * x68 + rR * (x643 + x885 - x793);
-        let x887 = f64::sqrt(x175) * x886;
-        let x888 = x287 * x639;
-        let x889 = x888 / f64::sqrt(x175);
-        let x890 = x120 + x130;
-        let x891 = x890 * theta_dot;
-        let x892 = x174 / f64::powf(x175, 1.5) + 1.0 / f64::sqrt(x175);
-        let x893 = -(x638 * x892);
-        let x894 = x632 * x88;
-        let x895 = x68 * x638;
-        let x896 = -(x95 * x638);
-        let x897 = x896 * x892;
-        let x898 = x635 - phi_dot;
-        let x899 = x898 * x72;
-        let x900 = x899 - x699;
-        let x901 = x75 * x900;
-        let x902 = x901 / f64::sqrt(x175);
-        let x903 = x897 + x902;
-        let x904 = x630 * phi_dot + x735 * x5;
-        let x905 = x904 * x88;
-        let x906 = x5 * x98;
-        let x907 = theta_dot * x906 + x406 * x136;
-        let x908 = delta_dot * x1;
-        let x909 = x907 + x908;
-        let x910 = x909 * x0;
-        let x911 = x94 * x842;
-        let x912 = x910 - x911;
-        let x913 = x68 * x912;
-        let x914 = x638 * x331;
-        let x915 = x914 * x892;
-        let x916 = x74 * x842;
-        let x917 = -x916 - x909 * x19;
-        let x918 = x75 * x917;
-        let x919 = x918 / f64::sqrt(x175);
-        let x920 = x915 + x919;
-        let x921 = x54 + x277 * x19;
-        let x922 = x20 * x921;
-        let x923 = x22 * x278 + x274 * x29;
-        let x924 = x278 * x29 - x22 * x274;
-        let x925 = x921 * x55;
-        let x926 = (x32 + x50 * x923 - x925 + x52 * x924) * mF
-            + (x278 * x47 + x49 * x274 - x925 + x33) * mH;
-        let x927 = ((x273 * x119 - x179) * x5 - x181) * mB
-            + (x113 * x274 - x921 * x112 + x107 * x278) * mH - x178
-            + mF * (x924 * x103 - x921 * x102 + x923 * x91);
-        let x928 = (x19 * (x924 * x142 + x144 * x923) - x921 * x147) * mF
-            + (x19 * (x111 * x274 + x134 * x278) - x138 * x921) * mH + x129 * x45;
-        let x929 = mF * (x161 * x923 - x152 * x921 + x924 * x159)
-            + (x278 * x165 - x163 * x921 + x274 * x166) * mH + mB * (x187 - x273 * xB);
-        let x930 = -(x921 * x170);
-        let x931 = rR * x6;
-        let x932 = x931 * x310;
-        let x933 = x7 - x10;
-        let x934 = x933 * x78 + (-x13 * x933 - x24) * x88;
-        let x935 = x933 * x12 - x17;
-        let x936 = rR * (x16 - x6) + x934 + x68 * (x0 * x935 + x27);
-        let x937 = f64::sqrt(x175) * x936 - x286;
-        let x938 = -(x75 * x921);
-        let x939 = x924 * x226 + x938 + x225 * x923;
-        let x940 = x280 + rF * (x938 * x272 + x175 * x939);
-        let x941 = x267 * x45;
-        let x942 = x8 * x319;
-        let x943 = x942 * f64::sqrt(x175);
-        let x944 = x943 - x329;
-        let x945 = x924 * x233 + x921 * x238 + x235 * x923;
-        let x946 = x321 + (x938 * x313 + x175 * x945) * rF;
-        let x947 = x41 * x78 + x354 + (-x38 - x42) * x88 + x154 * x49;
-        let x948 = f64::sqrt(x175) * x947;
-        let x949 = x948 - rF * (x357 - x358);
-        let x950 = x349 - (x350 - x352 * x938) * rF;
-        let x951 = f64::sqrt(x175) * x68 * x921;
-        let x952 = -x951 - x372;
-        let x953 = rF * (x938 * x369 + x274 * x370) - x367;
-        let x954 = -x376;
-        let x955 = -(rF * x921);
-        let x956 = x773 * x0 + (x685 - x770 - x771) * x19;
-        let x957 = x871 - 2.0 * x870 + x872;
-        let x958 = ((x771 - x679) * x88 - rR * x764 + x678 * x78
-            + ((x737 + x765) * x0 - x750 * x49) * x68) * f64::sqrt(x175);
-        let x959 = x792 * x4 + x649;
-        let x960 = (x653 - x13 * x959) * x88 + x959 * x78;
-        let x961 = x378 - x615;
-        let x962 = x648 + x959 * x12;
-        let x963 = x880 - 2.0 * x881 - x882;
-        let x964 = x818 - x816 - 2.0 * x817;
-        let x965 = (x45 * x636 - x613) * x19;
-        let x966 = x8 * x692 + x630 * x628;
-        let x967 = x837 - x838;
-        let x968 = x78 * x967;
-        let x969 = -(x921 * x638);
-        let x970 = x774 - thF_dot * x274;
-        let x971 = thF_dot * x278;
-        let x972 = x970 * x29 + x22 * (x765 - x767 - x971);
-        let x973 = x29 * (x768 + x971) + x22 * x970;
-        let x974 = x74 + x72 * x136;
-        let x975 = x20 * x974;
-        let x976 = x324 * x29 - x22 * x630;
-        let x977 = x630 * x29 + x22 * x324;
-        let x978 = (x8 * (x25 * x630 + x975 + x324 * x28)
-            + (x270 + x193 * x49 + x95 * x47) * x2) * mH
-            + mF * (x271 * x2 + x8 * (x975 + x30 * x976 + x31 * x977));
-        let x979 = x4 * x121;
-        let x980 = x9 * x119;
-        let x981 = x66 * x1;
-        let x982 = x981 - x68 * x331;
-        let x983 = x92 * x83 + x364 * x94;
-        let x984 = x331 * x88 + x983;
-        let x985 = x984 * x29 - x22 * x982;
-        let x986 = x982 * x29 + x22 * x984;
-        let x987 = x0 * x364;
-        let x988 = x83 * x72;
-        let x989 = (x987 - x99) * x5 - x333 * x88 - x988;
-        let x990 = x331 * x106 + x983;
-        let x991 = x5 * (x987 - x110) - x988 - x333 * x106;
-        let x992 = x981 - x109 * x331;
-        let x993 = (x60 * x8
-            + mB * (x6 * (2.0 * x114 - x979 + x980 - 2.0 * x116) + x122)) * x1
-            + mF
-                * (x985 * x30 + x31 * x986 + (x225 * x91 + x226 * x103 + x75 * x102) * x2
-                    - x20 * x989)
+        let x654 = x13 * x645;
+        let x655 = x653 - x654;
+        let x656 = x645 * x60 + x100 * x652 + x655 * x105 - rR * x647;
+        let x657 = f64::sqrt(x173) * x656;
+        let x658 = x657 - x639 / f64::sqrt(x173);
+        let x659 = psi_dot - phi_dot;
+        let x660 = (x3 - x35) * x659;
+        let x661 = psi_dot + phi_dot;
+        let x662 = (x35 + x3) * x661;
+        let x663 = x22 * x19;
+        let x664 = delta_dot * (x663 + x154);
+        let x665 = delta_dot * (x154 - x663);
+        let x666 = x19 * x29;
+        let x667 = delta_dot * (x158 + x666);
+        let x668 = delta_dot * (x666 - x158);
+        let x669 = (0.5 * x667 - 0.5 * x668) * x29 - x22 * (0.5 * x664 + 0.5 * x665);
+        let x670 = x49 * x669 - 0.5 * x660 - 0.5 * x662;
+        let x671 = x36 * x388;
+        let x672 = x418 * x9;
+        let x673 = x4 * x643;
+        let x674 = x671 + x8 * (x673 - x672);
+        let x675 = x674 * x13;
+        let x676 = x10 * x643;
+        let x677 = phi_dot * x45;
+        let x678 = x388 * x2;
+        let x679 = x676 + x4 * (x677 - x678);
+        let x680 = x679 * x12;
+        let x681 = delta_dot * x45;
+        let x682 = x675 + (x680 + x681);
+        let x683 = x624 + x515;
+        let x684 = delta_dot * x43 + x683;
+        let x685 = -x19 * x682 - x684 * x0;
+        let x686 = x685 * x348;
+        let x687 = x637 * x45;
+        let x688 = delta_dot * x93;
+        let x689 = x190 * thF_dot;
+        let x690 = x0 * x632;
+        let x691 = thF_dot * x188;
+        let x692 = x635 * x91;
+        let x693 = x692 - x691;
+        let x694 = x690 + x693;
+        let x695 = x22 * x694;
+        let x696 = thF_dot * x70;
+        let x697 = x528 * x74;
+        let x698 = theta_dot * x67 * x1 - x697;
+        let x699 = x696 + x698;
+        let x700 = x699 * x29;
+        let x701 = x695 + x700;
+        let x702 = x694 * x29 - x22 * x699;
+        let x703 = x22 * (x701 - x689) + (thF_dot * x189 + x702) * x29;
+        let x704 = (x257 * delta_dot + x637) * x0 + x19 * (x703 - x688);
+        let x705 = x704 * x55;
+        let x706 = x705 - 2.0 * x687;
+        let x707 = x637 * x55;
+        let x708 = x173 * x670 + (x93 * (x686 + x706) + x348 * x707);
+        let x709 = x638 * x274;
+        let x710 = x709 / f64::sqrt(x173);
+        let x711 = x8 * (x672 - x673);
+        let x712 = x711 - x671;
+        let x713 = x13 * x712;
+        let x714 = x4 * (x678 - x677) - x676;
+        let x715 = x714 * x12;
+        let x716 = x713 + x715;
+        let x717 = x683 - x272 * delta_dot;
+        let x718 = (x716 - x681) * x0 + x19 * x717;
+        let x719 = x12 * x712;
+        let x720 = x13 * x714;
+        let x721 = x719 - x720;
+        let x722 = x714 * x60 + x721 * x105;
+        let x723 = x100 * x718 + (x671 - x711 + x677 - x612) * rR + x722;
+        let x724 = f64::sqrt(x173) * x723;
+        let x725 = x724 - x710;
+        let x726 = thF_dot * x47;
+        let x727 = x674 * x12;
+        let x728 = x13 * x679;
+        let x729 = x728 - x726 - x727;
+        let x730 = thF_dot * x49;
+        let x731 = x19 * x684;
+        let x732 = x0 * x682;
+        let x733 = x732 - x730 - x731;
+        let x734 = x22 * x729 + x733 * x29;
+        let x735 = x685 * x93;
+        let x736 = x735 + x707;
+        let x737 = x727 - x728;
+        let x738 = (x726 + x737) * x29 + x22 * x733;
+        let x739 = x50 * x701 + x190 * x734 + x736 + x52 * x702 + x189 * x738;
+        let x740 = x190 * x702;
+        let x741 = x189 * x701;
+        let x742 = 2.0 * x740 + 2.0 * x638 + 2.0 * x741;
+        let x743 = x742 * x55;
+        let x744 = x276 * x685;
+        let x745 = x637 * x278;
+        let x746 = x743 + x744 - 2.0 * x745;
+        let x747 = x276 * x707 + (x739 * x173 + x746 * x93);
+        let x748 = x638 * x318;
+        let x749 = x74 * x614;
+        let x750 = theta_dot * x2;
+        let x751 = x74 * x615;
+        let x752 = x614 - x494;
+        let x753 = x4 * x752 - x413 * x3;
+        let x754 = x753 * x60;
+        let x755 = x750 * x74;
+        let x756 = x1 * (x67 * x615 - x755) + x135 * x614;
+        let x757 = delta_dot * x6;
+        let x758 = x756 + x757;
+        let x759 = x620 + x635 * x3;
+        let x760 = x759 * x19;
+        let x761 = x407 * x2;
+        let x762 = ((x750 * x67 + x751) * x1 - x749) * x105 + x754
+            + x100 * (x758 * x0 + x760) + rR * (x81 * x614 + (x615 * x312 + x761) * x1);
+        let x763 = x762 * f64::sqrt(x173);
+        let x764 = x763 - x748 / f64::sqrt(x173);
+        let x765 = delta_dot * x0;
+        let x766 = x74 * x765;
+        let x767 = theta_dot * x135;
+        let x768 = thF_dot * x0;
+        let x769 = theta_dot + x768;
+        let x770 = x74 * x29;
+        let x771 = x769 * x770;
+        let x772 = thF_dot + theta_dot * x0;
+        let x773 = x135 * x772;
+        let x774 = delta_dot * x230;
+        let x775 = x771 + x22 * (-x773 - x774);
+        let x776 = x22 * x769;
+        let x777 = delta_dot * x19;
+        let x778 = x777 * x29;
+        let x779 = (-x776 - x778) * x74 - x247 * x772;
+        let x780 = x775 * x189 + x190 * x779;
+        let x781 = x248 * x701 - x766 * x93 + x19 * (x93 * x767 - x74 * x637) + x780
+            + x702 * x246;
+        let x782 = x781 * x55;
+        let x783 = x637 * x311;
+        let x784 = x685 * x310;
+        let x785 = x782 - 2.0 * x783 + x784;
+        let x786 = x734 * x246 + x248 * x738 + x19 * (x767 * x55 - x74 * x685)
+            + x52 * x779 + x775 * x50 - x766 * x55;
+        let x787 = (x785 * x93 + x786 * x173) + x310 * x707;
+        let x788 = rF * thF_dot;
+        let x789 = x49 * x337;
+        let x790 = x637 * x789;
+        let x791 = theta_dot - phi_dot;
+        let x792 = x13 * x5;
+        let x793 = x369 - x792;
+        let x794 = x12 * x5;
+        let x795 = x794 + x368;
+        let x796 = theta_dot + phi_dot;
+        let x797 = x794 - x368;
+        let x798 = x369 + x792;
+        let x799 = 0.5 * (x791 * (x4 * x793 - x9 * x795))
+            + 0.5 * (x796 * (x9 * x797 + x798 * x4));
+        let x800 = x799 * x55;
+        let x801 = x685 * x370;
+        let x802 = x737 * x367 + (x370 * x707 + (x801 - 2.0 * x790 - x800) * x93);
+        let x803 = delta_dot * x18;
+        let x804 = x752 - x803;
+        let x805 = x640 + x641;
+        let x806 = x805 * x9;
+        let x807 = x806 - x644;
+        let x808 = x13 * x807;
+        let x809 = delta_dot * x3;
+        let x810 = x809 - x653 - x808;
+        let x811 = x0 * x804 + x19 * x810;
+        let x812 = x100 * (x811 * f64::sqrt(x173) + x20 * x638 / f64::sqrt(x173));
+        let x813 = x620 + x641;
+        let x814 = x19 * x804;
+        let x815 = x0 * (x653 + x808 - x809);
+        let x816 = x814 + x815;
+        let x817 = x12 * x807;
+        let x818 = x817 - x648;
+        let x819 = rR * (x644 - x806 + x813) + x100 * x816 + x647 * x60 + x818 * x105;
+        let x820 = f64::sqrt(x173) * x819;
+        let x821 = thF_dot * x25;
+        let x822 = x816 - x821;
+        let x823 = thF_dot * x28;
+        let x824 = x22 * x822 + x29 * (x823 + x818);
+        let x825 = -(x20 * x637);
+        let x826 = x811 * x93;
+        let x827 = x825 + x826;
+        let x828 = x648 - x823 - x817;
+        let x829 = x22 * x828 + x822 * x29;
+        let x830 = x189 * x824 + x827 + x702 * x30 + x190 * x829 + x31 * x701;
+        let x831 = x173 * x830;
+        let x832 = x276 * x825;
+        let x833 = x20 * x742;
+        let x834 = x284 * x637;
+        let x835 = x276 * x811;
+        let x836 = x833 + 2.0 * x834 - x835;
+        let x837 = (x836 * x93 - x832) - x831;
+        let x838 = x638 * x280;
+        let x839 = x838 / f64::sqrt(x173);
+        let x840 = x811 * x788;
+        let x841 = (x45 - x6) * x661;
+        let x842 = (x6 + x45) * x659;
+        let x843 = x25 * x669 - 0.5 * x841 - 0.5 * x842;
+        let x844 = x843 * x173;
+        let x845 = x825 * x348;
+        let x846 = (x811 * x348 + 2.0 * (x637 * x3)) - x20 * x704;
+        let x847 = x846 * x93;
+        let x848 = (-x844 - x845) - x847;
+        let x849 = x355 * x638;
+        let x850 = x719 + x728;
+        let x851 = x19 * x269;
+        let x852 = x0 * x850 - delta_dot * x851;
+        let x853 = x680 - x713;
+        let x854 = x100 * x852 - rR * x679 + x853 * x105 + x712 * x60;
+        let x855 = x854 * f64::sqrt(x173);
+        let x856 = x697 + x767 * x1;
+        let x857 = x528 * x67;
+        let x858 = theta_dot * x188;
+        let x859 = x857 + x858;
+        let x860 = x8 * x859 + x67 * x515;
+        let x861 = delta_dot * x35;
+        let x862 = delta_dot * x135 + phi_dot;
+        let x863 = x19 * (x612 - x862 * x45);
+        let x864 = x4 * x683;
+        let x865 = x413 * x45;
+        let x866 = x865 - x864;
+        let x867 = x407 * x1;
+        let x868 = x528 * x312 - x867;
+        let x869 = (x856 * x8 + x74 * x515) * x105 + x100 * ((x860 - x861) * x0 + x863)
+            + x866 * x60 + rR * (x8 * x868 + x312 * x515);
+        let x870 = x869 * f64::sqrt(x173);
+        let x871 = x20 * x781;
+        let x872 = x811 * x310;
+        let x873 = x327 * x637;
+        let x874 = x871 - x872 + 2.0 * x873;
+        let x875 = x31 * x775 + x779 * x30 + x248 * x824
+            + (-x811 * x74 - x20 * x767) * x19 + x20 * x766 + x246 * x829;
+        let x876 = x875 * x173;
+        let x877 = x825 * x310;
+        let x878 = rF * (x874 * x93 - x876 - x877);
+        let x879 = x638 * x55;
+        let x880 = x20 * x799;
+        let x881 = x811 * x370;
+        let x882 = x25 * x337;
+        let x883 = x882 * x637;
+        let x884 = 2.0 * x883 - x880 - x881;
+        let x885 = x825 * x370;
+        let x886 = x818 * x367;
+        let x887 = x884 * x93 + (-x885 - x886);
+        let x888 = x119 + x130;
+        let x889 = 1.0 / f64::sqrt(x173) + x172 / f64::powf(x173, 1.5);
+        let x890 = -(x637 * x889);
+        let x891 = x777 * x100;
+        let x892 = x631 * x105;
+        let x893 = x332 * x637;
+        let x894 = x889 * x893;
+        let x895 = x90 * x862;
+        let x896 = x74 * x5;
+        let x897 = theta_dot * x896 + x418 * x135;
+        let x898 = delta_dot * x1;
+        let x899 = x897 + x898;
+        let x900 = -x895 - x899 * x19;
+        let x901 = x900 * x93;
+        let x902 = x901 / f64::sqrt(x173);
+        let x903 = x894 + x902;
+        let x904 = x5 * x767 + x629 * phi_dot;
+        let x905 = x904 * x105;
+        let x906 = x899 * x0;
+        let x907 = x862 * x69;
+        let x908 = x906 - x907;
+        let x909 = x908 * x100;
+        let x910 = theta_dot * x79;
+        let x911 = x634 - phi_dot;
+        let x912 = x911 * x91;
+        let x913 = x912 - x690;
+        let x914 = x913 * x93;
+        let x915 = x914 / f64::sqrt(x173);
+        let x916 = -(x637 * x70);
+        let x917 = x889 * x916;
+        let x918 = x915 + x917;
+        let x919 = x100 * x637;
+        let x920 = x54 + x272 * x19;
+        let x921 = x20 * x920;
+        let x922 = x22 * x273 + x269 * x29;
+        let x923 = x273 * x29 - x22 * x269;
+        let x924 = x920 * x55;
+        let x925 = (x32 + x50 * x922 - x924 + x52 * x923) * mF
+            + (x273 * x47 + x49 * x269 - x924 + x33) * mH;
+        let x926 = ((x268 * x118 - x177) * x5 - x179) * mB - x176
+            + (x98 * x273 - x920 * x86 + x94 * x269) * mH
+            + (x923 * x108 + x112 * x922 - x111 * x920) * mF;
+        let x927 = ((x76 * x269 + x133 * x273) * x19 - x137 * x920) * mH + x128 * x45
+            + mF * (x19 * (x142 * x922 + x923 * x144) - x920 * x140);
+        let x928 = mF * (x159 * x922 - x150 * x920 + x923 * x157)
+            + (x273 * x163 - x161 * x920 + x269 * x164) * mH + mB * (x185 - x268 * xB);
+        let x929 = -(x920 * x168);
+        let x930 = rR * x6;
+        let x931 = x930 * x308;
+        let x932 = x7 - x10;
+        let x933 = x932 * x60 + (-x13 * x932 - x24) * x105;
+        let x934 = x932 * x12 - x17;
+        let x935 = rR * (x16 - x6) + x933 + x100 * (x0 * x934 + x27);
+        let x936 = x935 * f64::sqrt(x173) - x285;
+        let x937 = -(x920 * x93);
+        let x938 = x937 + x189 * x922 + x190 * x923;
+        let x939 = (x276 * x937 + x938 * x173) * rF + x275;
+        let x940 = x265 * x45;
+        let x941 = x8 * x317;
+        let x942 = x941 * f64::sqrt(x173);
+        let x943 = x942 - x328;
+        let x944 = x248 * x922 + x920 * x230 + x923 * x246;
+        let x945 = x319 + rF * (x944 * x173 + x937 * x310);
+        let x946 = x41 * x60 + x353 + (-x38 - x42) * x105 + x152 * x49;
+        let x947 = f64::sqrt(x173) * x946;
+        let x948 = x947 - rF * (x356 - x357);
+        let x949 = x351 - rF * (x346 - x937 * x348);
+        let x950 = x100 * x920 * f64::sqrt(x173);
+        let x951 = -x950 - x372;
+        let x952 = rF * (x937 * x370 + x269 * x367) - x366;
+        let x953 = -x376;
+        let x954 = -(rF * x920);
+        let x955 = f64::sqrt(x173)
+            * (((x727 + x720) * x0 - x777 * x49) * x100 + x674 * x60
+                + (x715 - x675) * x105 - rR * x714);
+        let x956 = x4 * x805 + x646;
+        let x957 = (x649 - x13 * x956) * x105 + x956 * x60;
+        let x958 = x494 - x614;
+        let x959 = x654 + x956 * x12;
+        let x960 = x835 - x833 - 2.0 * x834;
+        let x961 = (x635 * x45 - x612) * x19;
+        let x962 = x864 - x865;
+        let x963 = x60 * x962;
+        let x964 = x629 * x627 + x698 * x8;
+        let x965 = x872 - x871 - 2.0 * x873;
+        let x966 = x880 + x881 - 2.0 * x883;
+        let x967 = x717 * x0 + (x681 - x713 - x715) * x19;
+        let x968 = -(x637 * x920);
+        let x969 = x718 - thF_dot * x269;
+        let x970 = thF_dot * x273;
+        let x971 = x22 * x969 + (x721 + x970) * x29;
+        let x972 = x22 * (x720 - x719 - x970) + x969 * x29;
+        let x973 = x90 + x135 * x91;
+        let x974 = x20 * x973;
+        let x975 = x629 * x29 + x22 * x322;
+        let x976 = x322 * x29 - x22 * x629;
+        let x977 = mH
+            * ((x188 * x49 + x277 + x70 * x47) * x2
+                + x8 * (x322 * x28 + x25 * x629 + x974))
+            + (x278 * x2 + x8 * (x974 + x31 * x975 + x30 * x976)) * mF;
+        let x978 = x0 * x363;
+        let x979 = x84 * x91;
+        let x980 = x5 * (x978 - x110) - x330 * x105 - x979;
+        let x981 = x88 * x1;
+        let x982 = x981 - x332 * x100;
+        let x983 = x64 * x84 + x363 * x69;
+        let x984 = x332 * x105 + x983;
+        let x985 = x982 * x29 + x22 * x984;
+        let x986 = x984 * x29 - x22 * x982;
+        let x987 = x332 * x63 + x983;
+        let x988 = (x978 - x75) * x5 - x330 * x63 - x979;
+        let x989 = x981 - x332 * x73;
+        let x990 = x4 * x120;
+        let x991 = x9 * x118;
+        let x992 = mF
+            * (x31 * x985 - x20 * x980 + x30 * x986
+                + (x190 * x108 + x111 * x93 + x189 * x112) * x2)
             + mH
-                * (x28 * x990 - x991 * x20 + x25 * x992
-                    + (x113 * x193 + x75 * x112 + x95 * x107) * x2);
-        let x994 = ((x75 * x138 + (x134 * x95 + x193 * x111) * x19) * mH
-            + mF * (x19 * (x144 * x225 + x226 * x142) + x75 * x147) + x183 * x5) * x2;
-        let x995 = ((x75 * x152 + x226 * x159 + x225 * x161) * mF + x602 * x1
-            + mH * (x95 * x165 + x163 * x75 + x193 * x166)) * x2;
-        let x996 = x75 * x2;
-        let x997 = x996 * x170;
-        let x998 = x5 * x1;
-        let x999 = -(x998 / f64::sqrt(x172));
-        let x1000 = -(x332 / f64::sqrt(x175));
-        let x1001 = x974 * x55;
-        let x1002 = (x60 * x2
-            + mB * (x180 + x35 * (x979 - 2.0 * x114 - x980 + 2.0 * x116))) * x1
+                * (x987 * x28 - x20 * x988 + (x98 * x70 + x188 * x94 + x93 * x86) * x2
+                    + x989 * x25)
+            + (x99 * x8 + mB * (x6 * (2.0 * x113 - x990 + x991 - 2.0 * x115) + x121))
+                * x1;
+        let x993 = (mF * (x19 * (x189 * x142 + x190 * x144) + x93 * x140)
+            + ((x76 * x188 + x133 * x70) * x19 + x137 * x93) * mH + x181 * x5) * x2;
+        let x994 = ((x161 * x93 + x163 * x70 + x188 * x164) * mH + x601 * x1
+            + mF * (x189 * x159 + x150 * x93 + x190 * x157)) * x2;
+        let x995 = x93 * x2;
+        let x996 = x168 * x995;
+        let x997 = x5 * x1;
+        let x998 = -(x997 / f64::sqrt(x170));
+        let x999 = -(x333 / f64::sqrt(x173));
+        let x1000 = x973 * x55;
+        let x1001 = (x99 * x2
+            + mB * (x178 + x35 * (x990 - 2.0 * x113 - x991 + 2.0 * x115))) * x1
+            + mH
+                * (x989 * x49 + (x98 * x322 + x94 * x629 - x973 * x86) * x8 + x988 * x55
+                    + x987 * x47)
             + mF
-                * (x8 * (x103 * x976 - x974 * x102 + x977 * x91) + x989 * x55
-                    + x985 * x52 + x986 * x50)
-            + (x991 * x55 + x49 * x992 + x47 * x990
-                + x8 * (x113 * x630 + x324 * x107 - x974 * x112)) * mH;
-        let x1003 = (((x144 * x977 + x976 * x142) * x19 - x974 * x147) * mF
-            + (x19 * (x134 * x324 + x111 * x630) - x974 * x138) * mH + x600) * x8;
-        let x1004 = x8
-            * (mH * (x630 * x166 - x163 * x974 + x324 * x165) + x118 * mB
-                + (x976 * x159 - x974 * x152 + x977 * x161) * mF);
-        let x1005 = -(x8 * x974);
-        let x1006 = x1005 * x170;
-        let x1007 = -(x5 * x98);
-        let x1008 = x1007 * x205 + x333 * x194;
-        let x1009 = x215 - x217;
-        let x1010 = x117 * x117;
-        let x1011 = x333 * x29 - x22 * x1007;
-        let x1012 = x22 * x333 + x1007 * x29;
-        let x1013 = 2.0 * (x1011 * x226) + 2.0 * (x1012 * x225);
-        let x1014 = 2.0 * IHyy + 2.0 * IFyy;
-        let x1015 = x333 * x200;
-        let x1016 = x1007 * x194;
-        let x1017 = x1015 + x1016;
-        let x1018 = x331 * x238;
-        let x1019 = x1011 * x233 + x1012 * x235;
-        let x1020 = x5 * (x248 - x242 - x243 - x245)
-            + mH * (x991 * x138 + (x134 * x990 + x111 * x992) * x19)
-            + mF * ((x986 * x144 + x985 * x142) * x19 + x989 * x147) - x1018 * x228
-            + x1019 * IFxx + x251 * x333;
-        let x1021 = x1011 * x29 + x1012 * x22;
-        let x1022 = x0 * x331;
-        let x1023 = mH * (x992 * x166 + x165 * x990 + x163 * x991)
-            + x19 * (IFxx * x1021 + x1017) + x1022 * x228
-            + mF * (x986 * x161 + x985 * x159 + x989 * x152) + x259 * x1;
-        let x1024 = IRyy * x1;
-        let x1025 = x1008 + x989 * x169 + x991 * x168
-            + (x1012 * x29 - x1011 * x22) * IFxx;
-        let x1026 = x331 * IFyy;
-        let x1027 = rR * x611;
-        let x1028 = x8 * x1027;
-        let x1029 = x1027 * x2;
-        let x1030 = -(x974 * x75);
-        let x1031 = x331 * x55;
-        let x1032 = x1011 * x52 + x8 * (x226 * x976 + x977 * x225 + x1030) + x1031
-            + x1012 * x50;
-        let x1033 = 2.0 * x332 + x1013;
-        let x1034 = x943
+                * (x52 * x986 + x50 * x985
+                    + x8 * (x108 * x976 - x111 * x973 + x975 * x112) + x980 * x55);
+        let x1002 = x8
+            * ((x19 * (x133 * x322 + x76 * x629) - x137 * x973) * mH + x595
+                + mF * ((x975 * x142 + x144 * x976) * x19 - x973 * x140));
+        let x1003 = x8
+            * ((x976 * x157 + x975 * x159 - x973 * x150) * mF + x117 * mB
+                + mH * (x322 * x163 + x629 * x164 - x161 * x973));
+        let x1004 = -(x8 * x973);
+        let x1005 = x168 * x1004;
+        let x1006 = 2.0 * IHyy + 2.0 * IFyy;
+        let x1007 = -(x74 * x5);
+        let x1008 = x330 * x29 - x22 * x1007;
+        let x1009 = x22 * x330 + x1007 * x29;
+        let x1010 = 2.0 * (x1008 * x190) + 2.0 * (x1009 * x189);
+        let x1011 = x1007 * x211;
+        let x1012 = x330 * x227;
+        let x1013 = x1011 + x1012;
+        let x1014 = x330 * x211 + x1007 * x216;
+        let x1015 = x202 - x204;
+        let x1016 = x116 * x116;
+        let x1017 = x1008 * x246 + x1009 * x248;
+        let x1018 = x332 * x230;
+        let x1019 = (x19 * (x142 * x985 + x144 * x986) + x980 * x140) * mF + x1017 * IFxx
+            + (x245 - x239 - x240 - x242) * x5
+            + (x137 * x988 + x19 * (x76 * x989 + x133 * x987)) * mH - x1018 * x219
+            + x330 * x235;
+        let x1020 = x332 * x0;
+        let x1021 = x22 * x1009 + x1008 * x29;
+        let x1022 = mF * (x986 * x157 + x980 * x150 + x159 * x985)
+            + (x161 * x988 + x987 * x163 + x989 * x164) * mH + x1020 * x219 + x252 * x1
+            + x19 * (IFxx * x1021 + x1013);
+        let x1023 = IRyy * x1;
+        let x1024 = x1014 + (x1009 * x29 - x1008 * x22) * IFxx + x980 * x167
+            + x988 * x166;
+        let x1025 = x332 * IFyy;
+        let x1026 = rR * x610;
+        let x1027 = x8 * x1026;
+        let x1028 = x1026 * x2;
+        let x1029 = 2.0 * x333 + x1010;
+        let x1030 = x332 * x55;
+        let x1031 = -(x973 * x93);
+        let x1032 = (x190 * x976 + x1031 + x975 * x189) * x8 + x1009 * x50 + x1008 * x52
+            + x1030;
+        let x1033 = x942
+            - (x93 * (x1029 * x55 - 2.0 * (x332 * x278) + x276 * x1004) + x276 * x1030
+                + x173 * x1032) * rF - x333 * x274 / f64::sqrt(x173);
+        let x1034 = -(x20 * x332);
+        let x1035 = x1008 * x30;
+        let x1036 = x1009 * x31;
+        let x1037 = x276 * x2;
+        let x1038 = x319 - x333 * x280 / f64::sqrt(x173)
             - rF
-                * (x175 * x1032
-                    + x75 * (x1033 * x55 - 2.0 * (x271 * x331) + x1005 * x272)
-                    + x1031 * x272) - x332 * x279 / f64::sqrt(x175);
-        let x1035 = -(x20 * x331);
-        let x1036 = x272 * x2;
-        let x1037 = x1012 * x31;
-        let x1038 = x1011 * x30;
-        let x1039 = x321
+                * (x93 * (x20 * x1029 - x276 * x995 + 2.0 * (x332 * x284)) - x276 * x1034
+                    - (x1035 + x1036 + x1034 + x1037) * x173);
+        let x1039 = x617 * x1;
+        let x1040 = (x1039 - x171) * x930;
+        let x1041 = rR * x35;
+        let x1042 = x626 * x1;
+        let x1043 = x1041 * (x171 + x1042);
+        let x1044 = x246 * x976 + x248 * x975 + x973 * x230;
+        let x1045 = x1017 - x1018;
+        let x1046 = (x331 * f64::sqrt(x173) - x333 * x317 / f64::sqrt(x173)) * x2
             - rF
-                * ((x20 * x1033 - x996 * x272 + 2.0 * (x331 * x285)) * x75 - x1035 * x272
-                    - x175 * (x1036 + x1035 + x1037 + x1038))
-            - x332 * x287 / f64::sqrt(x175);
-        let x1040 = x618 * x1;
-        let x1041 = (x1040 - x173) * x931;
-        let x1042 = rR * x35;
-        let x1043 = x627 * x1;
-        let x1044 = x1042 * (x173 + x1043);
-        let x1045 = x1019 - x1018;
-        let x1046 = x974 * x238 + x235 * x977 + x233 * x976;
-        let x1047 = (f64::sqrt(x175) * x334 - x332 * x319 / f64::sqrt(x175)) * x2
+                * (x1044 * x8 * x173
+                    + (x310 * x1004 - 2.0 * (x332 * x311) + x1045 * x55) * x93
+                    + x310 * x1030);
+        let x1047 = x67 * x5;
+        let x1048 = x0 * x1047;
+        let x1049 = x100 * (x1048 - x91) + x315 * x5;
+        let x1050 = x8 * (x1049 * f64::sqrt(x173) - x325 * x333 / f64::sqrt(x173))
+            - (x93 * (2.0 * (x327 * x332) - x310 * x995 + x20 * x1045)
+                - (x1034 + x173 * x2) * x310) * rF;
+        let x1051 = x332 * x889;
+        let x1052 = (x332 * x1051 + x1031 / f64::sqrt(x173)) * rF;
+        let x1053 = x325 + x1052;
+        let x1054 = x19 * x1021 + x1020;
+        let x1055 = f64::sqrt(x173) * x3 * x603 - x333 * x350 / f64::sqrt(x173)
             - rF
-                * (x1031 * x313
-                    + (x1005 * x313 - 2.0 * (x312 * x331) + x1045 * x55) * x75
-                    + x175 * x8 * x1046);
-        let x1048 = x71 * x5;
-        let x1049 = x0 * x1048;
-        let x1050 = x68 * (x1049 - x72) + x318 * x5;
-        let x1051 = x8 * (f64::sqrt(x175) * x1050 - x332 * x326 / f64::sqrt(x175))
-            - ((2.0 * (x328 * x331) - x996 * x313 + x20 * x1045) * x75
-                - (x175 * x2 + x1035) * x313) * rF;
-        let x1052 = x331 * x892;
-        let x1053 = rF * (x1030 / f64::sqrt(x175) + x1052 * x331);
-        let x1054 = x1053 + x326;
-        let x1055 = x1022 + x19 * x1021;
-        let x1056 = x603 * x3;
-        let x1057 = x1056 * f64::sqrt(x175)
+                * (x93 * (x348 * x1004 - 2.0 * (x332 * x45) + x1054 * x55) - x35 * x173
+                    + x348 * x1030);
+        let x1056 = x79 + x135 * x105;
+        let x1057 = x1056 + x100 * x232;
+        let x1058 = f64::sqrt(x173) * x1057 * x45 - x333 * x355 / f64::sqrt(x173)
             - rF
-                * ((x1005 * x352 + x1055 * x55 - 2.0 * (x331 * x45)) * x75 + x1031 * x352
-                    - x175 * x35) - x332 * x348 / f64::sqrt(x175);
-        let x1058 = x136 * x88 + x80;
-        let x1059 = x68 * x232 + x1058;
-        let x1060 = f64::sqrt(x175) * x1059 * x45 - x356 * x332 / f64::sqrt(x175)
-            - (-(2.0 * (x331 * x3) - x20 * x1055 + x996 * x352) * x75 - x175 * x6
-                - x352 * x1035) * rF;
-        let x1061 = (x363 + x1058) * x5;
-        let x1062 = x19 * x630;
-        let x1063 = -(x331 * x892);
-        let x1064 = rF * x1062 * x1063;
-        let x1065 = x1061 + x1064;
-        let x1066 = x8 * x630;
-        let x1067 = x97 * x5 + x393 * x12;
-        let x1068 = (f64::sqrt(x175) * x2 - x1035 / f64::sqrt(x175)) * x76
+                * (-x173 * x6 - (x348 * x995 - x20 * x1054 + 2.0 * (x332 * x3)) * x93
+                    - x1034 * x348);
+        let x1059 = (x362 + x1056) * x5;
+        let x1060 = x19 * x629;
+        let x1061 = -(x332 * x889);
+        let x1062 = x1060 * rF * x1061;
+        let x1063 = x1059 + x1062;
+        let x1064 = x8 * x629;
+        let x1065 = x4 * x792 + x9 * x794;
+        let x1066 = x101 * (f64::sqrt(x173) * x2 - x1034 / f64::sqrt(x173))
             - rF
-                * (x370 * x1066
-                    + x75 * (x1005 * x369 - 2.0 * (x800 * x331) - x1067 * x55)
-                    + x1031 * x369);
-        let x1069 = x3 * x98;
-        let x1070 = x68 * (f64::sqrt(x175) * x1005 - x270 * x331 / f64::sqrt(x175))
+                * (x367 * x1064
+                    + x93 * (x370 * x1004 - x1065 * x55 - 2.0 * (x332 * x789))
+                    + x370 * x1030);
+        let x1067 = x74 * x3;
+        let x1068 = x100 * (f64::sqrt(x173) * x1004 - x332 * x277 / f64::sqrt(x173))
             - rF
-                * ((2.0 * (x869 * x331) - x996 * x369 - x1067 * x20) * x75 - x1035 * x369
-                    - x1069 * x370);
-        let x1071 = -(x95 * x892);
-        let x1072 = (x68 + rF * x1071) * x331 - rF * x75 * x333 / f64::sqrt(x175);
-        let x1073 = -(rF * x1005);
-        let x1074 = rF * x996;
-        let x1075 = x391 * x1;
-        let x1076 = x1075 * rR + x553 * (x78 - x64);
-        let x1077 = x82 * x841 + x13 * x1076;
-        let x1078 = x420 - x676;
-        let x1079 = x4 * x406;
-        let x1080 = x391 * x5 + x1079;
-        let x1081 = x1078 * x78 + rR * x1080;
-        let x1082 = (-delta_dot * x983 - x19 * x1077) + x1081 * x0;
-        let x1083 = x1080 * x12;
-        let x1084 = x1083 + (x13 * x1078 + x908);
-        let x1085 = x1084 * x0 - x911;
-        let x1086 = x12 * x1078;
-        let x1087 = x13 * x1080;
-        let x1088 = x1086 - x1087;
-        let x1089 = x1012 * x505 - x1011 * x492 + x985 * x497 + x1082 - x504 * x986
-            - x1085 * x88 + x68 * x1088;
-        let x1090 = x1077 * x0 + (delta_dot * (x74 * x364 - x988) + x19 * x1081);
-        let x1091 = -x916 - x1084 * x19;
-        let x1092 = x1090 + x1091 * x88;
-        let x1093 = x1076 * x12 - x62 * x841;
-        let x1094 = x1093 - x68 * x1091;
-        let x1095 = x436 * x986 + x1092 * x29 - x22 * x1094 - x989 * x497 - x1012 * x494
-            + x331 * x492;
-        let x1096 = x22 * x1092 - x985 * x436 + x504 * x989 - x505 * x331 + x1011 * x494
-            + x1094 * x29;
-        let x1097 = x1093 + x991 * x430 + x453 * x333 - x444 * x331 - x436 * x990
-            - x109 * x1091;
-        let x1098 = x1090 - x991 * x448 + x436 * x992 - x453 * x1007 + x106 * x1091
-            + x463 * x331;
-        let x1099 = x448 * x990 - x430 * x992 + x444 * x1007 + x1082 - x463 * x333
-            - x1085 * x106 + x109 * x1088;
-        let x1100 = x5 * x405;
-        let x1101 = x396 * x9 + x4 * x388;
-        let x1102 = x121 * x399 - x381 * x119;
-        let x1103 = xB * x1078 - x1101 * x5 + x1102 * x1 + x1080 * x115;
-        let x1104 = x1103 * psi_dot;
-        let x1105 = x4 * x414;
-        let x1106 = x9 * x418;
-        let x1107 = x1106 - x1105;
-        let x1108 = x388 - rR * x402 + x386 * x119;
-        let x1109 = phi_dot * x115;
-        let x1110 = x410 - 2.0 * x411;
-        let x1111 = x399 * x117;
-        let x1112 = x1108 * x1 + (x1109 + x9 * x1110 + x1111) * x5;
-        let x1113 = xB * phi_dot;
-        let x1114 = x381 * x117;
-        let x1115 = x395 - x394 + x391 * rR - x121 * x386;
-        let x1116 = (x4 * x1110 + x1113 - x1114) * x5 + x1 * x1115;
-        let x1117 = (x1085 * x200 + (x1008 - x1007 * IHyy) * x436)
-            + (x594 * x331 + x1088 * x194);
-        let x1118 = thF_dot * x333;
-        let x1119 = x1011 * x521;
-        let x1120 = thF_dot * x1007;
-        let x1121 = x1085 - x1120;
-        let x1122 = x504 * x331;
-        let x1123 = IFxx * ((x1118 + x1088) * x29 - x1119 + x22 * x1121 - x1122)
-            + IFyy * (x1119 + x1122);
-        let x1124 = x579 * x333;
-        let x1125 = x1091 * IFyy;
-        let x1126 = IHyy * x1091;
-        let x1127 = x574 * x1007;
-        let x1128 = x430 * x1008;
-        let x1129 = x448 * x1017;
-        let x1130 = x1124 - x1125 - x1126 - x1127 + x1128 - x1129;
-        let x1131 = x229 * phi_dot;
-        let x1132 = x210 * x399;
-        let x1133 = x213 * x381;
-        let x1134 = x9 * x590;
-        let x1135 = x528 * x4;
-        let x1136 = (-x1132 - x1133) + (x1134 + x1135);
-        let x1137 = IRyy * phi_dot;
-        let x1138 = phi_dot * IByy;
-        let x1139 = x406 * IRyy;
-        let x1140 = x4 * IByy;
-        let x1141 = x386 * x5;
-        let x1142 = (x1140 - x208 - x209) * x1141 + IBzz * x1078 + x567 * x1
-            - x1080 * IBxz;
-        let x1143 = x1088 * x205;
-        let x1144 = x333 * IHyy;
-        let x1145 = x1085 * x194;
-        let x1146 = x1143 + x436 * (x1144 - x1015 - x1016) + x1145 + x331 * x560;
-        let x1147 = x9 * IByy;
-        let x1148 = x1080 * IBxx - x1078 * IBxz + x530 * x1
-            + (x1147 - x211 - x212) * x1141;
-        let x1149 = x537 * x1;
-        let x1150 = x221 * x5;
-        let x1151 = x539 * x1150;
-        let x1152 = (x1149 + x1151) * IRyy
-            + (thR_dot * x1150 - x1149 + x216 * x1078 + x1080 * x214 - x1151) * IRxx;
-        let x1153 = x539 * x1009 * x5 + x546 * x1;
-        let x1154 = (x1153 + x218 * thR_dot * x5 - x214 * x1078 + x216 * x1080) * IRxx
-            - x1153 * IRyy;
-        let x1155 = x1012 * x521 + x497 * x331;
-        let x1156 = (x1121 * x29 + x1155 + x22 * (x1087 - x1118 - x1086)) * IFxx
-            - x1155 * IFyy;
-        let x1157 = x80 + x106 * x136;
-        let x1158 = mB * x117;
-        let x1159 = (mH * (x1157 + x111 * x0) + mF * x1059 + x1158) * g * x5;
-        let x1160 = g * x331 * x170;
-        let x1161 = 1.0 / f64::sqrt(x172);
-        let x1162 = x192 / f64::powf(x172, 1.5);
-        let x1163 = (4.0 - (3.0 * x1161 + x1162) * x1) * x1 - x173 + x609;
-        let x1164 = (x1161 + x1162) * x1;
-        let x1165 = f64::sqrt(x172) * phi_dot;
-        let x1166 = x761 / f64::powf(x175, 1.5) + x775 / f64::sqrt(x175);
-        let x1167 = x1005 * x638;
-        let x1168 = x904 + x1118;
-        let x1169 = x912 - x1120;
-        let x1170 = x1168 * x29 + x22 * x1169;
-        let x1171 = x9 * x514;
-        let x1172 = x553 * x9 + x840;
-        let x1173 = x1172 * x8;
-        let x1174 = x1171 + x1173;
-        let x1175 = x13 * x839;
-        let x1176 = x1174 * x12 - x1175;
-        let x1177 = thF_dot * x8;
-        let x1178 = x12 * x839;
-        let x1179 = x13 * x1174 + x1178;
-        let x1180 = x843 + x0 * (x1179 - x844);
-        let x1181 = x1176 * x29 + x976 * x1177 + x22 * x1180;
-        let x1182 = x917 * x55;
-        let x1183 = x1182 + x687 * x331;
-        let x1184 = x1169 * x29 - x22 * x1168;
-        let x1185 = x1180 * x29 - x977 * x1177 - x22 * x1176;
-        let x1186 = x92 * x842;
-        let x1187 = (x750 * x5 - x1186) * x8 + x0 * x613;
-        let x1188 = x1187 - x19 * x1179;
-        let x1189 = -(x974 * x638);
-        let x1190 = 2.0 * x918 + 2.0 * (x1170 * x225) + 2.0 * x914 + 2.0 * (x1012 * x702)
-            + 2.0 * (x1011 * x703) + 2.0 * (x1184 * x226);
-        let x1191 = x917 * x272 + x1033 * x638;
-        let x1192 = -x1171 - x1173;
-        let x1193 = x12 * x1192;
-        let x1194 = x13 * x1192;
-        let x1195 = x808 * (x9 * x804 + x4 * x807);
-        let x1196 = x811 * (x9 * x809 - x4 * x810);
-        let x1197 = 0.5 * x1195 - 0.5 * x1196;
-        let x1198 = x1183 + x1167;
-        let x1199 = x1067 * x638;
-        let x1200 = -(x20 * x917);
-        let x1201 = x798 * x331;
-        let x1202 = x715 * x0;
-        let x1203 = x3 * x402;
-        let x1204 = x961 * x9;
-        let x1205 = x1204 - x1203;
-        let x1206 = x12 * x713;
-        let x1207 = x13 * x1205 + (x1206 + x720);
-        let x1208 = x19 * x1207;
-        let x1209 = x1202 - x1208;
-        let x1210 = x1203 + x9 * x712;
-        let x1211 = delta_dot * x1062;
-        let x1212 = x1211 * x2;
-        let x1213 = x13 * x713;
-        let x1214 = x640 / f64::powf(x175, 1.5) + x658 / f64::sqrt(x175);
-        let x1215 = (delta_dot * x1021 + x917) * x0
+                * ((2.0 * (x332 * x882) - x370 * x995 - x20 * x1065) * x93 - x1034 * x370
+                    - x1067 * x367);
+        let x1069 = -(x889 * x70);
+        let x1070 = x332 * (x100 + rF * x1069) - x330 * rF * x93 / f64::sqrt(x173);
+        let x1071 = -(rF * x1004);
+        let x1072 = rF * x995;
+        let x1073 = x422 - x672;
+        let x1074 = x4 * x418;
+        let x1075 = x413 * x5 + x1074;
+        let x1076 = x1075 * x12;
+        let x1077 = (x13 * x1073 + x898) + x1076;
+        let x1078 = -x895 - x19 * x1077;
+        let x1079 = x419 * x1 + x528 * (x60 - x77);
+        let x1080 = x82 * x868 + x13 * x1079;
+        let x1081 = rR * x1075 + x1073 * x60;
+        let x1082 = x0 * x1080 + (x19 * x1081 + delta_dot * (x90 * x363 - x979));
+        let x1083 = x1078 * x63 - x446 * x988 + x1082 + x400 * x332 + x989 * x390
+            - x1007 * x455;
+        let x1084 = (-delta_dot * x983 - x19 * x1080) + x0 * x1081;
+        let x1085 = x13 * x1075;
+        let x1086 = x1073 * x12;
+        let x1087 = x1086 - x1085;
+        let x1088 = x1077 * x0 - x907;
+        let x1089 = x987 * x446 + x1084 + x73 * x1087 - x400 * x330 - x63 * x1088
+            - x989 * x403 + x447 * x1007;
+        let x1090 = x12 * x1079 - x87 * x868;
+        let x1091 = x1090 + x330 * x455 + x988 * x403 - x987 * x390 - x332 * x447
+            - x1078 * x73;
+        let x1092 = x5 * x510;
+        let x1093 = x507 * x4 + x9 * x503;
+        let x1094 = x120 * x383 - x379 * x118;
+        let x1095 = x1073 * xB - x5 * x1093 + x1094 * x1 + x1075 * x114;
+        let x1096 = x1095 * psi_dot;
+        let x1097 = x9 * x505;
+        let x1098 = x4 * x509;
+        let x1099 = x1097 - x1098;
+        let x1100 = x501 + x419 - x120 * x388 - x502;
+        let x1101 = x497 - 2.0 * x498;
+        let x1102 = xB * phi_dot;
+        let x1103 = x379 * x116;
+        let x1104 = x1100 * x1 + (x4 * x1101 + x1102 - x1103) * x5;
+        let x1105 = x507 - rR * x407 + x118 * x388;
+        let x1106 = phi_dot * x114;
+        let x1107 = x383 * x116;
+        let x1108 = x1105 * x1 + (x1106 + x9 * x1101 + x1107) * x5;
+        let x1109 = x1090 - x1078 * x100;
+        let x1110 = x1078 * x105 + x1082;
+        let x1111 = x1109 * x29 - x390 * x986 + x485 * x980 - x486 * x332 + x22 * x1110
+            + x1008 * x479;
+        let x1112 = x1110 * x29 - x22 * x1109 - x1009 * x479 - x980 * x482 + x390 * x985
+            + x332 * x473;
+        let x1113 = x100 * x1087 + x1084 + x486 * x1009 - x1088 * x105 - x1008 * x473
+            + x482 * x986 - x485 * x985;
+        let x1114 = x330 * thF_dot;
+        let x1115 = thF_dot * x1007;
+        let x1116 = x1088 - x1115;
+        let x1117 = x485 * x332;
+        let x1118 = x1008 * x564;
+        let x1119 = ((x1114 + x1087) * x29 + x22 * x1116 - x1117 - x1118) * IFxx
+            + (x1117 + x1118) * IFyy;
+        let x1120 = x221 * phi_dot;
+        let x1121 = x197 * x383;
+        let x1122 = x200 * x379;
+        let x1123 = x9 * x586;
+        let x1124 = x559 * x4;
+        let x1125 = (-x1121 - x1122) + (x1123 + x1124);
+        let x1126 = IRyy * phi_dot;
+        let x1127 = phi_dot * IByy;
+        let x1128 = x592 * x1007;
+        let x1129 = x1014 * x403;
+        let x1130 = x330 * x582;
+        let x1131 = x1078 * IHyy;
+        let x1132 = x1078 * IFyy;
+        let x1133 = x446 * x1013;
+        let x1134 = x1129 - x1128 + x1130 - x1131 - x1132 - x1133;
+        let x1135 = x418 * IRyy;
+        let x1136 = x5 * x388;
+        let x1137 = x9 * IByy;
+        let x1138 = x1075 * IBxx + x561 * x1 + x1136 * (x1137 - x198 - x199)
+            - x1073 * IBxz;
+        let x1139 = x330 * IHyy;
+        let x1140 = x211 * x1088;
+        let x1141 = x216 * x1087;
+        let x1142 = x332 * x547 + (x1139 - x1011 - x1012) * x390 + x1140 + x1141;
+        let x1143 = x4 * IByy;
+        let x1144 = IBzz * x1073 + x1136 * (x1143 - x195 - x196) + x522 * x1
+            - x1075 * IBxz;
+        let x1145 = x1015 * x5 * x537 + x532 * x1;
+        let x1146 = (x205 * thR_dot * x5 - x201 * x1073 + x1145 + x203 * x1075) * IRxx
+            - IRyy * x1145;
+        let x1147 = x554 * x1;
+        let x1148 = x208 * x5;
+        let x1149 = x1148 * x537;
+        let x1150 = IRyy * (x1147 + x1149)
+            + (thR_dot * x1148 + x203 * x1073 - x1147 - x1149 + x1075 * x201) * IRxx;
+        let x1151 = ((x1014 - x1007 * IHyy) * x390 + x1088 * x227)
+            + (x211 * x1087 + x332 * x583);
+        let x1152 = x332 * x482 + x1009 * x564;
+        let x1153 = IFxx * (x1116 * x29 + x22 * (x1085 - x1114 - x1086) + x1152)
+            - IFyy * x1152;
+        let x1154 = mB * x116;
+        let x1155 = x79 + x135 * x63;
+        let x1156 = (mF * x1057 + x1154 + mH * (x76 * x0 + x1155)) * g * x5;
+        let x1157 = x332 * g * x168;
+        let x1158 = 1.0 / f64::sqrt(x170);
+        let x1159 = x194 / f64::powf(x170, 1.5);
+        let x1160 = (4.0 - (3.0 * x1158 + x1159) * x1) * x1 - x171 + x608;
+        let x1161 = (x1158 + x1159) * x1;
+        let x1162 = f64::sqrt(x170) * phi_dot;
+        let x1163 = x332 * x638;
+        let x1164 = x900 / f64::sqrt(x173);
+        let x1165 = x767 * x2 - x751;
+        let x1166 = x637 * x1004;
+        let x1167 = x904 + x1114;
+        let x1168 = x908 - x1115;
+        let x1169 = x1167 * x29 + x22 * x1168;
+        let x1170 = x1168 * x29 - x22 * x1167;
+        let x1171 = x19 * x767;
+        let x1172 = x1171 - x766;
+        let x1173 = x1008 * x779 + x1169 * x248 + x1009 * x775 + x1170 * x246
+            - x900 * x230 + x332 * x1172;
+        let x1174 = x9 * x515;
+        let x1175 = x528 * x9 + x867;
+        let x1176 = x1175 * x8;
+        let x1177 = x1174 + x1176;
+        let x1178 = x12 * x866;
+        let x1179 = x13 * x1177 + x1178;
+        let x1180 = x64 * x862;
+        let x1181 = x0 * x612 + x8 * (x777 * x5 - x1180);
+        let x1182 = x1181 - x19 * x1179;
+        let x1183 = x637 * x1045 + x900 * x310;
+        let x1184 = x13 * x866;
+        let x1185 = x1177 * x12 - x1184;
+        let x1186 = x863 + x0 * (x1179 - x861);
+        let x1187 = thF_dot * x8;
+        let x1188 = x1185 * x29 + x22 * x1186 + x1187 * x976;
+        let x1189 = x1186 * x29 - x975 * x1187 - x22 * x1185;
+        let x1190 = x12 * x753;
+        let x1191 = x3 * x407;
+        let x1192 = x1191 + x9 * x752;
+        let x1193 = x13 * x753;
+        let x1194 = delta_dot * x1060;
+        let x1195 = x1194 * x2;
+        let x1196 = x0 * (x900 + delta_dot * x1021)
             + x19
-                * (x22 * (x1170 - x1011 * thF_dot) - delta_dot * x331
-                    + (x1184 + x1012 * thF_dot) * x29);
-        let x1216 = x735 * x2 - x723;
-        let x1217 = x19 * x735;
-        let x1218 = x1217 - x746;
-        let x1219 = x1218 * x331 + x235 * x1170 + x1011 * x752 + x1184 * x233
-            + x1012 * x734 - x917 * x238;
-        let x1220 = x638 * x1045 + x917 * x313;
-        let x1221 = x917 / f64::sqrt(x175);
-        let x1222 = x331 * x639;
-        let x1223 = x864 / f64::sqrt(x175) + x859 / f64::powf(x175, 1.5);
-        let x1224 = x706 * x75;
-        let x1225 = x730 * x45;
-        let x1226 = x638 * x2;
-        let x1227 = x1205 * x12 - x1213;
-        let x1228 = x0 * x1207 + x716;
-        let x1229 = thF_dot * x2;
-        let x1230 = x1227 * x29 + x22 * x1228 + x226 * x1229;
-        let x1231 = x1228 * x29 - x225 * x1229 - x22 * x1227;
-        let x1232 = theta_dot * x1048 + x406 * x98;
-        let x1233 = -x915 - x919;
-        let x1234 = x320 * x638 / f64::sqrt(x175);
-        let x1235 = x888 / f64::powf(x175, 1.5) + x886 / f64::sqrt(x175);
-        let x1236 = -(x333 * x638);
-        let x1237 = -(x95 * x917);
-        let x1238 = -(x95 * x639);
-        let x1239 = x1238 / f64::powf(x175, 2.5);
-        let x1240 = x900 / f64::powf(x175, 1.5);
-        let x1241 = rF
-            * (x75
-                * ((x1236 / f64::powf(x175, 1.5) + x1237 / f64::powf(x175, 1.5)
-                    + (3.0 * x1239 + x1240) * x331) * x75
-                    + (x911 - x910) / f64::sqrt(x175)
-                    + 3.0 * (x896 * x331 / f64::powf(x175, 1.5)))
-                + x900 * x331 / f64::sqrt(x175) + x1236 / f64::sqrt(x175)
-                + x1237 / f64::sqrt(x175)) + x68 * x917;
-        let x1242 = x836 * x88;
-        let x1243 = x316 - x130;
-        let x1244 = 3.0 * (x174 / f64::powf(x175, 2.5))
-            + 3.0 * (1.0 / f64::powf(x175, 1.5));
-        let x1245 = x1244 * x914;
-        let x1246 = x918 / f64::powf(x175, 1.5);
-        let x1247 = x907 * x88 + x80 * x406;
-        let x1248 = x906 * x638;
-        let x1249 = x836 * x331;
-        let x1250 = -(x20 * x19);
-        let x1251 = x0 * x28;
-        let x1252 = x18 * x29 + x347 * x160;
-        let x1253 = x347 * x156 - x22 * x18;
-        let x1254 = x160 * x274 + x355 * x29;
-        let x1255 = x156 * x274 - x22 * x355;
-        let x1256 = x19 * x55;
-        let x1257 = x0 * x47;
-        let x1258 = mF
-            * (x1252 * x50 + x31 * x1254 - x19 * (x347 * x55 - x20 * x274) + x52 * x1253
-                + x30 * x1255)
-            + mH
-                * (x347 * (x1257 - x1256) + (x1251 - x1250) * x274 + x25 * x355
-                    + x18 * x49);
-        let x1259 = -x124 - x125;
-        let x1260 = x1259 * x1;
-        let x1261 = rR * x1049;
-        let x1262 = x890 - x139;
-        let x1263 = x1261 - x1262 * x72;
-        let x1264 = rR * x906;
-        let x1265 = x68 * x1062 + x1264;
-        let x1266 = x1263 * x29 - x22 * x1265;
-        let x1267 = x22 * x1263 + x1265 * x29;
-        let x1268 = rR * x19 * x1048;
-        let x1269 = (x68 * x71 - x0 * x1262) * x1 - x1268;
-        let x1270 = x890 - x133;
-        let x1271 = x1261 - x1270 * x72;
-        let x1272 = x109 * x1062 + x1264;
-        let x1273 = (x109 * x71 - x0 * x1270) * x1 - x1268;
-        let x1274 = x107 * x0 - x19 * x112;
-        let x1275 = ((rR * (x9 * x16 - x4 * x11) - x121 * x16 + x11 * x119) * x5
-            - x1260 * x3) * mB
-            + (x103 * x1253 - x656 * x102 + x30 * x1266 + x31 * x1267 - x20 * x1269
-                + x1252 * x91) * mF
-            + (x1271 * x28 + x25 * x1272 + x113 * x18 - x20 * x1273 + x347 * x1274) * mH;
-        let x1276 = x111 + x0 * x1157;
-        let x1277 = x68 * x29;
-        let x1278 = x22 * x1058 - x1277 * x136;
-        let x1279 = x1058 * x29 + x141 * x136;
-        let x1280 = x0 * x1058 + x99;
-        let x1281 = (x19 * (x109 * (x18 * x98 - x25 * x136) - x347 * x137 + x1157 * x28)
-            - x20 * x1276) * mH
+                * (x22 * (x1169 - x1008 * thF_dot) - delta_dot * x332
+                    + (x1170 + x1009 * thF_dot) * x29);
+        let x1197 = x900 * x55;
+        let x1198 = x1197 + x332 * x685;
+        let x1199 = x1198 + x1166;
+        let x1200 = x637 * x603;
+        let x1201 = x656 / f64::sqrt(x173) + x639 / f64::powf(x173, 1.5);
+        let x1202 = x958 * x9;
+        let x1203 = x1202 - x1191;
+        let x1204 = x13 * x1203 + (x1190 + x757);
+        let x1205 = x19 * x1204;
+        let x1206 = x759 * x0;
+        let x1207 = x1206 - x1205;
+        let x1208 = -(x20 * x900);
+        let x1209 = x811 * x332;
+        let x1210 = (x798 * x9 - x4 * x797) * x796;
+        let x1211 = (x793 * x9 + x4 * x795) * x791;
+        let x1212 = 0.5 * x1211 - 0.5 * x1210;
+        let x1213 = x1065 * x637;
+        let x1214 = x709 / f64::powf(x173, 1.5) + x723 / f64::sqrt(x173);
+        let x1215 = -x1174 - x1176;
+        let x1216 = x12 * x1215;
+        let x1217 = x13 * x1215;
+        let x1218 = 2.0 * (x1009 * x701) + 2.0 * x901 + 2.0 * (x1169 * x189)
+            + 2.0 * (x1170 * x190) + 2.0 * x893 + 2.0 * (x1008 * x702);
+        let x1219 = x637 * x1029 + x276 * x900;
+        let x1220 = -(x973 * x637);
+        let x1221 = x1203 * x12 - x1193;
+        let x1222 = x0 * x1204 + x760;
+        let x1223 = x838 / f64::powf(x173, 1.5) + x819 / f64::sqrt(x173);
+        let x1224 = x637 * x318 / f64::sqrt(x173);
+        let x1225 = x22 * x1222 + x1221 * x29 + x689 * x2;
+        let x1226 = x1222 * x29 - thF_dot * x189 * x2 - x22 * x1221;
+        let x1227 = x637 * x2;
+        let x1228 = -x894 - x902;
+        let x1229 = theta_dot * x1047 + x74 * x418;
+        let x1230 = x854 / f64::sqrt(x173) + x849 / f64::powf(x173, 1.5);
+        let x1231 = x704 * x93;
+        let x1232 = x774 * x45;
+        let x1233 = x856 * x105;
+        let x1234 = x313 - x130;
+        let x1235 = 3.0 * (1.0 / f64::powf(x173, 1.5))
+            + 3.0 * (x172 / f64::powf(x173, 2.5));
+        let x1236 = x1235 * x893;
+        let x1237 = x901 / f64::powf(x173, 1.5);
+        let x1238 = -(x888 * theta_dot);
+        let x1239 = x79 * x418 + x897 * x105;
+        let x1240 = x332 * x856;
+        let x1241 = x637 * x896;
+        let x1242 = -(x330 * x637);
+        let x1243 = x913 / f64::powf(x173, 1.5);
+        let x1244 = -(x638 * x70);
+        let x1245 = x1244 / f64::powf(x173, 2.5);
+        let x1246 = -(x900 * x70);
+        let x1247 = rF
+            * (x93
+                * ((x907 - x906) / f64::sqrt(x173)
+                    + 3.0 * (x332 * x916 / f64::powf(x173, 1.5))
+                    + (x1242 / f64::powf(x173, 1.5) + (x1243 + 3.0 * x1245) * x332
+                        + x1246 / f64::powf(x173, 1.5)) * x93) + x1246 / f64::sqrt(x173)
+                + x1242 / f64::sqrt(x173) + x913 * x332 / f64::sqrt(x173)) + x100 * x900;
+        let x1248 = x20 * x19;
+        let x1249 = x0 * x28;
+        let x1250 = x18 * x29 + x349 * x158;
+        let x1251 = x349 * x154 - x22 * x18;
+        let x1252 = x158 * x269 + x354 * x29;
+        let x1253 = x154 * x269 - x22 * x354;
+        let x1254 = x19 * x55;
+        let x1255 = x0 * x47;
+        let x1256 = mF
+            * (x1250 * x50 + x31 * x1252 - x19 * (x349 * x55 - x20 * x269) + x52 * x1251
+                + x30 * x1253)
+            + (x349 * (x1255 - x1254) + x25 * x354 + (x1248 + x1249) * x269 + x18 * x49)
+                * mH;
+        let x1257 = -x123 - x124;
+        let x1258 = x1257 * x1;
+        let x1259 = rR * x19 * x1047;
+        let x1260 = x888 - x138;
+        let x1261 = x1 * (x100 * x67 - x1260 * x0) - x1259;
+        let x1262 = rR * x896;
+        let x1263 = x1060 * x100 + x1262;
+        let x1264 = rR * x1048;
+        let x1265 = x1264 - x1260 * x91;
+        let x1266 = x1263 * x29 + x22 * x1265;
+        let x1267 = x1265 * x29 - x22 * x1263;
+        let x1268 = x888 - x129;
+        let x1269 = (x73 * x67 - x0 * x1268) * x1 - x1259;
+        let x1270 = x1060 * x73 + x1262;
+        let x1271 = x98 * x0 - x19 * x86;
+        let x1272 = x1264 - x1268 * x91;
+        let x1273 = ((rR * (x9 * x16 - x4 * x11) - x120 * x16 + x11 * x118) * x5
+            - x1258 * x3) * mB
             + mF
-                * ((x31 * x1278 - x347 * x147 + x30 * x1279 + x1252 * x144
-                    + x142 * x1253) * x19 - x20 * x1280) - x3 * x1158;
-        let x1282 = x11 * xB;
-        let x1283 = x16 * x115;
-        let x1284 = x0 * x165 - x163 * x19;
-        let x1285 = mB * (x1283 - x1282)
-            + mF * (x159 * x1253 + x1252 * x161 - x152 * x656)
-            + (x18 * x166 + x347 * x1284) * mH;
-        let x1286 = -(x656 * x170);
-        let x1287 = x75 * x1062;
-        let x1288 = x1287 / f64::sqrt(x175);
-        let x1289 = mH
-            * (x274 * x1274 + x1271 * x47 + x49 * x1272 + x1273 * x55 + x113 * x355)
-            + mB
-                * (x1260 * x45
-                    + x5 * (x121 * x273 + rR * (x41 * x9 - x4 * x37) + x119 * x37))
+                * (x31 * x1266 - x111 * x651 - x1261 * x20 + x108 * x1251 + x30 * x1267
+                    + x1250 * x112)
+            + mH * (x18 * x94 - x20 * x1269 + x1270 * x25 + x349 * x1271 + x1272 * x28);
+        let x1274 = x76 + x0 * x1155;
+        let x1275 = x135 * x143 + x1056 * x29;
+        let x1276 = x22 * x1056 - x141 * x135;
+        let x1277 = x110 + x1056 * x0;
+        let x1278 = (x19 * (x73 * (x18 * x74 - x25 * x135) - x349 * x136 + x28 * x1155)
+            - x20 * x1274) * mH - x3 * x1154
+            + (x19
+                * (x1275 * x30 + x31 * x1276 + x1250 * x142 - x349 * x140 + x144 * x1251)
+                - x20 * x1277) * mF;
+        let x1279 = x11 * xB;
+        let x1280 = x16 * x114;
+        let x1281 = x0 * x163 - x161 * x19;
+        let x1282 = mB * (x1280 - x1279)
+            + mF * (x157 * x1251 + x1250 * x159 - x150 * x651)
+            + (x18 * x164 + x349 * x1281) * mH;
+        let x1283 = -(x651 * x168);
+        let x1284 = x1060 * x93;
+        let x1285 = x1284 / f64::sqrt(x173);
+        let x1286 = mB
+            * (x1258 * x45
+                + x5 * (x120 * x268 + rR * (x41 * x9 - x4 * x37) + x118 * x37))
+            + (x1269 * x55 + x1271 * x269 + x1270 * x49 + x1272 * x47 + x94 * x354) * mH
             + mF
-                * (x1269 * x55 - x102 * x862 + x1267 * x50 + x1254 * x91 + x103 * x1255
-                    + x52 * x1266);
-        let x1290 = mH
-            * (x1276 * x55
-                + x19 * (x1157 * x47 - x137 * x274 + x109 * (x355 * x98 - x49 * x136)))
-            + x1158 * x45
+                * (x112 * x1252 + x1261 * x55 + x50 * x1266 + x52 * x1267 - x111 * x851
+                    + x108 * x1253);
+        let x1287 = (x19
+            * (x142 * x1252 + x144 * x1253 - x269 * x140 + x50 * x1276 + x52 * x1275)
+            + x1277 * x55) * mF
+            + (x1274 * x55
+                + x19 * (x73 * (x74 * x354 - x49 * x135) - x136 * x269 + x1155 * x47))
+                * mH + x1154 * x45;
+        let x1288 = xB * x37;
+        let x1289 = (-x1288 - x268 * x114) * mB + (x1281 * x269 + x354 * x164) * mH
+            + mF * (x1253 * x157 - x150 * x851 + x159 * x1252);
+        let x1290 = -(x168 * x851);
+        let x1291 = x67 * x216 + x602 * x211;
+        let x1292 = 2.0 * x195 + x196 - x237;
+        let x1293 = x67 * x211;
+        let x1294 = x22 * x602 + x67 * x29;
+        let x1295 = x602 * x29 - x22 * x67;
+        let x1296 = 2.0 * (x1294 * x189) + 2.0 * (x190 * x1295);
+        let x1297 = x74 * x216 - x211 * x321;
+        let x1298 = 2.0 * x198 - x243 + x199;
+        let x1299 = x246 * x1295 + x1294 * x248;
+        let x1300 = x359 * x135;
+        let x1301 = x74 * x211;
+        let x1302 = x1301 - x227 * x321;
+        let x1303 = x22 * x74 + x321 * x29;
+        let x1304 = x770 - x22 * x321;
+        let x1305 = x189 * x1304 - x190 * x1303;
+        let x1306 = (x1297 * x74 + x9 * x1298 + x1299 * IFxx - x289 + x4 * x1292
+            + x67 * x241 + mB * (x126 * x1257 + x1016)) * x1 + x1300 * x219 + x70 * x1302
+            + IFxx * x1305
             + mF
-                * (x19
-                    * (x50 * x1278 + x144 * x1254 + x1255 * x142 + x52 * x1279
-                        - x147 * x274) + x1280 * x55);
-        let x1291 = xB * x37;
-        let x1292 = (-x1291 - x273 * x115) * mB + (x1284 * x274 + x355 * x166) * mH
-            + mF * (x1255 * x159 - x152 * x862 + x161 * x1254);
-        let x1293 = -(x170 * x862);
-        let x1294 = x71 * x29 - x160 * x98;
-        let x1295 = -x22 * x71 - x156 * x98;
-        let x1296 = 2.0 * (x225 * x1294) + 2.0 * (x226 * x1295);
-        let x1297 = x71 * x205 + x194 * x604;
-        let x1298 = 2.0 * x208 + x209 - x240;
-        let x1299 = x71 * x194;
-        let x1300 = 2.0 * x211 - x246 + x212;
-        let x1301 = x0 * x136;
-        let x1302 = x205 * x98 - x1301 * x194;
-        let x1303 = x233 * x1295 + x235 * x1294;
-        let x1304 = x194 * x98;
-        let x1305 = x1304 - x1301 * x200;
-        let x1306 = x143 - x160 * x136;
-        let x1307 = x22 * x98 + x156 * x136;
-        let x1308 = x1306 * x225 - x226 * x1307;
-        let x1309 = x360 * x136;
-        let x1310 = (x1276 * x112
-            + x19 * (x107 * x1157 + x134 * x1271 + x109 * (x1272 * x98 - x113 * x136))
-            + x1273 * x138) * mH
-            + (x9 * x1300 - x291 + x244 * x71 + x4 * x1298 + x1302 * x98
-                + mB * (x127 * x1259 + x1010) + IFxx * x1303) * x1 + x95 * x1305
-            + mF
-                * (x1269 * x147
-                    + (x1267 * x144 + x1266 * x142 + x103 * x1279 + x91 * x1278) * x19
-                    + x1280 * x102) + x1308 * IFxx + x1309 * x228;
-        let x1311 = x22 * x1294 + x1295 * x29;
-        let x1312 = (x298 * x604 + x1311 * IFxx + x1299) * x72 + x602 * x407
-            + (x166 * x1272 + x165 * x1271 + x163 * x1273) * mH
-            + mF * (x1269 * x152 + x1267 * x161 + x1266 * x159);
-        let x1313 = x1294 * x29 - x22 * x1295;
-        let x1314 = x1273 * x168 + x1269 * x169 + (IFxx * x1313 + x1297) * x1;
-        let x1315 = -(x1062 * IFyy);
-        let x1316 = x75 * x274;
-        let x1317 = -(x19 * x98);
-        let x1318 = (x52 * x1295 + x50 * x1294 - x1317 * x55) * x1 - x75 * x862
-            + x226 * x1255 + x225 * x1254;
-        let x1319 = x75 * x1317;
-        let x1320 = x1 * (x1296 - 2.0 * x1319);
-        let x1321 = x1287 * x279 / f64::sqrt(x175)
+                * (x19 * (x142 * x1266 + x112 * x1276 + x144 * x1267 + x108 * x1275)
+                    + x1261 * x140 + x111 * x1277)
+            + (x137 * x1269 + x86 * x1274
+                + (x73 * (x1270 * x74 - x94 * x135) + x98 * x1155 + x133 * x1272) * x19)
+                * mH;
+        let x1307 = x1295 * x29 + x22 * x1294;
+        let x1308 = x601 * rR * x5 + (IFxx * x1307 + x1293 + x602 * x301) * x91
+            + (x163 * x1272 + x161 * x1269 + x1270 * x164) * mH
+            + (x1261 * x150 + x1267 * x157 + x159 * x1266) * mF;
+        let x1309 = x1294 * x29 - x22 * x1295;
+        let x1310 = (x1309 * IFxx + x1291) * x1 + x1261 * x167 + x1269 * x166;
+        let x1311 = -(x1060 * IFyy);
+        let x1312 = x93 * x269;
+        let x1313 = -(x19 * x74);
+        let x1314 = x1313 * x93;
+        let x1315 = (x1296 - 2.0 * x1314) * x1;
+        let x1316 = x189 * x1252 - x93 * x851
+            + (x52 * x1295 - x1313 * x55 + x1294 * x50) * x1 + x190 * x1253;
+        let x1317 = x1284 * x274 / f64::sqrt(x173)
             - rF
-                * (x19 * (x630 * (2.0 * (x75 * x271) - x272 * x55) - x1316 * x272)
-                    + x175 * x1318 + x270 * x1320) + x948;
-        let x1322 = x226 * x1253 + x1 * (x30 * x1295 + x20 * x1317 + x31 * x1294)
-            + x1252 * x225 - x75 * x656;
-        let x1323 = x347 * x75;
-        let x1324 = x349 + x1287 * x287 / f64::sqrt(x175)
-            - (x19 * (x1323 * x272 + (-2.0 * (x75 * x285) - x20 * x272) * x630)
-                - x175 * x1322 - x282 * x1320) * rF;
-        let x1325 = -x197 - x199;
-        let x1326 = x1325 + x228;
-        let x1327 = (x1304 + (x22 * x1306 - x1307 * x29) * IFxx
-            + mH * (x162 * x1276 + x1157 * x165 - x137 * x166)
-            + (x161 * x1278 + x159 * x1279 + x1280 * x151) * mF + x1301 * x1326) * x19;
-        let x1328 = (x1306 * x29 + x22 * x1307) * IFxx + x1276 * x168 + x1280 * x169
-            + x1302;
-        let x1329 = x19 * IFyy;
-        let x1330 = x1329 * x136;
-        let x1331 = x1308 + (x1303 + x1317 * x238) * x1 + x1309;
-        let x1332 = x233 * x1255 + (x274 * x238 + x136 * x55) * x19 - x52 * x1307
-            + x235 * x1254 + x1306 * x50;
-        let x1333 = (x603 * f64::sqrt(x175) + x1319 * x319 / f64::sqrt(x175)) * x3
-            - (x270 * x1331 + x175 * x1332
-                + x19 * ((2.0 * (x75 * x312) - x313 * x55) * x630 - x1316 * x313)) * rF;
-        let x1334 = x233 * x1253 + x1306 * x31 + x235 * x1252
-            + x19 * (x347 * x238 - x20 * x136) - x30 * x1307;
-        let x1335 = (x1319 * x326 / f64::sqrt(x175) + f64::sqrt(x175) * x1059) * x45
+                * (((2.0 * (x278 * x93) - x276 * x55) * x629 - x276 * x1312) * x19
+                    + x1315 * x277 + x1316 * x173) + x947;
+        let x1318 = x349 * x93;
+        let x1319 = (x30 * x1295 + x31 * x1294 + x20 * x1313) * x1 - x651 * x93
+            + x1250 * x189 + x190 * x1251;
+        let x1320 = x280 * x1284 / f64::sqrt(x173)
             - rF
-                * ((x630 * (-2.0 * (x75 * x328) - x20 * x313) + x1323 * x313) * x19
-                    - x175 * x1334 - x282 * x1331);
-        let x1336 = x934 + rR * x16 + x154 * x935;
-        let x1337 = x352 * x55;
-        let x1338 = x1311 - x604;
-        let x1339 = rF * x19;
-        let x1340 = f64::sqrt(x175) * x1336 + x1287 * x348 / f64::sqrt(x175)
-            - (((x1338 * x55 + 2.0 * x1066) * x1 - x352 * x274) * x75 - x630 * x1337)
-                * x1339;
-        let x1341 = -(x20 * x352);
-        let x1342 = x277 * x154 - rR * x273 + x275;
-        let x1343 = x356 * x1287 / f64::sqrt(x175)
-            - x1339
-                * (x1341 * x630
-                    + (x347 * x352 + x1 * (2.0 * (x630 * x2) + x20 * x1338)) * x75)
-            + f64::sqrt(x175) * x1342;
-        let x1344 = x154 * x136 - x139;
-        let x1345 = (-x75 * x136 / f64::sqrt(x175) - x1062 * x98 * x892) * x1339 + x1344;
-        let x1346 = (x890 + x1345) * x1;
-        let x1347 = x69 * x1 - x4 * x368;
-        let x1348 = x68 * x19;
-        let x1349 = x1348 * (x282 * x630 / f64::sqrt(x175) - x347 * f64::sqrt(x175))
+                * (x19 * ((-x276 * x20 - 2.0 * (x284 * x93)) * x629 + x276 * x1318)
+                    - x1319 * x173 - x281 * x1315) + x351;
+        let x1321 = -x225 - x226;
+        let x1322 = x1321 + x219;
+        let x1323 = x19
+            * ((x160 * x1274 + x163 * x1155 - x136 * x164) * mH
+                + IFxx * (x22 * x1304 - x1303 * x29) + x1301 + x1322 * x321
+                + mF * (x1275 * x157 + x1277 * x149 + x159 * x1276));
+        let x1324 = (x22 * x1303 + x1304 * x29) * IFxx + x1274 * x166 + x1297
+            + x1277 * x167;
+        let x1325 = x19 * IFyy;
+        let x1326 = x1325 * x135;
+        let x1327 = x50 * x1304 + x248 * x1252 + x246 * x1253
+            + (x269 * x230 + x135 * x55) * x19 - x52 * x1303;
+        let x1328 = (x1313 * x230 + x1299) * x1 + x1300 + x1305;
+        let x1329 = (f64::sqrt(x173) * x603 + x1314 * x317 / f64::sqrt(x173)) * x3
             - rF
-                * (x19 * (x630 * (2.0 * (x75 * x800) - x369 * x55) - x1316 * x369)
-                    + x355 * x370 + x270 * x1347);
-        let x1350 = x1348 * (x270 * x630 / f64::sqrt(x175) - f64::sqrt(x175) * x274)
-            - (x19 * (x1323 * x369 + (-2.0 * (x869 * x75) - x20 * x369) * x630)
-                - x282 * x1347 - x18 * x370) * rF;
-        let x1351 = x95 * x19 * x892 - x260 / f64::sqrt(x175);
-        let x1352 = rF * x1351;
-        let x1353 = x1352 - x1348;
-        let x1354 = x630 * x1353;
-        let x1355 = rF * x862;
-        let x1356 = -(rF * x656);
-        let x1357 = x0 * x488 - x19 * x478;
-        let x1358 = x381 * x78 - rR * x399;
-        let x1359 = x447 - x446;
-        let x1360 = x1358 - x1359 * x106;
-        let x1361 = x382 * x1048;
-        let x1362 = x1361 * x0;
-        let x1363 = x19 * x1360 + x1362;
-        let x1364 = x389 * x380 + x403;
-        let x1365 = x1364 * x12 + x456;
-        let x1366 = x19 * x1365 + x1359 * x745;
-        let x1367 = x428;
-        let x1368 = x1367 * x109;
-        let x1369 = x1361 * x19;
-        let x1370 = x1368 + x0 * x1360 - x1369;
-        let x1371 = x676 - x420;
-        let x1372 = (x12 * x1371 + x1087) * x382;
-        let x1373 = x109 * x1366 - x1363 * x436 + x430 * x1370 + x1372
-            + x1359 * (x453 * x0 + x19 * x444);
-        let x1374 = rR * x1364 + x392 * x78;
-        let x1375 = x1374 - x1359 * x463 - x1361 * delta_dot;
-        let x1376 = x906 * x382;
-        let x1377 = x1359 * x19;
-        let x1378 = x1376 + x1377 * x109;
-        let x1379 = x13 * x1371 - x1083;
-        let x1380 = delta_dot * x1358 + x1379 * x382;
-        let x1381 = x19 * x1375 + x1378 * x436 - x106 * x1366 + x0 * x1380 - x1370 * x448
-            - x1367 * x453;
-        let x1382 = x0 * x1365 - x750 * x1359;
-        let x1383 = x13 * x1364;
-        let x1384 = x431 - x1383;
-        let x1385 = x0 * x1375 - x1382 * x106 - x1378 * x430 + x1367 * x444
-            + x109 * x1384 - x19 * x1380 + x1363 * x448;
-        let x1386 = x381 * xB;
-        let x1387 = x1386 - x399 * x115;
-        let x1388 = psi_dot * x192;
-        let x1389 = (x9 * x1388 - x1079) * x382 - x1387 * x399;
-        let x1390 = x1389 + x417;
-        let x1391 = (x676 + x4 * x1388) * x382 - x413 + x1387 * x381;
-        let x1392 = x1364 * x115 - x383 * (x9 * x381 + x4 * x399) + x392 * xB
-            + x399 * x388 + x396 * x381;
-        let x1393 = x1376 + x1377 * x68;
-        let x1394 = x1358 - x1359 * x88;
-        let x1395 = x19 * x1394 + x1362;
-        let x1396 = x1393 * x29 + x22 * x1395;
-        let x1397 = x1359 * x156 - x1367 * x22;
-        let x1398 = x1395 * x29 - x1393 * x22;
-        let x1399 = x1359 * x160 + x1367 * x29;
-        let x1400 = x1398 * x497 - x1396 * x504 - (x1048 * x745 + x19 * x1379) * x382
-            - x1397 * x492 - x750 * x1358 + x1374 * x0 + x505 * x1399 - x1382 * x88
-            + x68 * x1384;
-        let x1401 = x1367 * x68;
-        let x1402 = x1401 + x0 * x1394 - x1369;
-        let x1403 = x1358 * x745 - x1366 * x88 + (x0 * x1379 - x750 * x1048) * x382
-            + x1374 * x19;
-        let x1404 = x68 * x1366 + x1372;
-        let x1405 = x504 * x1402 - x1398 * x436 + x22 * x1403 + x1404 * x29
-            + x505 * x1377 + x494 * x1397;
-        let x1406 = x1403 * x29 - x22 * x1404 - x494 * x1399 - x1377 * x492
-            + x1396 * x436 - x497 * x1402;
-        let x1407 = x1389 - x415;
-        let x1408 = IHyy * x1366;
-        let x1409 = x1367 * x574;
-        let x1410 = -(IFyy * x1366);
-        let x1411 = x1359 * x0;
-        let x1412 = x1411 * x579;
-        let x1413 = x1411 * x200 + x1367 * x194;
-        let x1414 = x448 * x1413;
-        let x1415 = x1367 * x205;
-        let x1416 = x1411 * x194 + x1415;
-        let x1417 = x430 * x1416;
-        let x1418 = x1408 - x1409 - x1410 + x1412 - x1414 + x1417;
-        let x1419 = x593 - x577 - x578;
-        let x1420 = (x1382 * x200 + x436 * (x1416 - x1367 * IHyy))
-            + (x1384 * x194 + x1377 * x1419);
-        let x1421 = x528 * x399;
-        let x1422 = x399 * IBxx;
-        let x1423 = (-x1422 - x527) * x399;
-        let x1424 = IBzz * x381;
-        let x1425 = x1382 - x1367 * thF_dot;
-        let x1426 = thF_dot * x1411;
-        let x1427 = x504 * x1377;
-        let x1428 = x521 * x1397;
-        let x1429 = (x22 * x1425 + (x1426 + x1384) * x29 + x1427 - x1428) * IFxx
-            + (x1428 - x1427) * IFyy;
-        let x1430 = x531 - x386 * (x1422 - x529 + x527) + x1364 * IBxz - x392 * IBzz;
-        let x1431 = x1384 * x205;
-        let x1432 = x436 * x0 * IHyy;
-        let x1433 = x1432 + x607 * x19;
-        let x1434 = x1382 * x194;
-        let x1435 = x1431 + x1359 * x1433 - x1413 * x436 + x1434;
-        let x1436 = x537;
-        let x1437 = (x216 * x1364 - x1436 * thR_dot - x534) * IRxx + x1436 * x549 + x542;
-        let x1438 = x551 * x1009;
-        let x1439 = -x544 - x545;
-        let x1440 = (x543 + thR_dot * x1439 + x214 * x1364) * IRxx;
-        let x1441 = x1439 * x541;
-        let x1442 = x1364 * IBxx;
-        let x1443 = x1424 + x565;
-        let x1444 = x386 * (x1443 - x563);
-        let x1445 = x1399 * x521;
-        let x1446 = x1377 * x497;
-        let x1447 = IFxx * (x1445 + x1425 * x29 + x22 * (x1383 - x1426 - x431) - x1446)
-            + (x1446 - x1445) * IFyy;
-        let x1448 = g * x630 * x170;
-        let x1449 = x19 * x836;
-        let x1450 = x630 * x745;
-        let x1451 = x1449 + x1450;
-        let x1452 = -(x1451 * x75);
-        let x1453 = x0 * x836;
-        let x1454 = x1453 - x1211;
-        let x1455 = thF_dot * x1;
-        let x1456 = x1454 * x29 - x1455 * x1294 - x22 * x632;
-        let x1457 = x22 * x1454 + x632 * x29 + x1455 * x1295;
-        let x1458 = 2.0 * x1452
-            + (2.0 * (x703 * x1295) - 2.0 * (x1317 * x638) + 2.0 * (x702 * x1294)) * x1
-            + 2.0 * (x226 * x1456) + 2.0 * (x225 * x1457);
-        let x1459 = x861 * x19;
-        let x1460 = x274 * x745;
-        let x1461 = x1459 + x1460;
-        let x1462 = x863 - thF_dot * x355;
-        let x1463 = x731 * x274;
-        let x1464 = x22 * x1462 + (x860 + x1463) * x29;
-        let x1465 = x22 * (x770 - x684 - x1463) + x1462 * x29;
-        let x1466 = x638 * x274;
-        let x1467 = x638 * x1320 - x1451 * x272;
-        let x1468 = x1062 * x638;
-        let x1469 = x745 * x136;
-        let x1470 = x22 * (x750 * x136 - x728 * x98) - x732 * x234;
-        let x1471 = (x749 + x751) * x136 - x728 * x143;
-        let x1472 = x1469 * x75;
-        let x1473 = x235 * x1457 + x226 * x1471 + x1472
-            + (x734 * x1294 + x1295 * x752) * x1
+                * (x19 * ((2.0 * (x93 * x311) - x310 * x55) * x629 - x1312 * x310)
+                    + x1327 * x173 + x1328 * x277);
+        let x1330 = x1250 * x248 - x30 * x1303 + x31 * x1304
+            + (x349 * x230 - x20 * x135) * x19 + x246 * x1251;
+        let x1331 = (f64::sqrt(x173) * x1057 + x325 * x1314 / f64::sqrt(x173)) * x45
+            - rF
+                * ((x310 * x1318 + (-2.0 * (x327 * x93) - x20 * x310) * x629) * x19
+                    - x1330 * x173 - x1328 * x281);
+        let x1332 = x348 * x629;
+        let x1333 = x1307 - x602;
+        let x1334 = rF * x19;
+        let x1335 = x933 + rR * x16 + x152 * x934;
+        let x1336 = x350 * x1284 / f64::sqrt(x173)
+            - (((x1333 * x55 + 2.0 * x1064) * x1 - x348 * x269) * x93 - x1332 * x55)
+                * x1334 + f64::sqrt(x173) * x1335;
+        let x1337 = x272 * x152 - rR * x268 + x270;
+        let x1338 = x355 * x1284 / f64::sqrt(x173)
+            - ((x349 * x348 + (x20 * x1333 + 2.0 * (x629 * x2)) * x1) * x93
+                - x1332 * x20) * x1334 + x1337 * f64::sqrt(x173);
+        let x1339 = x100 * x321 - x138;
+        let x1340 = x888 + x1339;
+        let x1341 = (-x135 * x93 / f64::sqrt(x173) - x1060 * x74 * x889) * x1334;
+        let x1342 = (x1340 + x1341) * x1;
+        let x1343 = x100 * x19;
+        let x1344 = x9 * x368 - x4 * x369;
+        let x1345 = x1343 * (x281 * x629 / f64::sqrt(x173) - x349 * f64::sqrt(x173))
+            - rF
+                * (x19 * ((2.0 * (x789 * x93) - x370 * x55) * x629 - x1312 * x370)
+                    + x354 * x367 + x1344 * x277);
+        let x1346 = x1343 * (x629 * x277 / f64::sqrt(x173) - f64::sqrt(x173) * x269)
+            - rF
+                * (x19 * (x629 * (-2.0 * (x882 * x93) - x20 * x370) + x370 * x1318)
+                    - x18 * x367 - x281 * x1344);
+        let x1347 = x19 * x889 * x70 - x253 / f64::sqrt(x173);
+        let x1348 = rF * x1347;
+        let x1349 = x1348 - x1343;
+        let x1350 = x629 * x1349;
+        let x1351 = rF * x851;
+        let x1352 = -(rF * x651);
+        let x1353 = x411 * x378 + x408;
+        let x1354 = x114 * x1353 - x393 * (x9 * x379 + x4 * x383) + x507 * x383
+            + xB * x414 + x379 * x503;
+        let x1355 = x379 * xB;
+        let x1356 = x1355 - x383 * x114;
+        let x1357 = psi_dot * x194;
+        let x1358 = (x9 * x1357 - x1074) * x392 - x1356 * x383;
+        let x1359 = x1358 + x504;
+        let x1360 = (x672 + x4 * x1357) * x392 - x508 + x1356 * x379;
+        let x1361 = x379 * x60 - rR * x383;
+        let x1362 = x445 - x444;
+        let x1363 = x1361 - x1362 * x63;
+        let x1364 = x392 * x1047;
+        let x1365 = x0 * x1364;
+        let x1366 = x19 * x1363 + x1365;
+        let x1367 = x896 * x392;
+        let x1368 = x1362 * x19;
+        let x1369 = x1367 + x1368 * x73;
+        let x1370 = x415 + x12 * x1353;
+        let x1371 = x0 * x1370 - x777 * x1362;
+        let x1372 = x13 * x1353;
+        let x1373 = x436 - x1372;
+        let x1374 = x385;
+        let x1375 = x414 * x60 + rR * x1353;
+        let x1376 = x1375 - delta_dot * x1364 - x400 * x1362;
+        let x1377 = x672 - x422;
+        let x1378 = x13 * x1377 - x1076;
+        let x1379 = x1378 * x392 + delta_dot * x1361;
+        let x1380 = x446 * x1366 - x403 * x1369 - x1371 * x63 + x73 * x1373
+            + x1374 * x447 + x0 * x1376 - x19 * x1379;
+        let x1381 = x19 * x1364;
+        let x1382 = x1374 * x73;
+        let x1383 = x1382 - x1381 + x0 * x1363;
+        let x1384 = (x1085 + x12 * x1377) * x392;
+        let x1385 = x19 * x1370 + x1362 * x765;
+        let x1386 = x1383 * x403 - x1366 * x390 + x1384 + x73 * x1385
+            + x1362 * (x0 * x455 + x19 * x447);
+        let x1387 = x466 * x0 - x449 * x19;
+        let x1388 = x19 * x1376 - x1385 * x63 - x1374 * x455 - x1383 * x446 + x1379 * x0
+            + x390 * x1369;
+        let x1389 = x1374 * x100;
+        let x1390 = x1361 - x1362 * x105;
+        let x1391 = x1389 + x0 * x1390 - x1381;
+        let x1392 = x1362 * x0;
+        let x1393 = x22 * x1392 + x1374 * x29;
+        let x1394 = x1367 + x1368 * x100;
+        let x1395 = x19 * x1390 + x1365;
+        let x1396 = x1394 * x29 + x22 * x1395;
+        let x1397 = x1384 + x100 * x1385;
+        let x1398 = x19 * x1375 + x1361 * x765 + (x1378 * x0 - x777 * x1047) * x392
+            - x1385 * x105;
+        let x1399 = x1396 * x390 - x1391 * x482 - x1393 * x479 - x1368 * x473
+            - x22 * x1397 + x1398 * x29;
+        let x1400 = x1395 * x29 - x22 * x1394;
+        let x1401 = x1392 * x29 - x1374 * x22;
+        let x1402 = x1400 * x482 - x1396 * x485 - x777 * x1361
+            - x392 * (x1047 * x765 + x1378 * x19) - x1371 * x105 + x1375 * x0
+            + x100 * x1373 - x473 * x1401 + x486 * x1393;
+        let x1403 = x29 * x1397 + x479 * x1401 + x22 * x1398 + x486 * x1368
+            + x485 * x1391 - x1400 * x390;
+        let x1404 = x1374 * x216;
+        let x1405 = x1392 * x211 + x1404;
+        let x1406 = x1405 * x403;
+        let x1407 = -(x1385 * IFyy);
+        let x1408 = x1392 * x582;
+        let x1409 = x1385 * IHyy;
+        let x1410 = x1374 * x592;
+        let x1411 = x1392 * x227 + x1374 * x211;
+        let x1412 = x446 * x1411;
+        let x1413 = x1406 - x1407 + x1408 + x1409 - x1410 - x1412;
+        let x1414 = x1358 - x500;
+        let x1415 = x0 * IHyy * x390;
+        let x1416 = x1415 + x19 * x605;
+        let x1417 = x1373 * x216;
+        let x1418 = x1371 * x211;
+        let x1419 = x1362 * x1416 + x1417 + x1418 - x1411 * x390;
+        let x1420 = -x530 - x531;
+        let x1421 = IRxx * (thR_dot * x1420 + x533 + x201 * x1353);
+        let x1422 = x1420 * x556;
+        let x1423 = x383 * IBxx;
+        let x1424 = IBxz * x1353 + x562 - IBzz * x414 - x388 * (x1423 - x560 + x558);
+        let x1425 = IBxx * x1353;
+        let x1426 = IBzz * x379;
+        let x1427 = x1426 + x520;
+        let x1428 = x388 * (x1427 - x518);
+        let x1429 = x540 * x1015;
+        let x1430 = x554;
+        let x1431 = x557 + (x203 * x1353 - x550 - x1430 * thR_dot) * IRxx + x1430 * x538;
+        let x1432 = x579 - x580 - x581;
+        let x1433 = (x211 * x1373 + x1368 * x1432)
+            + ((x1405 - x1374 * IHyy) * x390 + x1371 * x227);
+        let x1434 = x1368 * x485;
+        let x1435 = x1401 * x564;
+        let x1436 = thF_dot * x1392;
+        let x1437 = x1371 - x1374 * thF_dot;
+        let x1438 = IFyy * (x1435 - x1434)
+            + ((x1436 + x1373) * x29 + x22 * x1437 + x1434 - x1435) * IFxx;
+        let x1439 = x559 * x383;
+        let x1440 = (-x1423 - x558) * x383;
+        let x1441 = x1368 * x482;
+        let x1442 = x1393 * x564;
+        let x1443 = (x1441 - x1442) * IFyy
+            + IFxx * (x1437 * x29 - x1441 + x1442 + x22 * (x1372 - x436 - x1436));
+        let x1444 = g * x629 * x168;
+        let x1445 = x629 * x765;
+        let x1446 = x856 * x19;
+        let x1447 = x1445 + x1446;
+        let x1448 = -(x93 * x1447);
+        let x1449 = x1060 * x637;
+        let x1450 = x1448 / f64::sqrt(x173) - x889 * x1449;
+        let x1451 = -(x348 * x1447);
+        let x1452 = thF_dot * x1;
+        let x1453 = x856 * x0;
+        let x1454 = x1453 - x1194;
+        let x1455 = x631 * x29 + x1452 * x1295 + x22 * x1454;
+        let x1456 = x1454 * x29 - x1294 * x1452 - x22 * x631;
+        let x1457 = x0 * (x1307 * x898 - x1445 - x1446)
             + x19
-                * ((x638 - theta_dot * x1062) * x136
-                    + (theta_dot * x75 + x1449 + 2.0 * x1450) * x98) + x702 * x1306
-            + x225 * x1470 - x703 * x1307 + x233 * x1456;
-        let x1474 = x1331 * x638 - x1451 * x313;
-        let x1475 = x1452 / f64::sqrt(x175) - x1468 * x892;
-        let x1476 = x347 * x745;
-        let x1477 = x655 * x19;
-        let x1478 = x1476 + x1477;
-        let x1479 = x638 * x1347 - x1451 * x369;
-        let x1480 = 0.5 * x1195 + 0.5 * x1196;
-        let x1481 = x1224 + x352 * x638;
-        let x1482 = x19
-            * (x22 * x1457 + (delta_dot * x1317 + thF_dot * x1313) * x1 + x1456 * x29)
-            + x0 * (x1311 * x908 - x1449 - x1450);
-        let x1483 = x175 * x671;
-        let x1484 = x638 * x348 / f64::sqrt(x175);
-        let x1485 = x657 - x18 * thF_dot;
-        let x1486 = x347 * x731;
-        let x1487 = x1485 * x29 + x22 * (x648 - x1486 - x651);
-        let x1488 = (x1486 + x652) * x29 + x22 * x1485;
-        let x1489 = x347 * x638;
-        let x1490 = x1451 * x68;
-        let x1491 = -x901 / f64::powf(x175, 1.5) - x1244 * x896;
-        let x1492 = x900 / f64::sqrt(x175);
-        let x1493 = x546 * x541;
-        let x1494 = (thR_dot * (x535 - x536) - x533 - x534) * IRxx + x542 + x549 * x537;
-        let x1495 = x30 * x29;
-        let x1496 = x22 * x31;
-        let x1497 = x22 * x50;
-        let x1498 = x52 * x29;
-        let x1499 = x1497 - x44 + x1498 - x46;
-        let x1500 = x27 - x26;
-        let x1501 = x1495 + x1496 + x1500;
-        let x1502 = (x1501 * x55 - x20 * x1499) * mF;
-        let x1503 = -(x95 * x109);
-        let x1504 = x92 * x80 - x101;
-        let x1505 = x1504 - x108;
-        let x1506 = x1504 - x96;
-        let x1507 = x29 * x1506 - x95 * x141;
-        let x1508 = x103 * x29 - x89 + x22 * x91 - x81 - x84;
-        let x1509 = x22 * x1506 + x95 * x1277;
-        let x1510 = (x112 * x1500 - x1503 * x25 + x1505 * x28) * mH
-            + (x1507 * x30 - x20 * x1508 + x102 * x1500 + x31 * x1509) * mF;
-        let x1511 = x317 - x131;
-        let x1512 = x1511 + x22 * x144 + x142 * x29;
-        let x1513 = (x147 * x1500 + x0 * x145 + x1250 * x1512) * mF
-            + (x0 * x135 + x138 * x1500) * mH;
-        let x1514 = x151 * x29 - x141;
-        let x1515 = x1277 + x22 * x151;
-        let x1516 = x0 * x151;
-        let x1517 = x159 * x29 + x22 * x161 + x1516;
-        let x1518 = x19 * x168;
-        let x1519 = mF * (x19 * (x30 * x1514 + x1515 * x31 + x151 * x1500) - x20 * x1517)
-            + x25 * x1518;
-        let x1520 = x170 * x1500;
-        let x1521 = -(x95 * x75);
-        let x1522 = -(x1521 / f64::sqrt(x175));
-        let x1523 = (x1508 * x55 + x52 * x1507 + x1509 * x50 - x102 * x47) * mF
-            + (x1505 * x47 - x47 * x112 - x1503 * x49) * mH;
-        let x1524 = (x0 * x184 - x138 * x47) * mH
-            + mF * (x1512 * x1256 - x147 * x47 + x0 * x185);
-        let x1525 = x49 * x1518
-            + mF * (x19 * (x1515 * x50 - x151 * x47 + x52 * x1514) + x1517 * x55);
-        let x1526 = -(x170 * x47);
-        let x1527 = 2.0 * x254 + 2.0 * x255;
-        let x1528 = x95 * x228;
-        let x1529 = -x195 - x201;
-        let x1530 = x133 - x130 - x131;
-        let x1531 = (x19 * (x1528 - x257 + x1529) - x261) * x98
+                * (x22 * x1455 + x1 * (delta_dot * x1313 + thF_dot * x1309)
+                    + x1456 * x29);
+        let x1458 = x19 * x850;
+        let x1459 = x269 * x765;
+        let x1460 = x1458 + x1459;
+        let x1461 = x173 * x669;
+        let x1462 = x1231 + x637 * x348;
+        let x1463 = x768 * x269;
+        let x1464 = x852 - thF_dot * x354;
+        let x1465 = (x853 + x1463) * x29 + x22 * x1464;
+        let x1466 = x1464 * x29 + x22 * (x713 - x680 - x1463);
+        let x1467 = x637 * x1315 - x276 * x1447;
+        let x1468 = 2.0 * x1448
+            + (2.0 * (x702 * x1295) - 2.0 * (x1313 * x637) + 2.0 * (x1294 * x701)) * x1
+            + 2.0 * (x1455 * x189) + 2.0 * (x190 * x1456);
+        let x1469 = x637 * x269;
+        let x1470 = x650 * x19;
+        let x1471 = x349 * x765;
+        let x1472 = x1470 + x1471;
+        let x1473 = x637 * x1344 - x370 * x1447;
+        let x1474 = 0.5 * x1210 + 0.5 * x1211;
+        let x1475 = x22 * (x777 * x135 - x74 * x772) - x247 * x769;
+        let x1476 = x135 * x765;
+        let x1477 = (x776 + x778) * x135 - x772 * x770;
+        let x1478 = x1328 * x637 - x1447 * x310;
+        let x1479 = x93 * x1476;
+        let x1480 = x1456 * x246 + x1455 * x248 + (x1294 * x775 + x779 * x1295) * x1
+            + x19
+                * ((2.0 * x1445 + x1446 + theta_dot * x93) * x74
+                    + (x637 - x1060 * theta_dot) * x135) + x701 * x1304 + x190 * x1477
+            + x189 * x1475 - x702 * x1303 + x1479;
+        let x1481 = x637 * x350 / f64::sqrt(x173);
+        let x1482 = x349 * x637;
+        let x1483 = x652 - x18 * thF_dot;
+        let x1484 = x349 * x768;
+        let x1485 = x1483 * x29 + x22 * (x654 - x1484 - x653);
+        let x1486 = (x1484 + x655) * x29 + x22 * x1483;
+        let x1487 = x100 * x1447;
+        let x1488 = x913 / f64::sqrt(x173);
+        let x1489 = -x1235 * x916 - x914 / f64::powf(x173, 1.5);
+        let x1490 = x532 * x556;
+        let x1491 = IRxx * (thR_dot * (x552 - x553) - x550 - x551) + x557 + x538 * x554;
+        let x1492 = x30 * x29;
+        let x1493 = x22 * x31;
+        let x1494 = x22 * x50;
+        let x1495 = x52 * x29;
+        let x1496 = x1494 - x44 + x1495 - x46;
+        let x1497 = x27 - x26;
+        let x1498 = x1492 + x1493 + x1497;
+        let x1499 = (x1498 * x55 - x20 * x1496) * mF;
+        let x1500 = x22 * x112 - x106 - x95 + x108 * x29 - x96;
+        let x1501 = x64 * x79 - x85;
+        let x1502 = x1501 - x109;
+        let x1503 = x1502 * x29 - x70 * x143;
+        let x1504 = x141 * x70 + x22 * x1502;
+        let x1505 = x1501 - x71;
+        let x1506 = -(x73 * x70);
+        let x1507 = mF * (x30 * x1503 - x20 * x1500 + x31 * x1504 + x111 * x1497)
+            + (x28 * x1505 + x86 * x1497 - x25 * x1506) * mH;
+        let x1508 = x314 - x131;
+        let x1509 = x19 * (x144 * x29 + x22 * x142 + x1508);
+        let x1510 = mF * (x140 * x1497 - x20 * x1509 + x0 * x145)
+            + mH * (x137 * x1497 + x134 * x0);
+        let x1511 = x149 * x29 - x143;
+        let x1512 = x141 + x22 * x149;
+        let x1513 = x0 * x149;
+        let x1514 = x157 * x29 + x22 * x159 + x1513;
+        let x1515 = x19 * x166;
+        let x1516 = mF * (x19 * (x30 * x1511 + x1512 * x31 + x149 * x1497) - x20 * x1514)
+            + x25 * x1515;
+        let x1517 = x168 * x1497;
+        let x1518 = -(x93 * x70);
+        let x1519 = -(x1518 / f64::sqrt(x173));
+        let x1520 = (x47 * x1505 - x86 * x47 - x49 * x1506) * mH
+            + (x1500 * x55 - x111 * x47 + x50 * x1504 + x52 * x1503) * mF;
+        let x1521 = mF * (x1509 * x55 - x47 * x140 + x0 * x182)
+            + (x183 * x0 - x137 * x47) * mH;
+        let x1522 = x49 * x1515
+            + mF * (x19 * (x1512 * x50 - x149 * x47 + x52 * x1511) + x1514 * x55);
+        let x1523 = -(x168 * x47);
+        let x1524 = 2.0 * x255 + 2.0 * x256;
+        let x1525 = -x224 - x228;
+        let x1526 = x70 * x219;
+        let x1527 = x129 - x130 - x131;
+        let x1528 = x74 * ((x1525 - x258 + x1526) * x19 - x254)
+            + mF
+                * (x250 * x0 - x107 * x140
+                    + x19 * (x142 * x1504 + x111 * x1508 + x144 * x1503))
+            + x93 * (x233 + x299)
             + mH
-                * (x19 * (x1530 * x112 - x1503 * x111 + x134 * x1505) + x0 * x237
-                    - x107 * x138)
-            + mF
-                * (x0 * x252 - x90 * x147
-                    + x19 * (x1511 * x102 + x1507 * x142 + x1509 * x144))
-            + (x302 + x249) * x75;
-        let x1532 = (x113 * x19 * x109 - x1503 * x166
-            + (x162 * x112 + x164 * x1505) * x0) * mH + x360 * (x298 + x339)
-            + mF
-                * (x1507 * x159 + x1509 * x161
-                    + x19 * (x1515 * x91 - x90 * x151 + x103 * x1514) + x1516 * x102)
-            + x0 * (x258 - x1528);
-        let x1533 = x75 * x194 - x90 * x169 - x107 * x168;
-        let x1534 = -(x95 * IFyy);
-        let x1535 = x1527 - 2.0 * x93 - 2.0 * x94;
-        let x1536 = -(x95 * x55);
-        let x1537 = x256 - x93 - x94;
-        let x1538 = x1537 * x55 + x75 * x1499;
-        let x1539 = -rF
-            * (x75 * (2.0 * (x95 * x271) - x272 * x47 + x270 * x1535) + x1536 * x272
-                + x175 * x1538) - x1521 * x279 / f64::sqrt(x175) - x951;
-        let x1540 = x1501 * x75 - x20 * x1537;
-        let x1541 = x20 * x95;
-        let x1542 = -x1521 * x287 / f64::sqrt(x175) - x367
+                * ((x1527 * x86 + x133 * x1505 - x76 * x1506) * x19 - x137 * x98
+                    + x0 * x236);
+        let x1529 = ((x160 * x86 + x162 * x1505) * x0 - x1506 * x164 + x19 * x73 * x94)
+            * mH + (x301 + x338) * x359
+            + (x19 * (x1512 * x112 + x108 * x1511 - x149 * x107) + x157 * x1503
+                + x159 * x1504 + x111 * x1513) * mF + (x259 - x1526) * x0;
+        let x1530 = x93 * x211 - x98 * x166 - x167 * x107;
+        let x1531 = -(x70 * IFyy);
+        let x1532 = -(x70 * x55);
+        let x1533 = x1524 - 2.0 * x68 - 2.0 * x69;
+        let x1534 = x257 - x68 - x69;
+        let x1535 = x1534 * x55 + x93 * x1496;
+        let x1536 = -x950 - x1518 * x274 / f64::sqrt(x173)
             - rF
-                * (x75 * (-x282 * x1535 - x272 * x1500 - 2.0 * (x95 * x285))
-                    - x1540 * x175 - x1541 * x272);
-        let x1543 = mF
-            * (x0 * x304 + (x1511 * x151 + x1515 * x144 + x1514 * x142) * x292)
-            + (x109 * x109 * x289 + x0 * x303) * mH + x302 * x0
-            + ((x1326 - x339) * x292 + x340 * x298) * x98;
-        let x1544 = x19 * (x1511 * x169 - x1304 + x168 * x1530);
-        let x1545 = -(x232 * IFyy);
-        let x1546 = x95 - x254 - x255;
-        let x1547 = x301 * x75 + (x19 * x1546 - x260) * x98;
-        let x1548 = x301 * x55 + (x19 * (x47 - x1497 - x1498) - x0 * x55) * x98;
-        let x1549 = -(x95 * x319);
-        let x1550 = x996 * (f64::sqrt(x175) * x68 - x1549 / f64::sqrt(x175))
+                * (x276 * x1532 + (2.0 * (x278 * x70) - x276 * x47 + x1533 * x277) * x93
+                    + x1535 * x173);
+        let x1537 = x1498 * x93 - x1534 * x20;
+        let x1538 = x20 * x70;
+        let x1539 = -x366
             - rF
-                * (x75 * (2.0 * (x95 * x312) - x313 * x47 + x1547 * x55) + x313 * x1536
-                    + x175 * x1548);
-        let x1551 = ((x28 - x1495 - x1496) * x19 + x20 * x0) * x98 - x20 * x301;
-        let x1552 = -(x68 * x974);
-        let x1553 = x8 * (f64::sqrt(x175) * x1552 - x1521 * x326 / f64::sqrt(x175))
-            - (x75 * (x20 * x1547 - 2.0 * (x95 * x328) - x313 * x1500) - x1541 * x313
-                - x175 * x1551) * rF;
-        let x1554 = x341 * x0;
-        let x1555 = -x1329;
-        let x1556 = x338 - 1.0;
-        let x1557 = x1556 * x360 + x1537 * x0;
-        let x1558 = rF
-            * (x352 * x1536 + (x1557 * x55 + 2.0 * (x95 * x45) - x352 * x47) * x75)
-            + f64::sqrt(x175) * x68 * x656 + x1521 * x348 / f64::sqrt(x175);
-        let x1559 = -x1558;
-        let x1560 = f64::sqrt(x175) * x68 * x862 + x356 * x1521 / f64::sqrt(x175)
+                * (x93 * (-2.0 * (x284 * x70) - x276 * x1497 - x1533 * x281)
+                    - x1537 * x173 - x276 * x1538) - x1518 * x280 / f64::sqrt(x173);
+        let x1540 = mF
+            * ((x1512 * x142 + x1511 * x144 + x149 * x1508) * x290 + x0 * x302)
+            + x74 * ((x1322 - x338) * x290 + x339 * x301) + x0 * x299
+            + mH * (x288 * x73 * x73 + x295 * x0);
+        let x1541 = (x167 * x1508 - x1301 + x1527 * x166) * x19;
+        let x1542 = -(x232 * IFyy);
+        let x1543 = -(x70 * x317);
+        let x1544 = (x19 * (x47 - x1494 - x1495) - x0 * x55) * x74 + x298 * x55;
+        let x1545 = x70 - x255 - x256;
+        let x1546 = (x19 * x1545 - x253) * x74 + x93 * x298;
+        let x1547 = (x100 * f64::sqrt(x173) - x1543 / f64::sqrt(x173)) * x995
+            - rF
+                * (x1544 * x173 + (2.0 * (x70 * x311) + x1546 * x55 - x310 * x47) * x93
+                    + x1532 * x310);
+        let x1548 = x74 * ((x28 - x1492 - x1493) * x19 + x20 * x0) - x20 * x298;
+        let x1549 = -(x100 * x973);
+        let x1550 = x8 * (f64::sqrt(x173) * x1549 - x325 * x1518 / f64::sqrt(x173))
+            - rF
+                * (x93 * (x1546 * x20 - x310 * x1497 - 2.0 * (x327 * x70)) - x1548 * x173
+                    - x310 * x1538);
+        let x1551 = x340 * x0;
+        let x1552 = -x1325;
+        let x1553 = x337 - 1.0;
+        let x1554 = x1553 * x359 + x1534 * x0;
+        let x1555 = x100 * x651 * f64::sqrt(x173) + x1518 * x350 / f64::sqrt(x173)
+            + rF * ((2.0 * (x70 * x45) - x348 * x47 + x1554 * x55) * x93 + x1532 * x348);
+        let x1556 = -x1555;
+        let x1557 = x100 * f64::sqrt(x173) * x851
             + rF
-                * (-x352 * x1541
-                    - (x352 * x1500 - x20 * x1557 - 2.0 * (x95 * x3)) * x75);
-        let x1561 = -x1560;
-        let x1562 = x1536 - x75 * x47;
-        let x1563 = x68 * (x282 * x95 / f64::sqrt(x175) + f64::sqrt(x175) * x1500)
-            - rF * (x369 * x1562 - 2.0 * (x1521 * x800));
-        let x1564 = x75 * x1500 + x1541;
-        let x1565 = (x95 * x270 / f64::sqrt(x175) - f64::sqrt(x175) * x47) * x68
-            - (2.0 * (x1521 * x869) - x1564 * x369) * rF;
-        let x1566 = x73 - x74;
-        let x1567 = (x75 * x1566 / f64::sqrt(x175) - x95 * x1071) * rF - x314;
-        let x1568 = rF * x47;
-        let x1569 = rF * x1500;
-        let x1570 = x448 * (x452 - x445);
-        let x1571 = x430 * x430 * x109;
-        let x1572 = x1570 - x1571;
-        let x1573 = delta_dot * (x450 - x451);
-        let x1574 = x1572 + x480 + x1573;
-        let x1575 = -x473 - x475;
-        let x1576 = x1575 + delta_dot * (x434 - x435);
-        let x1577 = x106 * x1576 + x465 + x472 - x430 * (x462 - 2.0 * x459);
-        let x1578 = x436 * (x445 + x449) - x109 * x1576;
-        let x1579 = x472 + x1576 * x88;
-        let x1580 = x452 - x493;
-        let x1581 = x430 * x1277 + x22 * x1580;
-        let x1582 = x1579 * x29 - x430 * x492 + x436 * x1581
-            + x22 * (x68 * x1576 - x494 * x436) + x490 * x497;
-        let x1583 = x1580 * x29;
-        let x1584 = x430 * x141;
-        let x1585 = x494 * x29;
-        let x1586 = x436 * (x1584 - x1583 + x1585) - x504 * x490 + x22 * x1579
-            - x1277 * x1576 + x505 * x430;
-        let x1587 = x504 * x1581;
-        let x1588 = (x1573 - x485) - x484;
-        let x1589 = (x1583 - x1584) * x497;
-        let x1590 = x505 * x22 - x492 * x29;
-        let x1591 = x1590 * x436;
-        let x1592 = ((-x499 - x1587) + x1588) + (x1589 + x1591);
-        let x1593 = x502 * x29 + x22 * x506 + x1592;
-        let x1594 = thF_dot * x29;
-        let x1595 = x504 * x430;
-        let x1596 = x436 * x521;
-        let x1597 = x1596 * x29;
-        let x1598 = (x1594 * x436 + x1595 - x1597 + x22 * x433) * IFxx
-            + (x1597 - x1595) * IFyy;
-        let x1599 = x433 * x194;
-        let x1600 = x436 * x436;
-        let x1601 = IHyy + x1325;
-        let x1602 = x1599 - x430 * x560 + x1600 * x1601;
-        let x1603 = x1576 * IFyy;
-        let x1604 = x448 * x200;
-        let x1605 = (x1604 - x578) - 2.0 * x577;
-        let x1606 = (x1603 + IHyy * x1576) + (x436 * x1605 + x601);
-        let x1607 = x1600 * x194;
-        let x1608 = x433 * x200;
-        let x1609 = x594 * x430;
-        let x1610 = x1572 - x481 - x482 + x1588;
-        let x1611 = x22 * thF_dot;
-        let x1612 = x22 * x1596 - x430 * x497;
-        let x1613 = (x433 * x29 - x1611 * x436 + x1612) * IFxx - x1612 * IFyy;
-        let x1614 = (x1609 - x1607) + (x598 - x1608);
-        let x1615 = x95 * g - x1573;
-        let x1616 = x22 * x702;
-        let x1617 = x703 * x29;
-        let x1618 = -(delta_dot * x95);
-        let x1619 = x29 * x752 + x22 * x734 + x735 * x0;
-        let x1620 = x22 * x1218 - x1594 * x238;
-        let x1621 = x638 * x29 - x1611 * x75;
-        let x1622 = (x735 * x29 + x1611 * x98) * x19 - x143 * x745;
-        let x1623 = x22 * x638 + x1594 * x75;
-        let x1624 = (x19 * (x699 + x705 - x1616 - x899 - x1617) - (x638 + x1618) * x0)
-            * x98 - x95 * x1217 + x75 * x1619 + x1620 * x225 + x233 * x1621
-            + x226 * x1622 + x235 * x1623;
-        let x1625 = x741 - x742;
-        let x1626 = -(x638 * x47);
-        let x1627 = -(x95 * x687);
-        let x1628 = x1626 + x1627;
-        let x1629 = x687 * x29 - x1611 * x55;
-        let x1630 = x22 * x744;
-        let x1631 = x748 * x29;
-        let x1632 = x22 * x687 + x1594 * x55;
-        let x1633 = x638 * x1547 + (x900 * x313 - x95 * x757);
-        let x1634 = ((2.0 * x1616 - 2.0 * x699 + 2.0 * x899 + 2.0 * x1617) * x75
-            + (x1535 * x638 + 2.0 * (x225 * x1623)))
-            + (2.0 * (x226 * x1621) + 2.0 * x896);
-        let x1635 = x900 + x1616 + x1617;
-        let x1636 = x900 * x55;
-        let x1637 = x1238 / f64::powf(x175, 1.5) + x1492;
-        let x1638 = x638 * x1557 - x706 * x95;
-        let x1639 = x0 * (x704 + x1556 * x705 + x900)
-            + x19 * (x22 * x1623 + delta_dot * x1546 + x634 + x1621 * x29 - x637);
-        let x1640 = x1636 + x1628;
-        let x1641 = x175
-            * (x22 * (0.5 * x669 + 0.5 * x670) + (0.5 * x667 - 0.5 * x666) * x29);
-        let x1642 = x19 * (x961 + x790);
-        let x1643 = x0 * x797;
-        let x1644 = x1642 + x1643;
-        let x1645 = -(x798 * x95);
-        let x1646 = x638 * x1500;
-        let x1647 = x1645 + x1646;
-        let x1648 = x20 * x900;
-        let x1649 = x1647 - x1648;
-        let x1650 = -x897 - x902;
-        let x1651 = x830 * x29;
-        let x1652 = x22 * x828;
-        let x1653 = x798 * x22 - x1594 * x20;
-        let x1654 = x20 * x1611 + x798 * x29;
-        let x1655 = x68 * x833 / f64::sqrt(x175);
-        let x1656 = x798 * f64::sqrt(x175) * x68;
-        let x1657 = x638 * x1566;
-        let x1658 = (x504 * x584 + IFxx * (x22 * (x519 - x474 + x1575) + x586 * x29))
-            + x523;
-        let x1659 = x497 * x522;
-        let x1660 = x587 - x1659;
-        let x1661 = x1659 + x585;
-        let x1662 = x22 * (x697 - x696 - x699);
-        let x1663 = x702 - x695 + x1662;
-        let x1664 = theta_dot * x1663 * x668;
-        let x1665 = x734 - x733 + x22 * (x729 + x730);
-        let x1666 = x233 * x1663 + x1665 * x226;
-        let x1667 = x747 * x29 + x22 * (x740 + x741 - x742) + x744;
-        let x1668 = (2.0 * x1662 + 2.0 * x701) * x226;
-        let x1669 = x829 * x29 + x22 * (x820 - x821 - x822) + x828;
-        let x1670 = x608 / f64::sqrt(x172);
-        let x1671 = x639 / f64::sqrt(x175);
-        let x1672 = x448 * x107;
-        let x1673 = x553 * x4 - x1075;
-        let x1674 = x1673 * x12 + (x629 - x13 * x1172);
-        let x1675 = x0 * x1674;
-        let x1676 = x696 + x1675;
-        let x1677 = x1172 * x12;
-        let x1678 = x13 * x1673;
-        let x1679 = -x1677 - x1678;
-        let x1680 = rR * x1673 - x1172 * x78;
-        let x1681 = (x1680 * x0 - x470) - delta_dot * x85;
-        let x1682 = x1672 - x113 * x430 - x1676 * x106 + x109 * x1679 + x1681
-            + x193 * x444 - x95 * x463;
-        let x1683 = x637 - x19 * x1674;
-        let x1684 = delta_dot * x1504 + (x1680 * x19 + x483);
-        let x1685 = x113 * x436 - x193 * x453 - x448 * x112 + x1683 * x106 + x1684
-            + x463 * x75;
-        let x1686 = x430 * x112 - x444 * x75 - x107 * x436 + x453 * x95 + x422
-            - x109 * x1683;
-        let x1687 = x1673 * x115 + x5 * x1102 + x1101 * x1 - x1172 * xB;
-        let x1688 = 2.0 * x411 - x408 - x409;
-        let x1689 = x5 * x1115 + (x1114 - x1113 + x4 * x1688) * x1;
-        let x1690 = x5 * x1108 + (x1688 * x9 - x1109 - x1111) * x1;
-        let x1691 = x422 - x68 * x1683;
-        let x1692 = x1683 * x88 + x1684;
-        let x1693 = x494 * x226 - x505 * x75 + x29 * x1691 + x22 * x1692 + x504 * x102
-            - x103 * x436;
-        let x1694 = x1692 * x29 - x494 * x225 - x497 * x102 - x22 * x1691 + x75 * x492
-            + x436 * x91;
-        let x1695 = x103 * x497 - x1676 * x88 - x504 * x91 + x505 * x225 + x68 * x1679
-            - x226 * x492 + x1681;
-        let x1696 = x75 * x497 + x521 * x225;
-        let x1697 = x698 + x1675;
-        let x1698 = IFxx * (x29 * x1697 + x22 * (x1677 + x1678 - x693) + x1696)
-            - x1696 * IFyy;
-        let x1699 = x226 * x521;
-        let x1700 = x504 * x75;
-        let x1701 = (x22 * x1697 - x1699 + (x1679 + x693) * x29 - x1700) * IFxx
-            + (x1699 + x1700) * IFyy;
-        let x1702 = (x1132 + x1133) + (-x1134 - x1135);
-        let x1703 = x386 * x1;
-        let x1704 = x530 * x5 + x1172 * IBxz + x1673 * IBxx + x1703 * (x213 - x1147);
-        let x1705 = -(x221 * x1);
-        let x1706 = x539 * x1705;
-        let x1707 = x5 * x537;
-        let x1708 = IRyy * (x1706 + x1707)
-            + (thR_dot * x1705 - x1706 - x216 * x1172 - x1707 + x1673 * x214) * IRxx;
-        let x1709 = x546 * x5 + x218 * x539 * x1;
-        let x1710 = (x1172 * x214 + thR_dot * x1009 * x1 + x1709 + x216 * x1673) * IRxx
-            - IRyy * x1709;
-        let x1711 = x1703 * (x210 - x1140) - x1172 * IBzz - x1673 * IBxz + x5 * x567;
-        let x1712 = x95 * IHyy;
-        let x1713 = x1679 * x205;
-        let x1714 = x1676 * x194;
-        let x1715 = x436 * (x1712 + x1529) + x1713 + x1714 + x75 * x560;
-        let x1716 = x1683 * IHyy;
-        let x1717 = x430 * x206;
-        let x1718 = x448 * x202;
-        let x1719 = x1683 * IFyy;
-        let x1720 = x193 * x574;
-        let x1721 = x95 * x579;
-        let x1722 = x1717 - x1716 - x1718 - x1719 - x1720 + x1721;
-        let x1723 = (x1676 * x200 + x436 * (x206 - x193 * IHyy))
-            + (x194 * x1679 + x594 * x75);
-        let x1724 = x609 - 2.0 * x173 + 2.0 * x1;
-        let x1725 = x390 * x12 + x13 * x401;
-        let x1726 = x379 - delta_dot * x98;
-        let x1727 = x0 * x1726 - x19 * x1725;
-        let x1728 = x461 - x460;
-        let x1729 = x401 * x78 + rR * x390;
-        let x1730 = x379 * x83;
-        let x1731 = delta_dot * x132;
-        let x1732 = x0 * (x1730 + x1731);
-        let x1733 = x106 * x1727 - x453 * x136
-            + ((x1728 + 2.0 * x459) * x98 + x1729) * x19 - x448 * x138 + x1732;
-        let x1734 = x134 * x448;
-        let x1735 = -x1730 - x1731;
-        let x1736 = x0 * x1725 + x19 * x1726;
-        let x1737 = x401 * x12;
-        let x1738 = x13 * x390;
-        let x1739 = x1737 - x1738;
-        let x1740 = (x1729 - x463 * x98) * x0 + x19 * (x1734 + x1735 - x430 * x111)
-            + x444 * x136 - x1736 * x106 + x109 * x1739;
-        let x1741 = x66 * x379;
-        let x1742 = x430 * x138 + x453 * x232 + x19 * (x444 * x98 - x134 * x436) + x1741
-            - x109 * x1727;
-        let x1743 = (xB * x400 - x384 + x387) * x9 + x4 * (x396 + x389 * x115);
-        let x1744 = x121 * x379 - x399 * x127 - x4 * x412;
-        let x1745 = x119 * x379 + x381 * x127 + x412 * x9;
-        let x1746 = x235 * x505 - x233 * x492 - x1736 * x88 + x1729 * x0
-            + (x497 * x142 - x504 * x144 + x1735) * x19 + x68 * x1739;
-        let x1747 = x1727 * x88 + x1729 * x19 + x1732;
-        let x1748 = x1741 - x68 * x1727;
-        let x1749 = x1747 * x29 - x497 * x147 - x22 * x1748 - x235 * x494
-            + x19 * (x436 * x144 - x492 * x98);
-        let x1750 = x19 * (x505 * x98 - x436 * x142) + x22 * x1747 + x494 * x233
-            + x1748 * x29 + x504 * x147;
-        let x1751 = (x1419 * x238 + (x244 - IHyy * x136) * x436)
-            + (x1739 * x194 + x1736 * x200);
-        let x1752 = x497 * x238;
-        let x1753 = x235 * x521;
-        let x1754 = x1736 - thF_dot * x136;
-        let x1755 = thF_dot * x232;
-        let x1756 = IFyy * (x1752 - x1753)
-            + (x1753 - x1752 + x1754 * x29 + x22 * (x1738 - x1737 - x1755)) * IFxx;
-        let x1757 = x579 * x232;
-        let x1758 = IFyy * x1727;
-        let x1759 = x251 * x448;
-        let x1760 = x574 * x136;
-        let x1761 = IHyy * x1727;
-        let x1762 = x430 * x244;
-        let x1763 = x1757 - x1758 - x1759 - x1760 - x1761 + x1762;
-        let x1764 = x504 * x238;
-        let x1765 = x233 * x521;
-        let x1766 = IFxx * (x1754 * x22 + x1764 + (x1739 + x1755) * x29 - x1765)
-            + (x1765 - x1764) * IFyy;
-        let x1767 = x528 * x9;
-        let x1768 = x399 * x247;
-        let x1769 = x4 * x590;
-        let x1770 = x241 * x381;
-        let x1771 = x389 - thR_dot;
-        let x1772 = (x1771 * x220 + x1771 * x219) * IRxx + x221 * x549;
-        let x1773 = x241 * x386 + x4 * (x389 * IBxx - x386 * IByy) - x401 * IBxz;
-        let x1774 = x1736 * x194;
-        let x1775 = x1739 * x205;
-        let x1776 = x251 * x436;
-        let x1777 = x1433 * x98 + x1774 + x1775 - x1776;
-        let x1778 = x386 * (x1147 + x211 - x246) - x390 * IBxz + x401 * IBzz;
-        let x1779 = x218 * x541 + (x217 * (x538 - x385) + x215 * x1771) * IRxx;
-        let x1780 = x310 * x1 - x610 - x192;
-        let x1781 = x5 * x364 - x1061 - x1064;
-        let x1782 = x1358 - delta_dot * x157;
-        let x1783 = x1359 + delta_dot;
-        let x1784 = x106 * x1783;
-        let x1785 = x1368 - x430 * x166 + x0 * (x164 * x448 + x1782 - x1784)
-            + x19 * (x1728 - x1361 + x459);
-        let x1786 = x436 * x166 + x0 * (x1361 + x463)
-            + x19 * (x1782 - x448 * x162 - x1784);
-        let x1787 = x1376 - x0 * (x444 + x164 * x436)
-            + x19 * (x453 + x430 * x162 + x109 * x1783);
-        let x1788 = 2.0 * x397 + 2.0 * x398;
-        let x1789 = 2.0 * x1386 - x1788 * x115;
-        let x1790 = x1782 - x1783 * x88;
-        let x1791 = x1401 + x1790 * x0 - x504 * x161 + x497 * x159
-            + x19 * (x1590 - x1361);
-        let x1792 = x1362 + x1790 * x19;
-        let x1793 = x1348 * x1783;
-        let x1794 = x22 * x1792 - x505 * x0 + x19 * (x504 * x151 + x1585) - x436 * x159
-            + (x1376 + x1793) * x29;
-        let x1795 = x1792 * x29 + x22 * (-x1376 - x1793 - x494 * x19) + x0 * x492
-            + x436 * x161 - x152 * x497;
-        let x1796 = x19 * x436;
-        let x1797 = (x1367 + x1796) * x194;
-        let x1798 = x0 * (x594 + x200 * x1783);
-        let x1799 = x1797 + x1798;
-        let x1800 = x540 * x537 + x1436 * IRxx;
-        let x1801 = x1788 * IBxz + x381 * (IBzz + IByy - IBxx);
-        let x1802 = x546 * x548;
-        let x1803 = x1439 * IRxx + x1802;
-        let x1804 = (IBzz - IByy) * x399 - x1422 - 2.0 * x527;
-        let x1805 = x194 * x1783;
-        let x1806 = x1415 + (x560 + x1805) * x0 + x1796 * x1601;
-        let x1807 = x0 * x497 + x665 * x521;
-        let x1808 = x19 * thF_dot;
-        let x1809 = (x1807 + (-x426 - x427 - x1808) * x22 + x156 * x1783) * IFxx
-            - x1807 * IFyy;
-        let x1810 = IHyy * x1783;
-        let x1811 = IFyy * x1783;
-        let x1812 = x1810 - x1604 + x1811 + 2.0 * x577 + x578;
-        let x1813 = x504 * x0;
-        let x1814 = x521 * x668;
-        let x1815 = (x1813 + x1814) * IFyy
-            + IFxx * ((x1367 + x1808) * x29 - x1813 + x160 * x1783 - x1814);
-        let x1816 = -(rR * x673);
-        let x1817 = x961 * rR;
-        let x1818 = x1802 - x546 * IRxx;
-        let x1819 = IRyy * x537;
-        let x1820 = 2.0 * x425 + 2.0 * x429;
-        let x1821 = (x504 + x503) * x68 - x22 * x68 * x448;
-        let x1822 = x22 * x492 - x489 - x440 - x442 + x505 * x29;
-        let x1823 = x68 * (-x495 - 2.0 * x496) - x68 * x448 * x29;
-        let x1824 = IFxx * (x436 - thF_dot) + x584;
-        let x1825 = x436 * (x297 + x205);
-        let x1826 = -(x430 * IFyy);
-        let x1827 = (x430 * (x200 - x203 - x204) - x557) + (2.0 * x558 + x1826);
+                * (-(x348 * x1497 - 2.0 * (x70 * x3) - x20 * x1554) * x93 - x348 * x1538)
+            + x355 * x1518 / f64::sqrt(x173);
+        let x1558 = -x1557;
+        let x1559 = x1532 - x93 * x47;
+        let x1560 = x100 * (x281 * x70 / f64::sqrt(x173) + f64::sqrt(x173) * x1497)
+            - rF * (x370 * x1559 - 2.0 * (x789 * x1518));
+        let x1561 = x93 * x1497 + x1538;
+        let x1562 = x100 * (x70 * x277 / f64::sqrt(x173) - f64::sqrt(x173) * x47)
+            - rF * (2.0 * (x882 * x1518) - x1561 * x370);
+        let x1563 = x92 - x90;
+        let x1564 = rF * (x93 * x1563 / f64::sqrt(x173) - x70 * x1069) - x316;
+        let x1565 = rF * x47;
+        let x1566 = rF * x1497;
+        let x1567 = (x452 - x453) * x446;
+        let x1568 = x73 * x403 * x403;
+        let x1569 = x1567 - x1568;
+        let x1570 = delta_dot * (x450 - x451);
+        let x1571 = x457 + x1569 + x1570;
+        let x1572 = -x438 - x441;
+        let x1573 = delta_dot * (x386 - x389) + x1572;
+        let x1574 = x390 * (x454 + x453) - x73 * x1573;
+        let x1575 = x63 * x1573 - x403 * (x399 - 2.0 * x391) + x435 + x448;
+        let x1576 = x452 - x478;
+        let x1577 = x141 * x403 + x22 * x1576;
+        let x1578 = x485 * x1577;
+        let x1579 = (x1570 - x458) - x460;
+        let x1580 = x29 * x1576;
+        let x1581 = x403 * x143;
+        let x1582 = (x1580 - x1581) * x482;
+        let x1583 = x486 * x22 - x473 * x29;
+        let x1584 = x390 * x1583;
+        let x1585 = ((-x1578 - x474) + x1579) + (x1582 + x1584);
+        let x1586 = x483 * x29 + x1585 + x22 * x487;
+        let x1587 = x435 + x1573 * x105;
+        let x1588 = x22 * (x100 * x1573 - x479 * x390) + x471 * x482 - x473 * x403
+            + x1587 * x29 + x1577 * x390;
+        let x1589 = x479 * x29;
+        let x1590 = x22 * x1587 + (x1581 - x1580 + x1589) * x390 - x471 * x485
+            - x141 * x1573 + x486 * x403;
+        let x1591 = x485 * x403;
+        let x1592 = thF_dot * x29;
+        let x1593 = x390 * x564;
+        let x1594 = x1593 * x29;
+        let x1595 = (x1591 + x1592 * x390 - x1594 + x22 * x462) * IFxx
+            + (x1594 - x1591) * IFyy;
+        let x1596 = x390 * x390;
+        let x1597 = x1596 * x211;
+        let x1598 = x583 * x403;
+        let x1599 = x462 * x227;
+        let x1600 = x1569 - x463 + x1579 - x464;
+        let x1601 = IFyy * x1573;
+        let x1602 = x446 * x227;
+        let x1603 = (x1602 - x581) - 2.0 * x580;
+        let x1604 = (x1601 + IHyy * x1573) + (x604 + x1603 * x390);
+        let x1605 = x22 * thF_dot;
+        let x1606 = x22 * x1593 - x482 * x403;
+        let x1607 = IFxx * (x1606 - x1605 * x390 + x462 * x29) - x1606 * IFyy;
+        let x1608 = x462 * x211;
+        let x1609 = IHyy + x1321;
+        let x1610 = x1608 + x1596 * x1609 - x547 * x403;
+        let x1611 = (x598 - x1599) + (x1598 - x1597);
+        let x1612 = g * x70 - x1570;
+        let x1613 = x731 - x732;
+        let x1614 = x1244 / f64::powf(x173, 1.5) + x1488;
+        let x1615 = (x22 * (0.5 * x667 + 0.5 * x668) + (0.5 * x665 - 0.5 * x664) * x29)
+            * x173;
+        let x1616 = -(x685 * x70);
+        let x1617 = -(x637 * x47);
+        let x1618 = x1616 + x1617;
+        let x1619 = x913 * x55;
+        let x1620 = x1618 + x1619;
+        let x1621 = x637 * x1554 - x704 * x70;
+        let x1622 = x1592 * x93 + x22 * x637;
+        let x1623 = x637 * x29 - x1605 * x93;
+        let x1624 = x0 * (x913 + x1553 * x688 + x703)
+            + (x633 + x22 * x1622 + delta_dot * x1545 - x636 + x1623 * x29) * x19;
+        let x1625 = x1592 * x55 + x22 * x685;
+        let x1626 = x685 * x29 - x1605 * x55;
+        let x1627 = x702 * x29;
+        let x1628 = x22 * x701;
+        let x1629 = x913 + x1627 + x1628;
+        let x1630 = x22 * x738;
+        let x1631 = x734 * x29;
+        let x1632 = ((x1533 * x637 + 2.0 * (x1622 * x189))
+            + x93 * (2.0 * x912 - 2.0 * x690 + 2.0 * x1627 + 2.0 * x1628))
+            + (2.0 * (x190 * x1623) + 2.0 * x916);
+        let x1633 = x1546 * x637 + (x913 * x310 - x781 * x70);
+        let x1634 = x22 * x1172 - x1592 * x230;
+        let x1635 = x22 * x775 + x779 * x29 + x0 * x767;
+        let x1636 = x19 * (x767 * x29 + x1605 * x74) - x766 * x29;
+        let x1637 = -(delta_dot * x70);
+        let x1638 = x189 * x1634 - x1171 * x70
+            + (x19 * (x688 - x912 + x690 - x1627 - x1628) - (x637 + x1637) * x0) * x74
+            + x190 * x1636 + x1622 * x248 + x246 * x1623 + x93 * x1635;
+        let x1639 = -(x811 * x70);
+        let x1640 = x637 * x1497;
+        let x1641 = x19 * (x958 + x803);
+        let x1642 = x810 * x0;
+        let x1643 = x1641 + x1642;
+        let x1644 = x20 * x1605 + x811 * x29;
+        let x1645 = x811 * x22 - x1592 * x20;
+        let x1646 = x22 * x824;
+        let x1647 = x29 * x829;
+        let x1648 = x1640 + x1639;
+        let x1649 = -x915 - x917;
+        let x1650 = x913 * x20;
+        let x1651 = x825 * x100 / f64::sqrt(x173);
+        let x1652 = x811 * x100 * f64::sqrt(x173);
+        let x1653 = x1648 - x1650;
+        let x1654 = x637 * x1563;
+        let x1655 = x569
+            + (IFxx * (x574 * x29 + x22 * (x567 - x439 + x1572)) + x485 * x576);
+        let x1656 = x482 * x565;
+        let x1657 = x575 - x1656;
+        let x1658 = x1656 + x577;
+        let x1659 = x775 - x771 + x22 * (x773 + x774);
+        let x1660 = x22 * (x730 + x731 - x732) + x738 + x729 * x29;
+        let x1661 = x22 * (x691 - x690 - x692);
+        let x1662 = x701 - x700 + x1661;
+        let x1663 = x1662 * x246 + x190 * x1659;
+        let x1664 = theta_dot * x1662 * x666;
+        let x1665 = (2.0 * x695 + 2.0 * x1661) * x190;
+        let x1666 = x22 * (x821 - x814 - x815) + x824 + x828 * x29;
+        let x1667 = x607 / f64::sqrt(x170);
+        let x1668 = x638 / f64::sqrt(x173);
+        let x1669 = x528 * x4 - x413 * x1;
+        let x1670 = x12 * x1669 + (x628 - x13 * x1175);
+        let x1671 = x636 - x19 * x1670;
+        let x1672 = x86 * x403 - x98 * x390 + x467 - x447 * x93 - x73 * x1671
+            + x70 * x455;
+        let x1673 = x0 * x1670;
+        let x1674 = x692 + x1673;
+        let x1675 = rR * x1669 - x1175 * x60;
+        let x1676 = (x0 * x1675 - x425) - delta_dot * x97;
+        let x1677 = x446 * x98;
+        let x1678 = x1175 * x12;
+        let x1679 = x13 * x1669;
+        let x1680 = -x1678 - x1679;
+        let x1681 = x1676 - x1674 * x63 - x94 * x403 - x400 * x70 + x188 * x447 + x1677
+            + x73 * x1680;
+        let x1682 = (x459 + x19 * x1675) + delta_dot * x1501;
+        let x1683 = x1671 * x63 - x446 * x86 + x1682 + x400 * x93 - x188 * x455
+            + x94 * x390;
+        let x1684 = 2.0 * x498 - x495 - x496;
+        let x1685 = x1100 * x5 + (x1103 - x1102 + x4 * x1684) * x1;
+        let x1686 = x5 * x1105 + (x1684 * x9 - x1106 - x1107) * x1;
+        let x1687 = x114 * x1669 + x1093 * x1 + x5 * x1094 - x1175 * xB;
+        let x1688 = x467 - x100 * x1671;
+        let x1689 = x1682 + x1671 * x105;
+        let x1690 = x1688 * x29 - x486 * x93 + x190 * x479 + x1689 * x22 - x108 * x390
+            + x111 * x485;
+        let x1691 = x1676 - x485 * x112 + x108 * x482 - x1674 * x105 + x100 * x1680
+            + x486 * x189 - x190 * x473;
+        let x1692 = x473 * x93 - x111 * x482 - x22 * x1688 - x479 * x189 + x1689 * x29
+            + x112 * x390;
+        let x1693 = (x1674 * x227 + (x217 - x188 * IHyy) * x390)
+            + (x583 * x93 + x1680 * x211);
+        let x1694 = x388 * x1;
+        let x1695 = IBxx * x1669 + x561 * x5 + x1175 * IBxz + x1694 * (x200 - x1137);
+        let x1696 = (x1121 + x1122) + (-x1123 - x1124);
+        let x1697 = x205 * x1 * x537 + x532 * x5;
+        let x1698 = (x1175 * x201 + thR_dot * x1015 * x1 + x1697 + x203 * x1669) * IRxx
+            - IRyy * x1697;
+        let x1699 = x1674 * x211;
+        let x1700 = IHyy * x70;
+        let x1701 = x1680 * x216;
+        let x1702 = x1699 + (x1525 + x1700) * x390 + x1701 + x547 * x93;
+        let x1703 = -(x208 * x1);
+        let x1704 = x1703 * x537;
+        let x1705 = x5 * x554;
+        let x1706 = (thR_dot * x1703 - x1704 - x203 * x1175 + x201 * x1669 - x1705)
+            * IRxx + IRyy * (x1704 + x1705);
+        let x1707 = x1694 * (x197 - x1143) - IBxz * x1669 - x1175 * IBzz + x5 * x522;
+        let x1708 = x482 * x93 + x189 * x564;
+        let x1709 = x693 + x1673;
+        let x1710 = IFxx * (x1709 * x29 + x1708 + (x1678 - x696 + x1679) * x22)
+            - x1708 * IFyy;
+        let x1711 = x403 * x217;
+        let x1712 = x188 * x592;
+        let x1713 = x446 * x229;
+        let x1714 = x1671 * IFyy;
+        let x1715 = x582 * x70;
+        let x1716 = x1671 * IHyy;
+        let x1717 = x1711 - x1712 - x1713 - x1714 + x1715 - x1716;
+        let x1718 = x485 * x93;
+        let x1719 = x190 * x564;
+        let x1720 = (x22 * x1709 - x1718 + (x696 + x1680) * x29 - x1719) * IFxx
+            + (x1718 + x1719) * IFyy;
+        let x1721 = x608 - 2.0 * x171 + 2.0 * x1;
+        let x1722 = x9 * (x506 + xB * x405 - x394) + x4 * (x503 + x411 * x114);
+        let x1723 = x120 * x377 - x383 * x126 - x4 * x499;
+        let x1724 = x118 * x377 + x379 * x126 + x499 * x9;
+        let x1725 = x412 * x12 + x13 * x406;
+        let x1726 = x377 - delta_dot * x74;
+        let x1727 = x1726 * x0 - x19 * x1725;
+        let x1728 = x88 * x377;
+        let x1729 = x137 * x403 + x19 * (x74 * x447 - x133 * x390) + x232 * x455
+            - x73 * x1727 + x1728;
+        let x1730 = rR * x412 + x406 * x60;
+        let x1731 = x398 - x396;
+        let x1732 = x377 * x84;
+        let x1733 = delta_dot * x132;
+        let x1734 = x0 * (x1732 + x1733);
+        let x1735 = x63 * x1727 - x135 * x455 - x137 * x446
+            + (x1730 + (x1731 + 2.0 * x391) * x74) * x19 + x1734;
+        let x1736 = x13 * x412;
+        let x1737 = x406 * x12;
+        let x1738 = x1737 - x1736;
+        let x1739 = x0 * x1725 + x1726 * x19;
+        let x1740 = x133 * x446;
+        let x1741 = -x1732 - x1733;
+        let x1742 = x447 * x135 + x73 * x1738 - x63 * x1739 + (x1730 - x400 * x74) * x0
+            + x19 * (x1740 + x1741 - x76 * x403);
+        let x1743 = x1728 - x100 * x1727;
+        let x1744 = x1730 * x19 + x1727 * x105 + x1734;
+        let x1745 = x1744 * x29 - x479 * x248 - x482 * x140 - x22 * x1743
+            + x19 * (x142 * x390 - x74 * x473);
+        let x1746 = x100 * x1738 - x1739 * x105 + x1730 * x0
+            + x19 * (x144 * x482 - x485 * x142 + x1741) - x473 * x246 + x486 * x248;
+        let x1747 = x485 * x140 + x19 * (x486 * x74 - x144 * x390) + x29 * x1743
+            + x479 * x246 + x22 * x1744;
+        let x1748 = x446 * x235;
+        let x1749 = IFyy * x1727;
+        let x1750 = IHyy * x1727;
+        let x1751 = x592 * x135;
+        let x1752 = x403 * x241;
+        let x1753 = x232 * x582;
+        let x1754 = x1752 - x1748 - x1749 - x1750 - x1751 + x1753;
+        let x1755 = ((x241 - x135 * IHyy) * x390 + x1432 * x230)
+            + (x1738 * x211 + x1739 * x227);
+        let x1756 = x1739 - thF_dot * x135;
+        let x1757 = x482 * x230;
+        let x1758 = x232 * thF_dot;
+        let x1759 = x248 * x564;
+        let x1760 = (x1756 * x29 - x1757 + x22 * (x1736 - x1737 - x1758) + x1759) * IFxx
+            + (x1757 - x1759) * IFyy;
+        let x1761 = x246 * x564;
+        let x1762 = x485 * x230;
+        let x1763 = IFxx * (x22 * x1756 - x1761 + (x1738 + x1758) * x29 + x1762)
+            + (x1761 - x1762) * IFyy;
+        let x1764 = x559 * x9;
+        let x1765 = x383 * x244;
+        let x1766 = x4 * x586;
+        let x1767 = x238 * x379;
+        let x1768 = x411 - thR_dot;
+        let x1769 = x208 * x538 + (x207 * x1768 + x206 * x1768) * IRxx;
+        let x1770 = (x204 * (x536 - x387) + x202 * x1768) * IRxx + x205 * x556;
+        let x1771 = x235 * x390;
+        let x1772 = x1738 * x216;
+        let x1773 = x211 * x1739;
+        let x1774 = x74 * x1416 - x1771 + x1772 + x1773;
+        let x1775 = x4 * (x411 * IBxx - x388 * IByy) - x406 * IBxz + x238 * x388;
+        let x1776 = x406 * IBzz - x412 * IBxz + x388 * (x1137 + x198 - x243);
+        let x1777 = x308 * x1 - x609 - x194;
+        let x1778 = x5 * x363 - x1059 - x1062;
+        let x1779 = x1362 + delta_dot;
+        let x1780 = x1361 - delta_dot * x155;
+        let x1781 = x1780 - x1779 * x105;
+        let x1782 = x1365 + x1781 * x19;
+        let x1783 = x1343 * x1779;
+        let x1784 = x1782 * x29 - x150 * x482 + x159 * x390
+            + x22 * (-x1367 - x1783 - x19 * x479) + x473 * x0;
+        let x1785 = x19 * (x485 * x149 + x1589) - x390 * x157 + (x1367 + x1783) * x29
+            + x1782 * x22 - x486 * x0;
+        let x1786 = x1389 + x1781 * x0 + x19 * (x1583 - x1364) + x482 * x157
+            - x485 * x159;
+        let x1787 = x63 * x1779;
+        let x1788 = x19 * (x1731 + x391 - x1364) - x164 * x403 + x1382
+            + x0 * (x162 * x446 + x1780 - x1787);
+        let x1789 = x164 * x390 + x0 * (x400 + x1364)
+            + x19 * (x1780 - x446 * x160 - x1787);
+        let x1790 = (x160 * x403 + x73 * x1779 + x455) * x19 + x1367
+            - x0 * (x162 * x390 + x447);
+        let x1791 = 2.0 * x381 + 2.0 * x382;
+        let x1792 = 2.0 * x1355 - x1791 * x114;
+        let x1793 = x19 * x390;
+        let x1794 = (x1374 + x1793) * x211;
+        let x1795 = x0 * (x227 * x1779 + x583);
+        let x1796 = x1794 + x1795;
+        let x1797 = x555 * x554 + x1430 * IRxx;
+        let x1798 = x211 * x1779;
+        let x1799 = x1793 * x1609 + x0 * (x547 + x1798) + x1404;
+        let x1800 = x1791 * IBxz + x379 * (IBzz + IByy - IBxx);
+        let x1801 = x532 * x535;
+        let x1802 = x1420 * IRxx + x1801;
+        let x1803 = (IBzz - IByy) * x383 - x1423 - 2.0 * x558;
+        let x1804 = x19 * thF_dot;
+        let x1805 = x666 * x564;
+        let x1806 = x485 * x0;
+        let x1807 = ((x1374 + x1804) * x29 + x158 * x1779 - x1805 - x1806) * IFxx
+            + (x1805 + x1806) * IFyy;
+        let x1808 = x663 * x564 + x0 * x482;
+        let x1809 = IFxx * ((-x380 - x384 - x1804) * x22 + x1808 + x154 * x1779)
+            - x1808 * IFyy;
+        let x1810 = IHyy * x1779;
+        let x1811 = IFyy * x1779;
+        let x1812 = x1810 - x1602 + x1811 + 2.0 * x580 + x581;
+        let x1813 = -(rR * x683);
+        let x1814 = x958 * rR;
+        let x1815 = x1801 - x532 * IRxx;
+        let x1816 = IRyy * x554;
+        let x1817 = 2.0 * x401 + 2.0 * x402;
+        let x1818 = x22 * x473 - x428 - x470 - x430 + x486 * x29;
+        let x1819 = x100 * (-2.0 * x480 - x481) - x100 * x446 * x29;
+        let x1820 = x100 * (x485 + x484) - x22 * x100 * x446;
+        let x1821 = (x300 + x216) * x390;
+        let x1822 = -(x403 * IFyy);
+        let x1823 = (2.0 * x544 + x1822) + (x403 * (x227 - x213 - x215) - x546);
+        let x1824 = (x390 - thF_dot) * IFxx + x576;
         Derivatives {
             qdot: [
                 x_dot,
@@ -4220,98 +4211,98 @@ pub mod lagrange {
                 [
                     mF * x32 + mH * x33 + x34,
                     x59,
-                    x123,
-                    x148,
-                    x167,
+                    x122,
+                    x146,
+                    x165,
+                    0.0,
+                    x169,
                     0.0,
                     x171,
                     0.0,
-                    x173,
-                    0.0,
-                    x176,
+                    x174,
                     0.0,
                     0.0,
                 ],
                 [
                     x59,
-                    (x177 + x50 * x50 + x52 * x52) * mF
-                        + (x49 * x49 + x177 + x47 * x47) * mH + x34,
-                    x182,
+                    (x175 + x50 * x50 + x52 * x52) * mF
+                        + (x49 * x49 + x175 + x47 * x47) * mH + x34,
+                    x180,
+                    x184,
                     x186,
-                    x188,
                     0.0,
-                    x189,
+                    x187,
                     0.0,
                     0.0,
-                    x173,
+                    x171,
                     0.0,
-                    x176,
+                    x174,
                     0.0,
                 ],
                 [
-                    x123,
-                    x182,
-                    mF * (x91 * x91 + x103 * x103 + x102 * x102)
-                        + mH * (x113 * x113 + x107 * x107 + x112 * x112)
-                        + ((x190 + x191) * x192 + x118 * x118) * mB + x95 * x202
-                        + (x207 + (x4 * x210 + x213 * x9 + x223) * x1) * x1 + x192 * x224
-                        + IFxx * x227 + x174 * x228 + x229 * (0.5 - 0.5 * x231),
-                    x253,
+                    x122,
+                    x180,
+                    mF * (x108 * x108 + x111 * x111 + x112 * x112) + x191 * IFxx
+                        + ((x192 + x193) * x194 + x117 * x117) * mB
+                        + mH * (x94 * x94 + x98 * x98 + x86 * x86)
+                        + ((x4 * x197 + x200 * x9 + x210) * x1 + x218) * x1 + x172 * x219
+                        + x194 * x220 + x221 * (0.5 - 0.5 * x223) + x229 * x70,
+                    x251,
+                    x260,
+                    x261,
                     x262,
                     x263,
-                    x264,
-                    x265,
-                    x268,
-                    x269,
-                    x281,
-                    x288,
+                    x266,
+                    x267,
+                    x279,
+                    x286,
                     0.0,
                 ],
                 [
-                    x148,
-                    x186,
-                    x253,
-                    x291 + x9 * x247 + x4 * x241 + x229
-                        + (x138 * x138 + x292 * (x293 + x294)) * mH + x127 * x128 + x223
-                        + mF * (x147 * x147 + (x295 + x296) * x292)
-                        + (x233 * x233 + x235 * x235) * IFxx + x244 * x136,
-                    x305,
+                    x146,
+                    x184,
+                    x251,
+                    x9 * x244 + x289 + x4 * x238 + x221
+                        + mF * (x140 * x140 + x290 * (x291 + x292)) + x126 * x127
+                        + (x137 * x137 + x290 * (x293 + x294)) * mH + x210
+                        + IFxx * (x248 * x248 + x246 * x246) + x135 * x241,
+                    x303,
                     0.0,
+                    x304,
+                    x305,
                     x306,
-                    x307,
-                    x308,
-                    x311,
-                    x322,
-                    x330,
-                    x335,
+                    x309,
+                    x320,
+                    x329,
+                    x334,
                 ],
                 [
-                    x167,
-                    x188,
-                    x262,
-                    x305,
-                    mH * (x163 * x163 + x166 * x166 + x165 * x165)
-                        + mF * (x161 * x161 + x152 * x152 + x159 * x159)
-                        + (x115 * x115 + xB * xB) * mB + (x339 + x200) * x292 + x224
-                        + x340 * x228,
+                    x165,
+                    x186,
+                    x260,
+                    x303,
+                    mH * (x161 * x161 + x164 * x164 + x163 * x163)
+                        + mF * (x159 * x159 + x150 * x150 + x157 * x157)
+                        + (x114 * x114 + xB * xB) * mB + (x338 + x227) * x290 + x220
+                        + x339 * x219,
                     IRyy,
+                    x341,
                     x342,
                     x343,
-                    x344,
-                    x346,
-                    x353,
-                    x359,
-                    x366,
+                    x345,
+                    x352,
+                    x358,
+                    x365,
                 ],
-                [0.0, 0.0, x263, 0.0, IRyy, IRyy, 0.0, 0.0, x344, x346, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x261, 0.0, IRyy, IRyy, 0.0, 0.0, x343, x345, 0.0, 0.0, 0.0],
                 [
-                    x171,
-                    x189,
-                    x264,
-                    x306,
-                    x342,
+                    x169,
+                    x187,
+                    x262,
+                    x304,
+                    x341,
                     0.0,
-                    x339 + x109 * x168 + x205 + x68 * x169,
+                    x338 + x73 * x166 + x216 + x100 * x167,
                     0.0,
                     0.0,
                     0.0,
@@ -4319,60 +4310,60 @@ pub mod lagrange {
                     x373,
                     x374,
                 ],
-                [0.0, 0.0, x265, x307, x343, 0.0, 0.0, IFyy, 0.0, 0.0, x375, x376, 0.0],
-                [x173, 0.0, x268, x308, x344, x344, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x173, x269, x311, x346, x346, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x176, 0.0, x281, x322, x353, 0.0, x371, x375, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x176, x288, x330, x359, 0.0, x373, x376, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, x335, x366, 0.0, x374, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x263, x305, x342, 0.0, 0.0, IFyy, 0.0, 0.0, x375, x376, 0.0],
+                [x171, 0.0, x266, x306, x343, x343, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x171, x267, x309, x345, x345, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x174, 0.0, x279, x320, x352, 0.0, x371, x375, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x174, x286, x329, x358, 0.0, x373, x376, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, x334, x365, 0.0, x374, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             force: [
-                x512,
-                -(x60 * (x513 + 2.0 * x515) + (x47 * x488 + x49 * x454 + x478 * x55) * mH
-                    + mF * (x511 * x55 + x506 * x50 + x52 * x502)
-                    + (x41 * x418 + x516 + x517) * mB),
-                (x532 - x218 * x542 + x552 - x554 - x562 - x573) * x1 - x225 * x523
-                    - mF * (x506 * x91 + x103 * x502 + x511 * x102) - phi_dot * x526
-                    + x582 * x75 - (x118 * x405 + x5 * x583) * mB - x226 * x588
-                    - (x478 * x112 + x107 * x488 + x113 * x454) * mH - x5 * x592
-                    - x95 * x595,
-                0.5 * (psi_dot * x526) - x531 * x9 - x218 * x551 - x405 * x128
-                    - mF * (x511 * x147 + x19 * x596) - x221 * x542
-                    - (x478 * x138 + x19 * x597) * mH + x599 - x235 * x523
-                    + (x600 - mF * x334 - (x134 * x5 + x109 * x333) * mH) * g - x4 * x572
-                    - x561 * x136 - x233 * x588,
-                x582 * x0 + x589 - x19 * x601 - (-x115 * x414 - xB * x418) * mB
-                    - mF * (x506 * x161 + x502 * x159 + x511 * x152) - x591
-                    + (psi_dot * x605
-                        - g
-                            * (x602 + x603 * mF
-                                + (x71 * x106 + x109 * x604 + x364) * mH)) * x1
-                    - mH * (x454 * x166 + x165 * x488 + x163 * x478),
-                -(x424 * IRyy),
-                (x464 - x458 + x606 - x465 + x477) * x168 - x555 + x22 * x588
-                    + x607 * x436 - x556 + (x606 - x507 - x508 + x509 + x510) * x169
-                    - x29 * x523,
-                -x581,
-                x_dot * x608 / f64::sqrt(x172) + x620,
-                x608 * y_dot / f64::sqrt(x172)
+                x511,
+                -((x512 + x41 * x505 + x513) * mB
+                    + mF * (x50 * x487 + x492 * x55 + x52 * x483)
+                    + x99 * (x514 + 2.0 * x516)
+                    + (x449 * x55 + x49 * x469 + x466 * x47) * mH),
+                (x541 - x527 - x529 - x549 - x205 * x557 + x563) * x1 - x569 * x189
+                    - phi_dot * x572 - (x466 * x98 + x449 * x86 + x94 * x469) * mH
+                    - (x112 * x487 + x483 * x108 + x111 * x492) * mF
+                    - mB * (x117 * x510 + x573 * x5) - x190 * x578 - x70 * x584
+                    - x5 * x588 + x93 * x594,
+                0.5 * (psi_dot * x572) - x4 * x526
+                    + (x595 - (x133 * x5 + x330 * x73) * mH - x331 * mF) * g
+                    - x248 * x569 - x205 * x540 - (x492 * x140 + x19 * x596) * mF
+                    - x246 * x578 - x135 * x548 - mH * (x19 * x597 + x449 * x137)
+                    - x510 * x127 - x562 * x9 - x208 * x557 + x599,
+                x585 + x0 * x594
+                    + (psi_dot * x600
+                        - g * (x601 + (x67 * x63 + x602 * x73 + x363) * mH + mF * x603))
+                        * x1 - mB * (-x509 * x114 - x505 * xB) - x587
+                    - (x466 * x163 + x161 * x449 + x164 * x469) * mH - x604 * x19
+                    - mF * (x150 * x492 + x483 * x157 + x159 * x487),
+                -(x440 * IRyy),
+                x605 * x390 - x542 - x543 - x569 * x29 + x22 * x578
+                    + (x489 - x488 + x490 + x606 - x491) * x167
+                    + x166 * (x404 - x417 + x606 + x443 - x448),
+                -x591,
+                x_dot * x607 / f64::sqrt(x170) + x619,
+                x607 * y_dot / f64::sqrt(x170)
                     + rR
-                        * (psi_dot * (x622 - x621 * x266 - x623 * x611)
-                            + (-x624 - x626 - (x625 * x627 + x266 * x628) * x1)
+                        * (psi_dot * (x621 - x620 * x264 - x622 * x610)
+                            + (-x623 - x625 - (x624 * x626 + x264 * x627) * x1)
                                 * phi_dot),
-                x_dot * x639 / f64::sqrt(x175) - (x660 - rF * x710) * theta_dot
-                    - (x727 - rF * x760) * phi_dot - (x777 - rF * x788) * psi_dot
-                    + x789 * x687 - delta_dot * (x799 - x814 * rF),
-                y_dot * x639 / f64::sqrt(x175) - x815
-                    - phi_dot * (x850 - x835 - x327 * x639 / f64::sqrt(x175))
-                    - theta_dot * (x865 - x858 * rF - x859 / f64::sqrt(x175))
+                x638 * x_dot / f64::sqrt(x173) - (x658 - x708 * rF) * theta_dot
+                    - psi_dot * (x725 - rF * x747) - (x764 - rF * x787) * phi_dot
+                    + x788 * x685 - delta_dot * (x812 - rF * x802),
+                x638 * y_dot / f64::sqrt(x173) - psi_dot * (x820 - rF * x837 - x839)
+                    - x840 - theta_dot * (x855 - rF * x848 - x849 / f64::sqrt(x173))
+                    - phi_dot * (x870 - x638 * x326 / f64::sqrt(x173) - x878)
                     - delta_dot
-                        * (x68 * (f64::sqrt(x175) * x687 - x866 / f64::sqrt(x175))
-                            - rF * x874) - psi_dot * (x887 - rF * x884 - x889),
-                -(((x891
-                    - (rF * (x19 * x893 - x75 * x745 / f64::sqrt(x175)) - x750 * x68)
-                        * x98) * x1 + x553 * x80 + x362 * x836 + x894) * theta_dot
-                    + delta_dot * (x895 + x903 * rF)
-                    + phi_dot * (x905 + x913 + x406 * x132 + rF * x920 + x80 * x641)),
+                        * (x100 * (x685 * f64::sqrt(x173) - x879 / f64::sqrt(x173))
+                            - x887 * rF),
+                -(((x888 * theta_dot
+                    - (rF * (x19 * x890 - x93 * x765 / f64::sqrt(x173)) - x891) * x74)
+                    * x1 + x528 * x79 + x892 + x856 * x361) * theta_dot
+                    + (rF * x903 + x905 + x909 + x418 * x132 + x5 * x910) * phi_dot
+                    + (rF * x918 + x919) * delta_dot),
             ],
             checks: [],
             d_qdot: [
@@ -4426,15 +4417,15 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        (2.0 * (x25 * x274) + 2.0 * (x278 * x28) + 2.0 * x922) * mH
+                        (2.0 * (x25 * x269) + 2.0 * (x273 * x28) + 2.0 * x921) * mH
                             + mF
-                                * (2.0 * (x31 * x923) + 2.0 * (x924 * x30) + 2.0 * x922),
+                                * (2.0 * (x31 * x922) + 2.0 * (x923 * x30) + 2.0 * x921),
+                        x925,
                         x926,
                         x927,
                         x928,
-                        x929,
                         0.0,
-                        x930,
+                        x929,
                         0.0,
                         0.0,
                         0.0,
@@ -4443,70 +4434,90 @@ pub mod lagrange {
                         0.0,
                     ],
                     [
-                        x926,
+                        x925,
                         mH * (2.0 * x57 + 2.0 * x58 - 2.0 * x56)
                             + mF * (2.0 * x51 + 2.0 * x53 - 2.0 * x56),
-                        x123,
-                        x148,
-                        x167,
+                        x122,
+                        x146,
+                        x165,
                         0.0,
-                        x171,
-                        0.0,
-                        0.0,
+                        x169,
                         0.0,
                         0.0,
                         0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x926,
+                        x122,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x931,
+                        x266,
+                        x936,
+                        x939,
                         0.0,
                     ],
                     [
                         x927,
-                        x123,
+                        x146,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x932,
-                        x268,
-                        x937,
                         x940,
+                        x306,
+                        x943,
+                        x945,
                         0.0,
                     ],
                     [
                         x928,
-                        x148,
+                        x165,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x941,
-                        x308,
-                        x944,
-                        x946,
+                        x344,
+                        x343,
+                        x948,
+                        x949,
                         0.0,
                     ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x344, x343, 0.0, 0.0, 0.0],
                     [
                         x929,
-                        x167,
+                        x169,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x345,
-                        x344,
-                        x949,
-                        x950,
+                        0.0,
+                        0.0,
+                        x951,
+                        x952,
                         0.0,
                     ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x345, x344, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x953, x954, 0.0],
                     [
-                        x930,
-                        x171,
+                        0.0,
+                        0.0,
+                        x931,
+                        x940,
+                        x344,
+                        x344,
                         0.0,
                         0.0,
                         0.0,
@@ -4514,22 +4525,32 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
+                    ],
+                    [
                         0.0,
-                        x952,
+                        0.0,
+                        x266,
+                        x306,
+                        x343,
+                        x343,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x936,
+                        x943,
+                        x948,
+                        0.0,
+                        x951,
                         x953,
                         0.0,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x954, x955, 0.0],
-                    [
-                        0.0,
-                        0.0,
-                        x932,
-                        x941,
-                        x345,
-                        x345,
-                        0.0,
-                        0.0,
-                        0.0,
                         0.0,
                         0.0,
                         0.0,
@@ -4538,23 +4559,8 @@ pub mod lagrange {
                     [
                         0.0,
                         0.0,
-                        x268,
-                        x308,
-                        x344,
-                        x344,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x937,
-                        x944,
+                        x939,
+                        x945,
                         x949,
                         0.0,
                         x952,
@@ -4565,134 +4571,133 @@ pub mod lagrange {
                         0.0,
                         0.0,
                     ],
-                    [
-                        0.0,
-                        0.0,
-                        x940,
-                        x946,
-                        x950,
-                        0.0,
-                        x953,
-                        x955,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        ((2.0 * x282 + 2.0 * x283 + 2.0 * x284) * mF
-                            + mH * (2.0 * (x95 * x28) + 2.0 * x282 + 2.0 * (x193 * x25)))
-                            * x2,
-                        x978,
+                        ((2.0 * (x188 * x25) + 2.0 * x281 + 2.0 * (x70 * x28)) * mH
+                            + mF * (2.0 * x282 + 2.0 * x281 + 2.0 * x283)) * x2,
+                        x977,
+                        x992,
                         x993,
                         x994,
-                        x995,
                         0.0,
-                        x997,
+                        x996,
+                        0.0,
+                        x998,
                         0.0,
                         x999,
-                        0.0,
-                        x1000,
                         0.0,
                         0.0,
                     ],
                     [
-                        x978,
+                        x977,
                         x8
-                            * ((2.0 * (x324 * x47) - 2.0 * x1001 + 2.0 * (x49 * x630))
-                                * mH
-                                + (2.0 * (x50 * x977) - 2.0 * x1001 + 2.0 * (x52 * x976))
-                                    * mF),
+                            * ((2.0 * (x52 * x976) + 2.0 * (x975 * x50) - 2.0 * x1000)
+                                * mF
+                                + (2.0 * (x322 * x47) + 2.0 * (x49 * x629) - 2.0 * x1000)
+                                    * mH),
+                        x1001,
                         x1002,
                         x1003,
-                        x1004,
                         0.0,
-                        x1006,
+                        x1005,
                         0.0,
+                        0.0,
+                        x998,
                         0.0,
                         x999,
                         0.0,
-                        x1000,
+                    ],
+                    [
+                        x992,
+                        x1001,
+                        x333 * x1006 + x221 * x571 + x1010 * IFxx + x70 * x1013
+                            + mF
+                                * (2.0 * (x112 * x985) + 2.0 * (x111 * x980)
+                                    + 2.0 * (x108 * x986))
+                            + mH
+                                * (2.0 * (x987 * x98) + 2.0 * (x988 * x86)
+                                    + 2.0 * (x989 * x94)) + x188 * x1014
+                            + (((2.0 * (x205 * x1015) - 2.0 * x209) * IRxx
+                                - x4 * (2.0 * x195 + 2.0 * x196)
+                                - x9 * (2.0 * x198 + 2.0 * x199) + 2.0 * IRyy + 2.0 * IByy
+                                + (2.0 * x192 + 2.0 * x193 - 2.0 * x1016) * mB) * x1 - x218)
+                                * x5 + x330 * x229,
+                        x1019,
+                        x1022,
+                        x1023,
+                        x1024,
+                        x1025,
+                        x1027,
+                        x1028,
+                        x1033,
+                        x1038,
                         0.0,
                     ],
                     [
                         x993,
                         x1002,
-                        x229 * x525 + x193 * x1008
-                            + (((2.0 * (x218 * x1009) - 2.0 * x222) * IRxx
-                                - x4 * (2.0 * x208 + 2.0 * x209)
-                                - x9 * (2.0 * x211 + 2.0 * x212) + 2.0 * IRyy + 2.0 * IByy
-                                + (2.0 * x190 + 2.0 * x191 - 2.0 * x1010) * mB) * x1 - x207)
-                                * x5
-                            + mF
-                                * (2.0 * (x986 * x91) + 2.0 * (x985 * x103)
-                                    + 2.0 * (x989 * x102))
-                            + (2.0 * (x113 * x992) + 2.0 * (x107 * x990)
-                                + 2.0 * (x991 * x112)) * mH + IFxx * x1013 + x332 * x1014
-                            + x95 * x1017 + x333 * x202,
-                        x1020,
-                        x1023,
-                        x1024,
-                        x1025,
-                        x1026,
-                        x1028,
-                        x1029,
-                        x1034,
-                        x1039,
+                        x1019,
                         0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1040,
+                        x1043,
+                        x1046,
+                        x1050,
+                        x1053,
                     ],
                     [
                         x994,
                         x1003,
-                        x1020,
+                        x1022,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         x1041,
-                        x1044,
-                        x1047,
-                        x1051,
-                        x1054,
+                        x930,
+                        x1055,
+                        x1058,
+                        x1063,
                     ],
                     [
-                        x995,
-                        x1004,
+                        0.0,
+                        0.0,
                         x1023,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1042,
-                        x931,
-                        x1057,
-                        x1060,
-                        x1065,
+                        x1041,
+                        x930,
+                        0.0,
+                        0.0,
+                        0.0,
                     ],
                     [
-                        0.0,
-                        0.0,
+                        x996,
+                        x1005,
                         x1024,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1042,
-                        x931,
                         0.0,
                         0.0,
-                        0.0,
+                        x1066,
+                        x1068,
+                        x1070,
                     ],
                     [
-                        x997,
-                        x1006,
+                        0.0,
+                        0.0,
                         x1025,
                         0.0,
                         0.0,
@@ -4701,34 +4706,49 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x1068,
-                        x1070,
+                        x1071,
                         x1072,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1026,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1073,
-                        x1074,
                         0.0,
                     ],
                     [
-                        x999,
+                        x998,
                         0.0,
-                        x1028,
+                        x1027,
+                        x1040,
                         x1041,
-                        x1042,
-                        x1042,
+                        x1041,
                         0.0,
                         0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x998,
+                        x1028,
+                        x1043,
+                        x930,
+                        x930,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x999,
+                        0.0,
+                        x1033,
+                        x1046,
+                        x1055,
+                        0.0,
+                        x1066,
+                        x1071,
                         0.0,
                         0.0,
                         0.0,
@@ -4738,209 +4758,194 @@ pub mod lagrange {
                     [
                         0.0,
                         x999,
-                        x1029,
-                        x1044,
-                        x931,
-                        x931,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x1000,
-                        0.0,
-                        x1034,
-                        x1047,
-                        x1057,
+                        x1038,
+                        x1050,
+                        x1058,
                         0.0,
                         x1068,
-                        x1073,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x1000,
-                        x1039,
-                        x1051,
-                        x1060,
-                        0.0,
-                        x1070,
-                        x1074,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1054,
-                        x1065,
-                        0.0,
                         x1072,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1053,
+                        x1063,
+                        0.0,
+                        x1070,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
                         0.0,
                     ],
                 ],
                 [
                     [
-                        (x347 * (2.0 * x1251 - 2.0 * x1250) + 2.0 * (x18 * x25)) * mH
+                        (2.0 * (x18 * x25) + x349 * (2.0 * x1248 + 2.0 * x1249)) * mH
                             + mF
-                                * (2.0 * (x20 * x656) + 2.0 * (x31 * x1252)
-                                    + 2.0 * (x30 * x1253)),
-                        x1258,
-                        x1275,
-                        x1281,
+                                * (2.0 * (x20 * x651) + 2.0 * (x31 * x1250)
+                                    + 2.0 * (x30 * x1251)),
+                        x1256,
+                        x1273,
+                        x1278,
+                        x1282,
+                        0.0,
+                        x1283,
+                        0.0,
+                        0.0,
+                        0.0,
                         x1285,
-                        0.0,
-                        x1286,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1288,
                         0.0,
                         0.0,
                     ],
                     [
-                        x1258,
+                        x1256,
                         mF
-                            * (2.0 * (x52 * x1255) - 2.0 * (x862 * x55)
-                                + 2.0 * (x50 * x1254))
-                            + (2.0 * (x49 * x355) + x274 * (2.0 * x1257 - 2.0 * x1256))
+                            * (2.0 * (x52 * x1253) - 2.0 * (x851 * x55)
+                                + 2.0 * (x50 * x1252))
+                            + (2.0 * (x49 * x354) + (2.0 * x1255 - 2.0 * x1254) * x269)
                                 * mH,
+                        x1286,
+                        x1287,
                         x1289,
+                        0.0,
                         x1290,
-                        x1292,
-                        0.0,
-                        x1293,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1288,
+                        x1285,
                         0.0,
                     ],
                     [
-                        x1275,
-                        x1289,
-                        mF
-                            * (2.0 * (x1269 * x102) + 2.0 * (x1267 * x91)
-                                + 2.0 * (x103 * x1266))
-                            + (IFxx * x1296 - (x0 * x202 - x360 * x1014) * x98
-                                + x71 * x206
-                                + (x1297 * x98 + x4 * (x246 - 2.0 * x211 - x212)
-                                    + x9 * x1298) * x1 + x95 * (x1299 + x604 * x200)) * x1
-                            + (2.0 * (x107 * x1271) + 2.0 * (x1273 * x112)
-                                + 2.0 * (x113 * x1272)) * mH
-                            + mB
-                                * (2.0 * (x1260 * x118)
-                                    + rR * x192 * (2.0 * x980 - 2.0 * x979)),
+                        x1273,
+                        x1286,
+                        mB
+                            * (2.0 * (x1258 * x117)
+                                + rR * x194 * (2.0 * x991 - 2.0 * x990))
+                            + mF
+                                * (2.0 * (x108 * x1267) + 2.0 * (x1261 * x111)
+                                    + 2.0 * (x112 * x1266))
+                            + mH
+                                * (2.0 * (x1270 * x94) + 2.0 * (x98 * x1272)
+                                    + 2.0 * (x1269 * x86))
+                            + x1
+                                * ((x1291 * x74 + x4 * (x243 - 2.0 * x198 - x199)
+                                    + x9 * x1292) * x1 - x74 * (x229 * x0 - x1006 * x359)
+                                    + (x1293 + x602 * x227) * x70 + x67 * x217 + IFxx * x1296),
+                        x1306,
+                        x1308,
+                        0.0,
                         x1310,
-                        x1312,
-                        0.0,
-                        x1314,
-                        x1315,
+                        x1311,
                         0.0,
                         0.0,
-                        x1321,
+                        x1317,
+                        x1320,
+                        0.0,
+                    ],
+                    [
+                        x1278,
+                        x1287,
+                        x1306,
+                        mH
+                            * (2.0 * (x137 * x1274)
+                                + (2.0 * (x133 * x1155) - 2.0 * (x136 * x76)) * x290)
+                            + (x290 * (2.0 * (x1276 * x142) + 2.0 * (x1275 * x144))
+                                + 2.0 * (x1277 * x140)) * mF
+                            + (x1297 - x288 * x1006 - x287) * x135 + 2.0 * x240
+                            + x74 * (x0 * x1302 + x241) + x9 * (x237 - 2.0 * x195 - x196)
+                            + (2.0 * (x248 * x1304) - 2.0 * (x246 * x1303)) * IFxx
+                            + x4 * x1298,
+                        x1323,
+                        0.0,
+                        x1324,
+                        x1326,
+                        0.0,
+                        0.0,
+                        x1329,
+                        x1331,
+                        x1063,
+                    ],
+                    [
+                        x1282,
+                        x1289,
+                        x1308,
+                        x1323,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1336,
+                        x1338,
+                        x1342,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x1283,
+                        x1290,
+                        x1310,
                         x1324,
                         0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1345,
+                        x1346,
+                        x1350,
                     ],
                     [
-                        x1281,
-                        x1290,
-                        x1310,
-                        (x244 + x0 * x1305) * x98
-                            + (2.0 * (x138 * x1276)
-                                + (2.0 * (x134 * x1157) - 2.0 * (x111 * x137)) * x292) * mH
-                            + 2.0 * x243
-                            + (2.0 * (x235 * x1306) - 2.0 * (x233 * x1307)) * IFxx
-                            + x9 * (x240 - 2.0 * x208 - x209) + x4 * x1300
-                            + (x1302 - x290 - x1014 * x289) * x136
-                            + mF
-                                * ((2.0 * (x142 * x1279) + 2.0 * (x144 * x1278)) * x292
-                                    + 2.0 * (x1280 * x147)),
-                        x1327,
-                        0.0,
-                        x1328,
-                        x1330,
                         0.0,
                         0.0,
-                        x1333,
-                        x1335,
-                        x1065,
+                        x1311,
+                        x1326,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1351,
+                        x1352,
+                        0.0,
                     ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [
                         x1285,
-                        x1292,
-                        x1312,
-                        x1327,
+                        0.0,
+                        x1317,
+                        x1329,
+                        x1336,
+                        0.0,
+                        x1345,
+                        x1351,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
+                    ],
+                    [
                         0.0,
-                        x1340,
-                        x1343,
+                        x1285,
+                        x1320,
+                        x1331,
+                        x1338,
+                        0.0,
                         x1346,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1286,
-                        x1293,
-                        x1314,
-                        x1328,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1349,
-                        x1350,
-                        x1354,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1315,
-                        x1330,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1355,
-                        x1356,
-                        0.0,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1288,
-                        0.0,
-                        x1321,
-                        x1333,
-                        x1340,
-                        0.0,
-                        x1349,
-                        x1355,
+                        x1352,
                         0.0,
                         0.0,
                         0.0,
@@ -4949,27 +4954,12 @@ pub mod lagrange {
                     ],
                     [
                         0.0,
-                        x1288,
-                        x1324,
-                        x1335,
-                        x1343,
+                        0.0,
+                        0.0,
+                        x1063,
+                        x1342,
                         0.0,
                         x1350,
-                        x1356,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1065,
-                        x1346,
-                        0.0,
-                        x1354,
                         0.0,
                         0.0,
                         0.0,
@@ -4995,156 +4985,155 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        -((2.0 * x1495 - 2.0 * x26 + 2.0 * x1496 + 2.0 * x27) * x20
+                        -((2.0 * x1492 - 2.0 * x26 + 2.0 * x1493 + 2.0 * x27) * x20
                             * mF),
-                        x1502,
+                        x1499,
+                        x1507,
                         x1510,
-                        x1513,
+                        x1516,
+                        0.0,
+                        x1517,
+                        0.0,
+                        0.0,
+                        0.0,
                         x1519,
                         0.0,
-                        x1520,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1522,
-                        0.0,
                         0.0,
                     ],
                     [
-                        x1502,
-                        mF * (2.0 * x1497 - 2.0 * x44 + 2.0 * x1498 - 2.0 * x46) * x55,
-                        x1523,
-                        x1524,
-                        x1525,
-                        0.0,
-                        x1526,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
+                        x1499,
+                        mF * (2.0 * x1494 - 2.0 * x44 + 2.0 * x1495 - 2.0 * x46) * x55,
+                        x1520,
+                        x1521,
                         x1522,
+                        0.0,
+                        x1523,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1519,
+                        0.0,
+                    ],
+                    [
+                        x1507,
+                        x1520,
+                        (2.0 * (x98 * x1505) - 2.0 * (x94 * x1506) - 2.0 * (x98 * x86))
+                            * mH
+                            + (2.0 * x224 - x1006 * x70 + IFxx * x1524 + 2.0 * x228)
+                                * x93
+                            + mF
+                                * (2.0 * (x108 * x1503) - 2.0 * (x111 * x107)
+                                    + 2.0 * (x112 * x1504)),
+                        x1528,
+                        x1529,
+                        0.0,
+                        x1530,
+                        x1531,
+                        0.0,
+                        0.0,
+                        x1536,
+                        x1539,
                         0.0,
                     ],
                     [
                         x1510,
-                        x1523,
-                        mF
-                            * (2.0 * (x1507 * x103) - 2.0 * (x90 * x102)
-                                + 2.0 * (x1509 * x91))
-                            + x75
-                                * (x1527 * IFxx + 2.0 * x195 - x95 * x1014 + 2.0 * x201)
-                            + mH
-                                * (2.0 * (x107 * x1505) - 2.0 * (x107 * x112)
-                                    - 2.0 * (x113 * x1503)),
-                        x1531,
-                        x1532,
+                        x1521,
+                        x1528,
+                        x19
+                            * (mF
+                                * (2.0 * (x140 * x1508) + (2.0 * x291 + 2.0 * x292) * x0)
+                                + (2.0 * (x137 * x1527) + x0 * (2.0 * x293 + 2.0 * x294))
+                                    * mH
+                                + (x232 * (x1006 + x1321) - (2.0 * x296 + 2.0 * x297) * IFxx
+                                    - x233 - 2.0 * x234) * x74),
+                        x1540,
                         0.0,
-                        x1533,
-                        x1534,
-                        0.0,
-                        0.0,
-                        x1539,
+                        x1541,
                         x1542,
                         0.0,
-                    ],
-                    [
-                        x1513,
-                        x1524,
-                        x1531,
-                        x19
-                            * ((x232 * (x1014 + x1325) - (2.0 * x299 + 2.0 * x300) * IFxx
-                                - x249 - 2.0 * x250) * x98
-                                + mF
-                                    * (2.0 * (x1511 * x147) + (2.0 * x295 + 2.0 * x296) * x0)
-                                + ((2.0 * x293 + 2.0 * x294) * x0 + 2.0 * (x138 * x1530))
-                                    * mH),
-                        x1543,
                         0.0,
-                        x1544,
-                        x1545,
-                        0.0,
-                        0.0,
+                        x1547,
                         x1550,
-                        x1553,
-                        x1072,
+                        x1070,
                     ],
                     [
-                        x1519,
-                        x1525,
-                        x1532,
-                        x1543,
-                        ((2.0 * (x1516 * x151) + 2.0 * (x1514 * x159)
-                            + 2.0 * (x1515 * x161)) * mF
+                        x1516,
+                        x1522,
+                        x1529,
+                        x1540,
+                        ((2.0 * (x1513 * x149) + 2.0 * (x1511 * x157)
+                            + 2.0 * (x1512 * x159)) * mF
                             + x0
-                                * (2.0 * x197 - 2.0 * IHyy + 2.0 * x199 - 2.0 * IFyy
-                                    + IFxx * (2.0 * x336 + 2.0 * x337)) + 2.0 * (x166 * x168))
+                                * (2.0 * x225 - 2.0 * IHyy + 2.0 * x226 - 2.0 * IFyy
+                                    + IFxx * (2.0 * x335 + 2.0 * x336)) + 2.0 * (x164 * x166))
                             * x19,
                         0.0,
-                        x1554,
-                        x1555,
+                        x1551,
+                        x1552,
                         0.0,
                         0.0,
-                        x1559,
-                        x1561,
-                        x1354,
+                        x1556,
+                        x1558,
+                        x1350,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [
-                        x1520,
-                        x1526,
-                        x1533,
-                        x1544,
-                        x1554,
+                        x1517,
+                        x1523,
+                        x1530,
+                        x1541,
+                        x1551,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1563,
+                        x1560,
+                        x1562,
+                        x1564,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x1531,
+                        x1542,
+                        x1552,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
                         x1565,
-                        x1567,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1534,
-                        x1545,
-                        x1555,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1568,
-                        x1569,
+                        x1566,
                         0.0,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [
-                        x1522,
+                        x1519,
                         0.0,
+                        x1536,
+                        x1547,
+                        x1556,
+                        0.0,
+                        x1560,
+                        x1565,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x1519,
                         x1539,
                         x1550,
-                        x1559,
+                        x1558,
                         0.0,
-                        x1563,
-                        x1568,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x1522,
-                        x1542,
-                        x1553,
-                        x1561,
-                        0.0,
-                        x1565,
-                        x1569,
+                        x1562,
+                        x1566,
                         0.0,
                         0.0,
                         0.0,
@@ -5155,10 +5144,10 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x1072,
-                        x1354,
+                        x1070,
+                        x1350,
                         0.0,
-                        x1567,
+                        x1564,
                         0.0,
                         0.0,
                         0.0,
@@ -5307,10 +5296,11 @@ pub mod lagrange {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    -(mH * (x454 * x274 - x478 * x921 + x278 * x488)
-                        + mF * (x506 * x923 - x511 * x921 + x924 * x502)
-                        + x60 * (-x513 - 2.0 * x515) + mB * (x273 * x418 - x516 - x517)),
-                    x512,
+                    -(mB * (x268 * x505 - x512 - x513)
+                        + (x269 * x469 - x449 * x920 + x466 * x273) * mH
+                        + mF * (x923 * x483 - x920 * x492 + x487 * x922)
+                        + x99 * (-x514 - 2.0 * x516)),
+                    x511,
                     0.0,
                     0.0,
                     0.0,
@@ -5318,498 +5308,485 @@ pub mod lagrange {
                     0.0,
                     0.0,
                     rR
-                        * ((-x621 * x310 - x623 * ((x609 + x310) * x1 - x192) - x622)
+                        * ((-x620 * x308 - x622 * ((x608 + x308) * x1 - x194) - x621)
                             * psi_dot
-                            + (x624 + x626 - (x310 * x628 + x618 * x625) * x1)
+                            + (x623 + x625 - (x308 * x627 + x617 * x624) * x1)
                                 * phi_dot),
-                    x620,
-                    x815
+                    x619,
+                    x840
+                        - theta_dot
+                            * (x955 - rF * (x844 + x845 + x847)
+                                - x638 * x946 / f64::sqrt(x173))
+                        - (f64::sqrt(x173)
+                            * (x957 - (x645 + x813) * rR
+                                + x100
+                                    * (x19 * (x958 - delta_dot * x934) + x0 * (x959 + x809)))
+                            - x638 * x935 / f64::sqrt(x173)
+                            - rF * (x831 + x960 * x93 + x832)) * psi_dot
+                        - phi_dot
+                            * ((x100 * ((x8 * x631 + x135 * x515 + x861) * x0 + x961)
+                                + rR * (x81 * x515 + x8 * (x81 * x528 + x867)) + x963
+                                + x964 * x105) * f64::sqrt(x173)
+                                - rF * (x93 * x965 + x876 + x877)
+                                - x941 * x638 / f64::sqrt(x173))
                         - delta_dot
-                            * ((f64::sqrt(x175) * x956 + x921 * x639 / f64::sqrt(x175))
-                                * x68 - rF * (x867 + x868 + x75 * x957))
-                        - (x958 - rF * (x852 + x856 + x857)
-                            - x639 * x947 / f64::sqrt(x175)) * theta_dot
-                        - psi_dot
-                            * (f64::sqrt(x175)
-                                * (x960 - rR * (x647 + x885)
-                                    + x68
-                                        * (x19 * (x961 - delta_dot * x935) + x0 * (x962 + x796)))
-                                - x936 * x639 / f64::sqrt(x175)
-                                - rF * (x75 * x963 + x878 + x879))
-                        - (f64::sqrt(x175)
-                            * (x68 * (x965 + x0 * (x844 + x632 * x8 + x514 * x136))
-                                + rR * (x61 * x514 + x8 * (x61 * x553 + x840)) + x966 * x88
-                                + x968) - x942 * x639 / f64::sqrt(x175)
-                            - rF * (x832 + x834 + x964 * x75)) * phi_dot,
-                    -(x789 * x956
-                        + psi_dot
-                            * (x777
-                                - rF
-                                    * ((2.0 * (x638 * x939) + x921 * x780 - x956 * x272) * x75
-                                        - x175
-                                            * (x969 + x75 * x956 + x226 * x972 + x225 * x973
-                                                + x703 * x924 + x702 * x923) - x969 * x272))
-                        + theta_dot
-                            * (x660
-                                - rF
-                                    * (-x969 * x352
-                                        - (x352 * x956 - x706 * x921 + 2.0 * x689) * x75
-                                        - x175 * (x274 * x671 + 0.5 * x662 + 0.5 * x664)))
-                        + (x727
+                            * ((x967 * f64::sqrt(x173) + x638 * x920 / f64::sqrt(x173))
+                                * x100 - rF * (x885 + x93 * x966 + x886)),
+                    -(theta_dot
+                        * (x658
                             - rF
-                                * ((2.0 * (x945 * x638) - x956 * x313 + x757 * x921) * x75
-                                    - x969 * x313
-                                    - (x734 * x923 + (-x956 * x98 - x735 * x921) * x19
-                                        + x746 * x921 + x235 * x973 + x233 * x972 + x924 * x752)
-                                        * x175)) * phi_dot
+                                * (-(x269 * x669 + 0.5 * x660 + 0.5 * x662) * x173
+                                    - x93 * (2.0 * x687 - x704 * x920 + x967 * x348)
+                                    - x968 * x348))
+                        + (x725
+                            - (x93 * (x742 * x920 - x276 * x967 + 2.0 * (x938 * x637))
+                                - x276 * x968
+                                - (x968 + x702 * x923 + x967 * x93 + x971 * x189
+                                    + x190 * x972 + x922 * x701) * x173) * rF) * psi_dot
+                        + phi_dot
+                            * (x764
+                                - rF
+                                    * ((x920 * x781 - x967 * x310 + 2.0 * (x944 * x637)) * x93
+                                        - x968 * x310
+                                        - x173
+                                            * (x766 * x920 + x971 * x248 + x972 * x246 + x775 * x922
+                                                + x19 * (-x920 * x767 - x967 * x74) + x923 * x779)))
                         + delta_dot
-                            * (x799
-                                - ((2.0 * (x338 * x638 * x274) - x812 * x921 - x956 * x369)
-                                    * x75 - x969 * x369 - x768 * x370) * rF)),
+                            * (x812
+                                - rF
+                                    * ((2.0 * (x637 * x337 * x269) - x967 * x370 - x799 * x920)
+                                        * x93 - x721 * x367 - x968 * x370)) + x967 * x788),
                     0.0,
                 ],
                 [
-                    -(mF
-                        * ((x226 * x502 + x506 * x225 + x511 * x75) * x2
-                            + (x30 * x1095 - x1089 * x20 + x31 * x1096) * psi_dot)
-                        + ((x478 * x75 + x95 * x488 + x193 * x454) * x2
-                            + (x25 * x1097 + x28 * x1098 - x20 * x1099) * psi_dot) * mH
+                    -(mH
+                        * (psi_dot * (x28 * x1083 - x20 * x1089 + x1091 * x25)
+                            + (x188 * x469 + x449 * x93 + x466 * x70) * x2)
                         + mB
-                            * ((x1100 + (x1107 - x1104) * x1) * x2
-                                + (x11 * x1112 + x16 * x1116) * psi_dot)
-                        + x60 * (-x377 * x3 - 2.0 * (phi_dot * x621))),
-                    -(mF
-                        * ((x976 * x502 - x974 * x511 + x506 * x977) * x8
-                            + psi_dot * (x1096 * x50 + x1089 * x55 + x52 * x1095))
-                        + x60 * (x377 * x45 - 2.0 * (phi_dot * x613))
-                        + (x8 * ((x1105 + x1104 - x1106) * x1 - x1100)
-                            + psi_dot * (x41 * x1116 + x37 * x1112)) * mB
-                        + (x8 * (x454 * x630 + x324 * x488 - x478 * x974)
-                            + (x1099 * x55 + x1098 * x47 + x49 * x1097) * psi_dot) * mH),
-                    (x75 * x1130 - x95 * x1117 - x1123 * x225 - 2.0 * (x1131 * x231)
-                        + (x1136 + x1137 + x1138) * x192
-                        + (x4 * x1148 - x1139 - x1142 * x9 - x1146 * x98 - x218 * x1152
-                            + x221 * x1154) * x1 - x1156 * x226) * psi_dot
-                        - (x583 * x1 - x1100 * x117
-                            + (x118 * x1103 + (x119 * x1116 + x121 * x1112) * x5)
-                                * psi_dot) * mB
+                            * ((x1092 + (x1099 - x1096) * x1) * x2
+                                + (x16 * x1104 + x1108 * x11) * psi_dot)
+                        + mF
+                            * ((x189 * x487 + x93 * x492 + x190 * x483) * x2
+                                + (x31 * x1111 + x1112 * x30 - x20 * x1113) * psi_dot)
+                        + x99 * (-x493 * x3 - 2.0 * (phi_dot * x620))),
+                    -(x99 * (x493 * x45 - 2.0 * (phi_dot * x612))
+                        + mF
+                            * ((x483 * x976 - x973 * x492 + x975 * x487) * x8
+                                + psi_dot * (x52 * x1112 + x50 * x1111 + x1113 * x55))
+                        + mH
+                            * (psi_dot * (x1089 * x55 + x1091 * x49 + x47 * x1083)
+                                + x8 * (x629 * x469 - x449 * x973 + x466 * x322))
+                        + ((x1 * (x1096 - x1097 + x1098) - x1092) * x8
+                            + (x41 * x1104 + x1108 * x37) * psi_dot) * mB),
+                    psi_dot
+                        * ((x1125 + x1126 + x1127) * x194 - x1119 * x189
+                            - 2.0 * (x1120 * x223) + x93 * x1134
+                            + (x4 * x1138 - x1135 - x74 * x1142 - x1144 * x9
+                                + x208 * x1146 - x205 * x1150) * x1 - x70 * x1151
+                            - x190 * x1153)
+                        + x5 * (x527 - x1015 * x557 - x541 + x549 - x563) - x588 * x1
+                        - (psi_dot * ((x1108 * x120 + x118 * x1104) * x5 + x117 * x1095)
+                            + x573 * x1 - x1092 * x116) * mB - x1008 * x578
                         - mF
-                            * (x506 * x986
-                                + psi_dot * (x1089 * x102 + x103 * x1095 + x1096 * x91)
-                                + x989 * x511 + x985 * x502) - x592 * x1 - x1011 * x588
-                        - x595 * x333 - x1012 * x523
-                        + x5 * (x562 - x1009 * x542 - x532 - x552 + x573) + x582 * x331
-                        - mH
-                            * (x488 * x990 + x991 * x478 + x454 * x992
-                                + psi_dot * (x113 * x1097 + x1099 * x112 + x107 * x1098)),
-                    ((x19 * (x1125 - x1124 + x1126 + x1127 - x1128 + x1129) - x0 * x1117)
-                        * x98 - x1103 * x128 - x1156 * x233 - x4 * x1142 - x1152 * x221
-                        - x235 * x1123
-                        - (x1099 * x138 + x19 * (x111 * x1097 + x134 * x1098)) * mH
-                        - x1146 * x136 - x1148 * x9 - x218 * x1154 + x231 * x524
-                        - mF * (x1089 * x147 + x19 * (x1096 * x144 + x1095 * x142)))
-                        * psi_dot
-                        + g * (x129 * x1 - (x109 * x324 + x134 * x1) * mH - mF * x326),
-                    ((x1136 + phi_dot * x224) * x5
-                        - x19 * (x22 * x1123 + x1156 * x29 + x1117)
-                        - (-x1112 * x115 - xB * x1116) * mB + x0 * x1130
-                        - mF * (x1089 * x152 + x1095 * x159 + x1096 * x161)
-                        - mH * (x163 * x1099 + x166 * x1097 + x165 * x1098)) * psi_dot
-                        - x1159,
-                    x554,
-                    (x22 * x1156 + x607 * x331 - x1143 + (x1017 - x1144) * x436
-                        - x1123 * x29 - x1089 * x169 - x1099 * x168 - x1145) * psi_dot
-                        - x1160,
-                    -(x1125 * psi_dot),
+                            * (x487 * x985 + x483 * x986 + x980 * x492
+                                + (x111 * x1113 + x112 * x1111 + x1112 * x108) * psi_dot)
+                        - x330 * x584
+                        - (x466 * x987 + x989 * x469
+                            + psi_dot * (x1091 * x94 + x98 * x1083 + x86 * x1089)
+                            + x449 * x988) * mH - x1009 * x569 + x332 * x594,
+                    g * (x128 * x1 - mH * (x133 * x1 + x73 * x322) - x325 * mF)
+                        + psi_dot
+                            * (x74
+                                * (x19 * (x1128 - x1129 - x1130 + x1131 + x1132 + x1133)
+                                    - x0 * x1151) - x1095 * x127
+                                - mF * ((x1112 * x144 + x142 * x1111) * x19 + x1113 * x140)
+                                - (x137 * x1089 + x19 * (x133 * x1083 + x1091 * x76)) * mH
+                                - x208 * x1150 - x135 * x1142 - x205 * x1146 - x4 * x1144
+                                - x1119 * x248 - x9 * x1138 - x246 * x1153 + x223 * x570),
+                    psi_dot
+                        * ((x1125 + phi_dot * x220) * x5
+                            - (x1091 * x164 + x161 * x1089 + x163 * x1083) * mH
+                            - (x1153 * x29 + x1151 + x22 * x1119) * x19
+                            - (x150 * x1113 + x1112 * x157 + x159 * x1111) * mF
+                            - mB * (-xB * x1104 - x1108 * x114) + x0 * x1134) - x1156,
+                    x529,
+                    (x22 * x1153 + (x1013 - x1139) * x390 - x1089 * x166 - x1140
+                        - x1119 * x29 - x1141 - x1113 * x167 + x332 * x605) * psi_dot
+                        - x1157,
+                    -(psi_dot * x1132),
                     rR
                         * (psi_dot
-                            * (x624 - x5 * (x612 * x1163 + (x617 - 1.0) * x613)
-                                - x514 * x310)
+                            * (x623 - x5 * (x611 * x1160 + (x616 - 1.0) * x612)
+                                - x515 * x308)
                             + phi_dot
-                                * (x5 * (f64::sqrt(x172) * x616 + 2.0 * x615)
-                                    - (x623 * (3.0 * x609 - x173 + (2.0 - x1164) * x1)
-                                        + x618 * x621) * x1 - x622)) + x_dot * x1165,
+                                * (x5 * (f64::sqrt(x170) * x615 + 2.0 * x614)
+                                    - (x622 * (3.0 * x608 - x171 + (2.0 - x1161) * x1)
+                                        + x617 * x620) * x1 - x621)) + x_dot * x1162,
                     rR
-                        * ((-(2.0 * x625 - f64::sqrt(x172) * x628) * x5
-                            - (x618 * x613
-                                + x612 * ((x1164 - 2.0) * x1 + x173 - 3.0 * x609)) * x1
-                            - x614) * phi_dot
-                            + (-x5 * ((1.0 - x617) * x621 + x623 * x1163) - x619
-                                - x378 * x266) * psi_dot) + y_dot * x1165,
-                    x920 * x_dot
-                        - ((-x917 * x279 / f64::sqrt(x175)
-                            - x942 * x638 / f64::sqrt(x175) - x1166 * x331) * x75
-                            - x914 * x279 / f64::sqrt(x175)
+                        * ((-(2.0 * x624 - f64::sqrt(x170) * x627) * x5
+                            - (x617 * x612
+                                + x611 * ((x1161 - 2.0) * x1 + x171 - 3.0 * x608)) * x1
+                            - x613) * phi_dot
+                            + (-x5 * ((1.0 - x616) * x620 + x622 * x1160) - x618
+                                - x494 * x264) * psi_dot) + y_dot * x1162,
+                    x_dot * x903
+                        - (((-(x1163 / f64::powf(x173, 1.5) + x1164) * x317
+                            - x331 * x637 / f64::sqrt(x173)) * x2
+                            - x332 * x762 / f64::sqrt(x173)) * x93
+                            - x318 * x893 / f64::sqrt(x173)
+                            + f64::sqrt(x173)
+                                * (rR * (x5 * (x81 * x615 - x761) + x81 * x641)
+                                    + x100
+                                        * (((x135 * x615 + x755) * x5 + x809 + x135 * x641) * x0
+                                            + x19 * (x494 - x6 * x862))
+                                    + (x5 * x1165 + x622 * x629) * x105
+                                    + (x4 * x813 + x413 * x6) * x60)
                             - rF
-                                * (x272 * x1167
-                                    + x175
-                                        * (x1170 * x50 + x1181 * x225 + x1012 * x744 + x1011 * x748
-                                            + x1183 + x52 * x1184 + x226 * x1185 + x75 * x1188
-                                            + x8 * (x702 * x977 + x1189 + x703 * x976))
-                                    + x75
-                                        * (x1190 * x55 - 2.0 * (x638 * x1032) + x1188 * x272
-                                            + x1005 * x780 - 2.0 * (x787 * x331) - 2.0 * (x271 * x917)
-                                            + x1033 * x687) + x784 * x331 + x1191 * x55)
-                            + f64::sqrt(x175)
-                                * ((x1193 - x13 * x967) * x88
-                                    + x68 * (x965 + (x844 + x12 * x967 + x1194) * x0)
-                                    + rR * (x1171 - x625 + x1173 - x514) + x968)) * psi_dot
-                        + x789 * x1188
-                        - delta_dot
-                            * (x68
-                                * (x20 * x914 / f64::sqrt(x175)
-                                    + (-x1200 / f64::sqrt(x175)
-                                        - (x2 / f64::sqrt(x175) + x1035 / f64::powf(x175, 1.5))
-                                            * x639 - x1201 / f64::sqrt(x175)) * x75
-                                    + x1209 * f64::sqrt(x175))
-                                - rF
-                                    * ((x1188 * x369 - x1067 * x687
-                                        - (2.0 * (x331 * x739) + 2.0 * (x49 * x917)
-                                            + 2.0 * (x638 * x1066)) * x338 + x1197 * x55 - x1005 * x812)
-                                        * x75 + x1198 * x369
-                                        + x338 * (x175 * x1176 - 2.0 * (x49 * x914))
-                                        + (-x1199 - x812 * x331) * x55))
-                        - (f64::sqrt(x175)
-                            * ((x1206 - x13 * x1210) * x88
-                                + ((x1210 * x12 + x1213) * x0 - x1212) * x68 + x1210 * x78
-                                - rR * x713)
-                            + x75
-                                * (-x917 * x348 / f64::sqrt(x175)
-                                    - x1056 * x638 / f64::sqrt(x175) - x1214 * x331)
-                            - rF
-                                * (x1055 * x709
-                                    + x75
-                                        * (x8 * (2.0 * (x5 * x638) - x706 * x974) + x352 * x1188
-                                            + x1215 * x55 - 2.0 * (x917 * x45) - 2.0 * (x672 * x331)
-                                            + x687 * x1055)
-                                    + x175 * (x671 * x1066 - 0.5 * x853 + 0.5 * x854)
-                                    + x1198 * x352 + x331 * x708)
-                            - x914 * x348 / f64::sqrt(x175)) * theta_dot
-                        - ((rR * (x5 * (x61 * x616 - x724) + x61 * x645)
-                            + x68
-                                * (x19 * (x378 - x6 * x842)
-                                    + (x136 * x645 + x5 * (x616 * x136 + x718) + x796) * x0)
-                            + (x623 * x630 + x1216 * x5) * x88
-                            + (x4 * x885 + x391 * x6) * x78) * f64::sqrt(x175)
-                            - x320 * x914 / f64::sqrt(x175)
-                            - rF
-                                * (x313 * x1167
-                                    + x75
-                                        * (x1219 * x55 - 2.0 * (x917 * x312)
-                                            + x8 * (-2.0 * (x638 * x1046) - x757 * x974)
-                                            - 2.0 * (x753 * x331) + x313 * x1188 + x687 * x1045)
-                                    + x1220 * x55
-                                    + (x235 * x1181 + x233 * x1185
-                                        + x8 * (x734 * x977 - x1218 * x974 + x976 * x752)
-                                        - x1188 * x238) * x175 + x759 * x331)
-                            + x75
-                                * ((-x334 * x638 / f64::sqrt(x175)
-                                    - x319 * (x1221 + x1222 / f64::powf(x175, 1.5))) * x2
-                                    - x725 * x331 / f64::sqrt(x175))) * phi_dot,
-                    x920 * y_dot
+                                * (x332 * x785 + x1166 * x310
+                                    + x93
+                                        * (x8 * (-x973 * x781 - 2.0 * (x1044 * x637))
+                                            - 2.0 * (x332 * x786) + x1173 * x55 + x685 * x1045
+                                            + x1182 * x310 - 2.0 * (x900 * x311)) + x1183 * x55
+                                    + x173
+                                        * (x8 * (x975 * x775 - x973 * x1172 + x779 * x976)
+                                            + x248 * x1188 + x246 * x1189 - x1182 * x230))) * phi_dot
                         - theta_dot
-                            * (x75
-                                * (-x1223 * x331 - x356 * x917 / f64::sqrt(x175)
-                                    - x689 * x1059 / f64::sqrt(x175))
+                            * (((x1190 - x13 * x1192) * x105 + x1192 * x60 - rR * x753
+                                + ((x1192 * x12 + x1193) * x0 - x1195) * x100)
+                                * f64::sqrt(x173) - x350 * x893 / f64::sqrt(x173)
                                 - rF
-                                    * ((x20 * x1215 - x798 * x1055 - x1209 * x352
-                                        + 2.0 * (x855 * x331) - 2.0 * (x917 * x3)
-                                        + ((2.0 * x5 - x351 - x260) * x638 - x1224) * x2) * x75
-                                        - x851 * x331 + x20 * (x1055 * x638 + x352 * x917)
-                                        - x175 * (x1069 * x671 - 0.5 * x662 + 0.5 * x664))
-                                - x356 * x914 / f64::sqrt(x175)
-                                + f64::sqrt(x175)
-                                    * ((x1178 - x1194) * x88 + x1192 * x78 - rR * x839
-                                        + x68 * ((x1193 + x1175) * x0 - x1225)))
-                        - phi_dot
-                            * (f64::sqrt(x175)
-                                * (x68
-                                    * ((x136 * x613 - x685
-                                        + x8 * (theta_dot * x1007 + x406 * x71)) * x0
-                                        + x19 * (x35 * x636 + x514))
-                                    + rR * (x8 * (x420 + x406 * x315) + x61 * x613)
-                                    + (x4 * (x613 - x681) - x391 * x35) * x78
-                                    + (x1232 * x8 - x98 * x613) * x88)
-                                - rF
-                                    * (x75
-                                        * (x20 * x1219 - x798 * x1045 - x996 * x757
-                                            + 2.0 * (x831 * x331) + (x1226 - x1202 + x1208) * x313
-                                            + 2.0 * (x328 * x917)) + x20 * x1220 + x819 * x331
-                                        - x175
-                                            * (x235 * x1230 + x1231 * x233 + (x1218 * x75 + x756) * x2
-                                                - x1209 * x238))
-                                + (x1233 * x326 - x1050 * x639 / f64::sqrt(x175)) * x8
-                                - x332 * x849 / f64::sqrt(x175))
-                        - delta_dot
-                            * (x68
-                                * (f64::sqrt(x175) * x1188 - x914 * x55 / f64::sqrt(x175)
-                                    + (-x1167 / f64::sqrt(x175)
-                                        - (x687 / f64::sqrt(x175) + x866 / f64::powf(x175, 1.5))
-                                            * x331 - x1182 / f64::sqrt(x175)) * x75)
-                                - rF
-                                    * (x75
-                                        * (x338
-                                            * (2.0 * (x827 * x331) + 2.0 * (x25 * x917)
-                                                + 2.0 * (x1069 * x638)) - (x1209 + x1226) * x369
-                                            + x996 * x812 + x798 * x1067 + x1197 * x20) - x1227 * x370
-                                        + x20 * (x917 * x369 - x1199) + x331 * x873)) - x1209 * x789
-                        - (f64::sqrt(x175)
-                            * (x1227 * x88 + rR * (x961 + x1203 - x1204) + x68 * x1228
-                                + x714)
+                                    * ((x8 * (2.0 * (x637 * x5) - x973 * x704)
+                                        - 2.0 * (x332 * x670) - 2.0 * (x900 * x45) + x1196 * x55
+                                        + x1182 * x348 + x685 * x1054) * x93 + x1054 * x707
+                                        + x332 * x706 + x348 * x1199
+                                        + (x1064 * x669 - 0.5 * x841 + 0.5 * x842) * x173)
+                                + x93
+                                    * (-x900 * x350 / f64::sqrt(x173)
+                                        - x1200 * x3 / f64::sqrt(x173) - x332 * x1201))
+                        + x788 * x1182
+                        - (x100
+                            * (x1207 * f64::sqrt(x173)
+                                + x93
+                                    * (-x1208 / f64::sqrt(x173)
+                                        - (x2 / f64::sqrt(x173) + x1034 / f64::powf(x173, 1.5))
+                                            * x638 - x1209 / f64::sqrt(x173))
+                                + x20 * x893 / f64::sqrt(x173))
                             - rF
-                                * (x883 * x331
-                                    + x75
-                                        * (x638 * (x1036 + 2.0 * x1035 + 2.0 * x1037 + 2.0 * x1038)
-                                            - x798 * x1033 + 2.0 * (x917 * x285) - x996 * x780
-                                            - x1209 * x272 + 2.0 * (x877 * x331) + x20 * x1190)
-                                    - x175
-                                        * (x1200 + x1170 * x31 + x1012 * x828 + x1231 * x226
-                                            + x1209 * x75 + x1184 * x30 + x1201
-                                            + (x778 + x779 + x639) * x2 + x225 * x1230 + x1011 * x830)
-                                    + x20 * x1191) - x914 * x287 / f64::sqrt(x175)
-                            + x75
-                                * (-x917 * x287 / f64::sqrt(x175) - x1234 - x1235 * x331))
-                            * psi_dot,
-                    -(delta_dot * x1241
-                        + phi_dot
-                            * (x68 * (x0 * (x847 - x629) - x72 * x842) + x1242
-                                + x1243 * x553 + x80 * x690
-                                + rF
-                                    * (2.0 * (x917 * x331 / f64::sqrt(x175))
-                                        + x1189 / f64::sqrt(x175)
-                                        + x75
-                                            * ((x19 * (x629 - x845 - x846) - x1186) / f64::sqrt(x175)
-                                                - x974 * x639 / f64::powf(x175, 1.5)
-                                                + (x1245 + 2.0 * x1246) * x331)))
+                                * ((x1182 * x370 + x1212 * x55 - x1065 * x685
+                                    - (2.0 * (x900 * x49) + 2.0 * (x637 * x1064)
+                                        + 2.0 * (x332 * x737)) * x337 - x799 * x1004) * x93
+                                    + (-x332 * x799 - x1213) * x55
+                                    + x337 * (x173 * x1185 - 2.0 * (x49 * x893))
+                                    + x370 * x1199)) * delta_dot
+                        - psi_dot
+                            * ((-x941 * x637 / f64::sqrt(x173)
+                                - x900 * x274 / f64::sqrt(x173) - x1214 * x332) * x93
+                                - x893 * x274 / f64::sqrt(x173)
+                                + f64::sqrt(x173)
+                                    * ((x1216 - x13 * x962) * x105
+                                        + x100 * (x961 + (x861 + x12 * x962 + x1217) * x0)
+                                        + rR * (x1174 - x624 + x1176 - x515) + x963)
+                                - rF
+                                    * (x93
+                                        * (x742 * x1004 + x276 * x1182 + x1218 * x55
+                                            - 2.0 * (x332 * x739) - 2.0 * (x637 * x1032) + x685 * x1029
+                                            - 2.0 * (x900 * x278)) + x1219 * x55
+                                        + x173
+                                            * (x1198 + x1170 * x52 + x1169 * x50 + x189 * x1188
+                                                + x1182 * x93 + x1008 * x734 + x1009 * x738 + x190 * x1189
+                                                + (x975 * x701 + x702 * x976 + x1220) * x8) + x276 * x1166
+                                        + x332 * x746)),
+                    x903 * y_dot
+                        - (f64::sqrt(x173)
+                            * (x1221 * x105 + rR * (x958 + x1191 - x1202) + x754
+                                + x100 * x1222) - x893 * x280 / f64::sqrt(x173)
+                            + (-x332 * x1223 - x1224 - x900 * x280 / f64::sqrt(x173))
+                                * x93
+                            - rF
+                                * (x93
+                                    * (x637 * (2.0 * x1035 + 2.0 * x1036 + 2.0 * x1034 + x1037)
+                                        + x20 * x1218 + 2.0 * (x900 * x284) - x811 * x1029
+                                        - x276 * x1207 - x742 * x995 + 2.0 * (x332 * x830))
+                                    + x1219 * x20
+                                    - x173
+                                        * (x2 * (x740 + x638 + x741) + x1225 * x189 + x1170 * x30
+                                            + x190 * x1226 + x1009 * x824 + x1008 * x829 + x1207 * x93
+                                            + x1208 + x1209 + x1169 * x31) + x836 * x332)) * psi_dot
+                        - (x8 * (x325 * x1228 - x638 * x1049 / f64::sqrt(x173))
+                            - rF
+                                * (x20 * x1183
+                                    - (x248 * x1225 + (x780 + x93 * x1172) * x2 - x1207 * x230
+                                        + x1226 * x246) * x173 + x332 * x874
+                                    + (2.0 * (x327 * x900) - x781 * x995
+                                        + x310 * (x1227 + x1205 - x1206) + x20 * x1173
+                                        + 2.0 * (x875 * x332) - x811 * x1045) * x93)
+                            + f64::sqrt(x173)
+                                * (x100
+                                    * ((x135 * x612 + x8 * (theta_dot * x1007 + x67 * x418)
+                                        - x681) * x0 + x19 * (x515 + x35 * x635))
+                                    + rR * (x8 * (x418 * x312 + x422) + x81 * x612)
+                                    + (x8 * x1229 - x74 * x612) * x105
+                                    + (x4 * (x612 - x677) - x413 * x35) * x60)
+                            - x333 * x869 / f64::sqrt(x173)) * phi_dot
+                        - theta_dot
+                            * ((-x1230 * x332 - x687 * x1057 / f64::sqrt(x173)
+                                - x355 * x900 / f64::sqrt(x173)) * x93
+                                - rF
+                                    * ((x900 * x348 + x637 * x1054) * x20
+                                        - (x1067 * x669 - 0.5 * x660 + 0.5 * x662) * x173
+                                        + x93
+                                            * ((x637 * (2.0 * x5 - x347 - x253) - x1231) * x2
+                                                + 2.0 * (x843 * x332) - x1207 * x348 + x1196 * x20
+                                                - 2.0 * (x900 * x3) - x811 * x1054) - x332 * x846)
+                                + (x100 * ((x1216 + x1184) * x0 - x1232)
+                                    + (x1178 - x1217) * x105 + x1215 * x60 - rR * x866)
+                                    * f64::sqrt(x173) - x355 * x893 / f64::sqrt(x173))
+                        - (x100
+                            * (f64::sqrt(x173) * x1182 - x893 * x55 / f64::sqrt(x173)
+                                + (-x1166 / f64::sqrt(x173) - x1197 / f64::sqrt(x173)
+                                    - x332
+                                        * (x879 / f64::powf(x173, 1.5) + x685 / f64::sqrt(x173)))
+                                    * x93)
+                            - rF
+                                * (x93
+                                    * ((2.0 * (x637 * x1067) + 2.0 * (x900 * x25)
+                                        + 2.0 * (x332 * x818)) * x337 - x370 * (x1207 + x1227)
+                                        + x799 * x995 + x20 * x1212 + x811 * x1065)
+                                    + x20 * (x900 * x370 - x1213) + x332 * x884 - x1221 * x367))
+                            * delta_dot - x1207 * x788,
+                    -(phi_dot
+                        * (x1233 + x910 * x1 + x1234 * x528
+                            + x100 * ((x859 - x628) * x0 - x862 * x91)
+                            + rF
+                                * (2.0 * (x332 * x900 / f64::sqrt(x173))
+                                    + x93
+                                        * (x332 * (x1236 + 2.0 * x1237)
+                                            + ((x628 - x857 - x858) * x19 - x1180) / f64::sqrt(x173)
+                                            - x638 * x973 / f64::powf(x173, 1.5))
+                                    + x1220 / f64::sqrt(x173)))
                         + theta_dot
-                            * (x1247 + x1232 * x154
+                            * (x5 * (x1238 - x100 * x774) + x1239
                                 + rF
-                                    * ((x630 * x1063 - x906 * x75 / f64::sqrt(x175)) * x745
-                                        + x19
-                                            * (((-x630
-                                                * (3.0 * (x1222 / f64::powf(x175, 2.5))
-                                                    + x917 / f64::powf(x175, 1.5))
-                                                - x1248 / f64::powf(x175, 1.5)
-                                                - x1249 / f64::powf(x175, 1.5)) * x75
-                                                - 3.0 * (x630 * x914 / f64::powf(x175, 1.5))
-                                                - x1232 / f64::sqrt(x175)) * x75
-                                                - x630 * x917 / f64::sqrt(x175) - x1249 / f64::sqrt(x175)
-                                                - x1248 / f64::sqrt(x175))) + (-x891 - x68 * x730) * x5)),
+                                    * ((x629 * x1061 - x93 * x896 / f64::sqrt(x173)) * x765
+                                        + (x93
+                                            * ((-x1240 / f64::powf(x173, 1.5)
+                                                - (x900 / f64::powf(x173, 1.5)
+                                                    + 3.0 * (x1163 / f64::powf(x173, 2.5))) * x629
+                                                - x1241 / f64::powf(x173, 1.5)) * x93
+                                                - 3.0 * (x629 * x893 / f64::powf(x173, 1.5))
+                                                - x1229 / f64::sqrt(x173)) - x1241 / f64::sqrt(x173)
+                                            - x900 * x629 / f64::sqrt(x173) - x1240 / f64::sqrt(x173))
+                                            * x19) + x152 * x1229) + x1247 * delta_dot),
                 ],
                 [
-                    -((x18 * x454 + x1357 * x347 + x25 * x1373 + x1381 * x28
-                        - x20 * x1385) * mH
-                        + (x1390 * x11 + x16 * x1391 - x16 * x414 - x1392 * x3) * mB
+                    -((x11 * x1359 - x1354 * x3 - x16 * x509 + x16 * x1360) * mB
+                        + (x1386 * x25 - x20 * x1380 + x349 * x1387 + x1388 * x28
+                            + x18 * x469) * mH
+                        + (x30 * x1399 - x20 * x1402 - x651 * x492 + x483 * x1251
+                            + x1250 * x487 + x31 * x1403) * mF),
+                    -((x269 * x1387 + x1386 * x49 + x1388 * x47 + x1380 * x55
+                        + x354 * x469) * mH
                         + mF
-                            * (x1252 * x506 - x20 * x1400 - x511 * x656 + x502 * x1253
-                                + x1405 * x31 + x1406 * x30)),
-                    -(mF
-                        * (x1400 * x55 + x1405 * x50 + x52 * x1406 + x506 * x1254
-                            - x511 * x862 + x1255 * x502)
-                        + (x1390 * x37 + x41 * x1391 + x273 * x414 + x1392 * x45) * mB
-                        + (x454 * x355 + x1357 * x274 + x49 * x1373 + x1381 * x47
-                            + x1385 * x55) * mH),
-                    x75 * x1418
-                        - ((x121 * x1407 + x119 * x1391 + rR * x1107) * x5
-                            + (x405 * x1259 + x1392 * x117) * x1) * mB
-                        - (x1271 * x488 + x107 * x1381 + x454 * x1272 + x1385 * x112
-                            + x113 * x1373 + x1273 * x478) * mH
+                            * (x483 * x1253 - x492 * x851 + x487 * x1252 + x52 * x1399
+                                + x1402 * x55 + x50 * x1403)
+                        + (x268 * x509 + x1354 * x45 + x41 * x1360 + x1359 * x37) * mB),
+                    x93 * x1413
+                        - mB
+                            * ((x120 * x1414 + x118 * x1360 + rR * x1099) * x5
+                                + (x1354 * x116 + x510 * x1257) * x1)
+                        + (x1424 * x9 - x1295 * x578 - x67 * x548 - x1294 * x569
+                            - x74 * x1419 - x205 * (x1421 + x1422)
+                            + x4 * (x1425 + x524 - 2.0 * x525 + x1428) - x1429
+                            + x208 * x1431 - x599) * x1
                         - mF
-                            * (x1405 * x91 + x511 * x1269 + x1267 * x506 + x1266 * x502
-                                + x1406 * x103 + x1400 * x102) - x95 * x1420
-                        - (x1421 + x1423 + (x590 - x1424 - x565) * x381) * x5
-                        - x225 * x1429
-                        + (x9 * x1430 - x1295 * x588 - x1294 * x523 - x1435 * x98
-                            + x221 * x1437 - x599 - x1438 - x71 * x561
-                            - x218 * (x1440 + x1441)
-                            + x4 * (x570 + x1442 - 2.0 * x571 + x1444)) * x1
-                        - x1447 * x226,
-                    x9 * (2.0 * x571 - x1442 - x568 - x1444 - x569)
-                        - (x1392 * x127 + x405 * x117) * mB - x1435 * x136
-                        - (x478 * x1276
-                            + (x1157 * x488 + x134 * x1381
-                                + (x1373 * x98 - x454 * x136) * x109) * x19 + x138 * x1385)
-                            * mH + (x551 - x1440 - x1441) * x221
+                            * (x487 * x1266 + x111 * x1402 + x483 * x1267 + x112 * x1403
+                                + x1261 * x492 + x108 * x1399) - x1433 * x70 - x189 * x1438
+                        - (x1439 + x1440 + (x586 - x1426 - x520) * x379) * x5
+                        - x190 * x1443
+                        - (x449 * x1269 + x86 * x1380 + x1270 * x469 + x1386 * x94
+                            + x466 * x1272 + x98 * x1388) * mH,
+                    x578 * x1303 - x1419 * x135 - x248 * x1438
+                        + (x540 - x1421 - x1422) * x208
+                        + x0 * (x135 * x584 - x74 * x1433) - x569 * x1304
                         - mF
-                            * (x1400 * x147 + x511 * x1280
-                                + (x1406 * x142 + x1405 * x144 + x502 * x1279
-                                    + x506 * x1278) * x19) + x1307 * x588 - x1159 - x1447 * x233
-                        - x1306 * x523 - x562 - x235 * x1429
-                        + x0 * (x595 * x136 - x1420 * x98) + x4 * x1430 - x218 * x1437
+                            * (x1402 * x140
+                                + (x142 * x1403 + x483 * x1275 + x144 * x1399
+                                    + x487 * x1276) * x19 + x1277 * x492) + x4 * x1424
+                        - x246 * x1443 + x9 * (2.0 * x525 - x1425 - x517 - x1428 - x523)
                         + x19
-                            * ((x1409 - x1408 + x1410 - x1412 + x1414 - x1417) * x98
-                                + x582 * x136),
-                    x0 * x1418 - mH * (x1373 * x166 + x1381 * x165 + x163 * x1385)
-                        - g
-                            * ((x137 * x0 + x1270) * mH + mF * (x890 + x1344)
-                                + x126 * mB) * x1
-                        - x19 * (x1420 + x1447 * x29 + x22 * x1429)
-                        - (-x1407 * x115 - xB * x1391) * mB - x1421 - x1423
-                        - mF * (x1406 * x159 + x1405 * x161 + x152 * x1400)
-                        + x381 * (x1443 + x566),
+                            * (x135 * x594
+                                + x74 * (x1407 - x1406 - x1408 - x1409 + x1410 + x1412))
+                        - x549 - x205 * x1431 - (x126 * x1354 + x510 * x116) * mB
+                        - (x19
+                            * (x133 * x1388 + x73 * (x1386 * x74 - x135 * x469)
+                                + x466 * x1155) + x137 * x1380 + x449 * x1274) * mH - x1156,
+                    x0 * x1413 - x19 * (x1443 * x29 + x1433 + x22 * x1438)
+                        - (-x1414 * x114 - xB * x1360) * mB - x1439
+                        - (mF * x1340 + mH * (x73 * x321 + x1268) + x125 * mB) * g * x1
+                        - mF * (x1399 * x157 + x159 * x1403 + x150 * x1402) - x1440
+                        - mH * (x161 * x1380 + x1388 * x163 + x1386 * x164)
+                        + x379 * (x1427 + x521),
                     0.0,
-                    x22 * x1447 - x1429 * x29 + (x1413 - x1411 * IHyy) * x436 - x1431
-                        - x1400 * x169 + x19 * (x1448 + x1359 * x560) - x1385 * x168
-                        - x1434,
-                    -x1410,
+                    x22 * x1443 - x1402 * x167 - x1380 * x166 - x1417 - x1418
+                        + (x1411 - x1392 * IHyy) * x390 - x1438 * x29
+                        + x19 * (x1444 + x1362 * x547),
+                    -x1407,
                     0.0,
                     0.0,
-                    x_dot * x1475
+                    x_dot * x1450
+                        - theta_dot
+                            * ((x957 - rR * x645 + x100 * (x959 * x0 - x777 * x934))
+                                * f64::sqrt(x173)
+                                - rF
+                                    * (x1451 * x55
+                                        + (x1457 * x55 - x1460 * x348 + 2.0 * (x1447 * x45)) * x93
+                                        + x354 * x1461
+                                        + ((x736 * x1333
+                                            - x74 * (2.0 * x687 - x686 + 2.0 * (x93 * x670) - x705))
+                                            * x1 - x1462 * x269) * x19) + x350 * x1449 / f64::sqrt(x173)
+                                + (x1447 * x350 / f64::sqrt(x173) + x1060 * x1201
+                                    - x637 * x1335 / f64::sqrt(x173)) * x93)
                         - psi_dot
-                            * (x958
-                                - ((2.0 * (x1451 * x271) - 2.0 * (x638 * x1318)
-                                    + x687 * x1320 + x1458 * x55 - x1461 * x272
-                                    + x19 * (2.0 * (x630 * x787) - x274 * x780)) * x75
-                                    + x175
-                                        * (x52 * x1456 + x50 * x1457 + x703 * x1255 + x702 * x1254
-                                            - x638 * x862 - x1451 * x55 + x1464 * x225
-                                            + (x748 * x1295 + x1294 * x744 - x1317 * x687) * x1
-                                            + x1465 * x226 - x1461 * x75)
-                                    + (x630 * (2.0 * x782 - x781 - x783) - x1466 * x272) * x19
-                                    + x1467 * x55) * rF
-                                + x75
-                                    * (x1166 * x1062 - x638 * x947 / f64::sqrt(x175)
-                                        + x1451 * x279 / f64::sqrt(x175))
-                                + x1468 * x279 / f64::sqrt(x175)) - x789 * x1461
-                        - (f64::sqrt(x175)
-                            * (x68 * (x0 * (x1216 * x1 + x722) - x1212) + x80 * x615
-                                + (x890 * x717 + x616 * x364) * x1 + x719 * x88)
-                            + x320 * x1468 / f64::sqrt(x175)
-                            + x75
-                                * (((x711 / f64::powf(x175, 1.5) + x725 / f64::sqrt(x175))
-                                    * x1317 - x603 * x1226 / f64::sqrt(x175)) * x1
-                                    + x1451 * x320 / f64::sqrt(x175))
-                            - rF
-                                * (x175
-                                    * (x1306 * x744 + x235 * x1464 + x1469 * x55 + x1255 * x752
-                                        - x748 * x1307 + x50 * x1470 + x52 * x1471 + x734 * x1254
-                                        + x1465 * x233
-                                        + x19
-                                            * ((x687 - theta_dot * x862) * x136
-                                                + (x1459 + 2.0 * x1460 + theta_dot * x55) * x98))
-                                    + x75
-                                        * (x687 * x1331 + x19 * (2.0 * (x753 * x630) - x757 * x274)
-                                            + x1473 * x55 - x1461 * x313 - 2.0 * (x1332 * x638)
-                                            + 2.0 * (x1451 * x312))
-                                    + ((2.0 * x755 - x754 - x758) * x630 - x1466 * x313) * x19
-                                    + x1474 * x55)) * phi_dot
+                            * (x93
+                                * (x1447 * x274 / f64::sqrt(x173)
+                                    - x637 * x946 / f64::sqrt(x173) + x1214 * x1060)
+                                + x274 * x1449 / f64::sqrt(x173) + x955
+                                - rF
+                                    * (x173
+                                        * (x1465 * x189 + x1455 * x50 + x190 * x1466 + x702 * x1253
+                                            - x1447 * x55
+                                            + (x1294 * x738 + x734 * x1295 - x1313 * x685) * x1
+                                            - x1460 * x93 + x52 * x1456 - x637 * x851 + x1252 * x701)
+                                        + x1467 * x55
+                                        + (x19 * (2.0 * (x739 * x629) - x742 * x269) - x276 * x1460
+                                            - 2.0 * (x1316 * x637) + x685 * x1315 + x1468 * x55
+                                            + 2.0 * (x278 * x1447)) * x93
+                                        + x19 * ((2.0 * x745 - x743 - x744) * x629 - x276 * x1469)))
                         - delta_dot
-                            * (x68
+                            * (x100
                                 * (x19
-                                    * (x630 * (x833 * x892 + x875 / f64::sqrt(x175))
-                                        + x347 * x639 / f64::sqrt(x175))
-                                    + x282 * x1451 / f64::sqrt(x175) - f64::sqrt(x175) * x1478)
-                                - (x860 * x370
-                                    + x19 * (x630 * (2.0 * x801 - x802 + x813) - x1466 * x369)
-                                    + x1479 * x55
-                                    + x75
-                                        * (x687 * x1347 - x1461 * x369
-                                            + (2.0 * (x1062 * x739) - 2.0 * (x638 * x355)
-                                                + 2.0 * (x1451 * x49)) * x338 - x1480 * x55 + x812 * x862))
-                                    * rF)
-                        - theta_dot
-                            * (x1468 * x348 / f64::sqrt(x175)
+                                    * (x349 * x638 / f64::sqrt(x173)
+                                        + (x825 * x889 + x826 / f64::sqrt(x173)) * x629)
+                                    + x281 * x1447 / f64::sqrt(x173) - f64::sqrt(x173) * x1472)
                                 - rF
-                                    * (((x786 * x1338
-                                        - (2.0 * (x75 * x672) - x688 + 2.0 * x689 - x707) * x98)
-                                        * x1 - x1481 * x274) * x19
-                                        + x75 * (2.0 * (x1451 * x45) + x1482 * x55 - x1461 * x352)
-                                        - x1451 * x1337 + x1483 * x355)
-                                + f64::sqrt(x175)
-                                    * (x960 - rR * x647 + x68 * (x0 * x962 - x750 * x935))
-                                + x75
-                                    * (x1214 * x1062 - x638 * x1336 / f64::sqrt(x175)
-                                        + x1451 * x348 / f64::sqrt(x175))),
-                    x789 * x1478
+                                    * (x853 * x367 + x1473 * x55
+                                        + (x799 * x851 - x1474 * x55 - x1460 * x370
+                                            + (2.0 * (x1060 * x737) + 2.0 * (x49 * x1447)
+                                                - 2.0 * (x637 * x354)) * x337 + x685 * x1344) * x93
+                                        + ((2.0 * x790 + x800 - x801) * x629 - x1469 * x370) * x19))
+                        - ((x318 * x1447 / f64::sqrt(x173)
+                            + (x1313
+                                * (x762 / f64::sqrt(x173) + x748 / f64::powf(x173, 1.5))
+                                - x1200 * x2 / f64::sqrt(x173)) * x1) * x93
+                            - rF
+                                * (x173
+                                    * (x738 * x1304 + x775 * x1252
+                                        + (x74 * (x1458 + 2.0 * x1459 + theta_dot * x55)
+                                            + (x685 - theta_dot * x851) * x135) * x19 - x734 * x1303
+                                        + x1466 * x246 + x50 * x1475 + x779 * x1253 + x1476 * x55
+                                        + x52 * x1477 + x1465 * x248) + x1478 * x55
+                                    + (x685 * x1328 - x1460 * x310 + 2.0 * (x1447 * x311)
+                                        + x1480 * x55 + x19 * (2.0 * (x786 * x629) - x269 * x781)
+                                        - 2.0 * (x1327 * x637)) * x93
+                                    + x19 * ((2.0 * x783 - x782 - x784) * x629 - x1469 * x310))
+                            + x318 * x1449 / f64::sqrt(x173)
+                            + f64::sqrt(x173)
+                                * (x79 * x614 + (x888 * x750 + x615 * x363) * x1
+                                    + x100 * ((x1165 * x1 + x749) * x0 - x1195) + x756 * x105))
+                            * phi_dot - x788 * x1460,
+                    x788 * x1472
                         - psi_dot
-                            * ((x1451 * x287 / f64::sqrt(x175) - x1484 + x1062 * x1235)
-                                * x75 + x1468 * x287 / f64::sqrt(x175)
-                                - (x19 * (x630 * x963 + x1489 * x272)
-                                    - x175
-                                        * (x30 * x1456 - x656 * x638 + x702 * x1252
-                                            + (x830 * x1295 - x798 * x1317 + x828 * x1294) * x1
-                                            + x1487 * x226 + x1451 * x20 - x75 * x1478 + x31 * x1457
-                                            + x1488 * x225 + x703 * x1253)
-                                    + x75
-                                        * (x1458 * x20 - x798 * x1320
-                                            + x19 * (x347 * x780 - 2.0 * (x877 * x630))
-                                            - 2.0 * (x1451 * x285) + x1478 * x272
-                                            + 2.0 * (x638 * x1322)) + x1467 * x20) * rF + x659)
+                            * ((x1447 * x280 / f64::sqrt(x173) - x1481 + x1060 * x1223)
+                                * x93
+                                - rF
+                                    * ((x1468 * x20 + x19 * (x349 * x742 - 2.0 * (x629 * x830))
+                                        - 2.0 * (x284 * x1447) - x811 * x1315 + 2.0 * (x1319 * x637)
+                                        + x276 * x1472) * x93 + x19 * (x960 * x629 + x276 * x1482)
+                                        - (x20 * x1447 - x93 * x1472 + x190 * x1485 + x189 * x1486
+                                            + x1456 * x30
+                                            + (x1294 * x824 + x1295 * x829 - x811 * x1313) * x1
+                                            + x31 * x1455 - x637 * x651 + x702 * x1251 + x1250 * x701)
+                                            * x173 + x1467 * x20) + x280 * x1449 / f64::sqrt(x173)
+                                + x657) + y_dot * x1450
                         - phi_dot
-                            * (x849 * x1287 / f64::sqrt(x175)
-                                + x8
-                                    * (x638 * x1
-                                        * (x1317 * x326 * x892 - x75 * x1059 / f64::sqrt(x175))
-                                        - x1452 * x326 / f64::sqrt(x175))
+                            * (f64::sqrt(x173)
+                                * ((x1238 * x1 + x528 * x363) * x8 + x515 * x363
+                                    + x100 * (x0 * x964 - x1232) + x860 * x105)
                                 - rF
-                                    * (x75
-                                        * (2.0 * (x638 * x1334) - 2.0 * (x1451 * x328)
-                                            + x313 * x1478 - x798 * x1331 + x20 * x1473
-                                            + (x347 * x757 - 2.0 * (x630 * x831)) * x19)
-                                        + (x964 * x630 + x1489 * x313) * x19 + x20 * x1474
-                                        - x175
-                                            * (x235 * x1488 - x20 * x1469 + x1487 * x233 + x752 * x1253
-                                                - x830 * x1307 + x734 * x1252 + x31 * x1470 + x1471 * x30
+                                    * (x19 * (x310 * x1482 + x629 * x965)
+                                        - x173
+                                            * (x824 * x1304 + x1485 * x246 + x248 * x1486 - x20 * x1476
                                                 + x19
-                                                    * ((2.0 * x1476 + x1477 - x20 * theta_dot) * x98
-                                                        + (x798 - theta_dot * x656) * x136) + x1306 * x828))
-                                + f64::sqrt(x175)
-                                    * ((x966 * x0 - x1225) * x68 + x848 * x88
-                                        + (x553 * x364 - x890 * x690) * x8 + x514 * x364))
+                                                    * ((x1470 + 2.0 * x1471 - x20 * theta_dot) * x74
+                                                        + (x811 - theta_dot * x651) * x135) + x779 * x1251
+                                                - x1303 * x829 + x1250 * x775 + x1477 * x30 + x31 * x1475)
+                                        + (x20 * x1480 + x310 * x1472 - x811 * x1328
+                                            - 2.0 * (x327 * x1447) + 2.0 * (x1330 * x637)
+                                            + x19 * (x349 * x781 - 2.0 * (x875 * x629))) * x93
+                                        + x20 * x1478)
+                                + x8
+                                    * (x637
+                                        * (x325 * x1313 * x889 - x93 * x1057 / f64::sqrt(x173)) * x1
+                                        - x325 * x1448 / f64::sqrt(x173))
+                                + x869 * x1284 / f64::sqrt(x173))
                         - delta_dot
-                            * (x68
-                                * (x1451 * x270 / f64::sqrt(x175) - f64::sqrt(x175) * x1461
+                            * (x100
+                                * (x1447 * x277 / f64::sqrt(x173) - x1460 * f64::sqrt(x173)
                                     + x19
-                                        * (x630 * (x785 / f64::sqrt(x175) + x709 * x892)
-                                            + x274 * x639 / f64::sqrt(x175)))
-                                - (x75
-                                    * (x338
-                                        * (2.0 * (x18 * x638) - 2.0 * (x827 * x1062)
-                                            - 2.0 * (x1451 * x25)) - x812 * x656 - x798 * x1347
-                                        - x1480 * x20 + x1478 * x369) - x370 * x652 + x20 * x1479
-                                    + x19 * (x630 * x957 + x1489 * x369)) * rF)
-                        - theta_dot
-                            * (f64::sqrt(x175)
-                                * (x769 - rR * x766 + x68 * (x772 * x0 - x750 * x277))
+                                        * (x638 * x269 / f64::sqrt(x173)
+                                            + (x889 * x707 + x735 / f64::sqrt(x173)) * x629))
                                 - rF
-                                    * (x19
-                                        * (x347 * x1481
-                                            + (-x1338 * x876 - (x851 - 2.0 * (x855 * x75)) * x98) * x1)
-                                        - x75 * (-x352 * x1478 - 2.0 * (x1451 * x3) - x20 * x1482)
-                                        - x1483 * x18 + x1451 * x1341)
-                                + x356 * x1468 / f64::sqrt(x175)
-                                + x75
-                                    * (x1223 * x1062 - x1342 * x638 / f64::sqrt(x175)
-                                        + x1451 * x356 / f64::sqrt(x175))) + y_dot * x1475,
-                    -(((theta_dot * x80 - x750 * x146
-                        + (x19
-                            * (x893 * x136
-                                - (x1449 / f64::sqrt(x175) + x1451 / f64::sqrt(x175)
-                                    + x75
-                                        * ((x1451 / f64::powf(x175, 1.5)
-                                            + x1449 / f64::powf(x175, 1.5)
-                                            + x630
-                                                * (x745 / f64::powf(x175, 1.5)
-                                                    + 3.0 * (x19 * x639 / f64::powf(x175, 2.5)))) * x75
-                                            + 3.0 * (x1468 / f64::powf(x175, 1.5)))
-                                    + x1450 / f64::sqrt(x175)) * x98) - x1472 / f64::sqrt(x175))
-                            * rF) * x1 + x1242 - x890 * x553 + x847 * x362) * theta_dot
+                                    * (x20 * x1473 + (x629 * x966 + x370 * x1482) * x19
+                                        + x93
+                                            * (x370 * x1472 - x20 * x1474
+                                                + (2.0 * (x18 * x637) - 2.0 * (x1060 * x818)
+                                                    - 2.0 * (x25 * x1447)) * x337 - x799 * x651 - x811 * x1344)
+                                        - x655 * x367))
+                        - theta_dot
+                            * (x355 * x1449 / f64::sqrt(x173)
+                                + x93
+                                    * (x1230 * x1060 - x637 * x1337 / f64::sqrt(x173)
+                                        + x355 * x1447 / f64::sqrt(x173))
+                                - (x19
+                                    * ((-x827 * x1333 - x74 * (x846 - 2.0 * (x843 * x93))) * x1
+                                        + x349 * x1462) - x18 * x1461 + x1451 * x20
+                                    - (-x20 * x1457 - x348 * x1472 - 2.0 * (x1447 * x3)) * x93)
+                                    * rF
+                                + (x722 - rR * x712 + (x0 * x716 - x777 * x272) * x100)
+                                    * f64::sqrt(x173)),
+                    -((x1233 + x859 * x361
+                        + (rF
+                            * (x19
+                                * (x135 * x890
+                                    - (x1445 / f64::sqrt(x173) + x1446 / f64::sqrt(x173)
+                                        + x1447 / f64::sqrt(x173)
+                                        + x93
+                                            * (3.0 * (x1449 / f64::powf(x173, 1.5))
+                                                + (x629
+                                                    * (3.0 * (x638 * x19 / f64::powf(x173, 2.5))
+                                                        + x765 / f64::powf(x173, 1.5))
+                                                    + x1447 / f64::powf(x173, 1.5)
+                                                    + x1446 / f64::powf(x173, 1.5)) * x93)) * x74)
+                                - x1479 / f64::sqrt(x173)) - x891 * x135 + x910) * x1
+                        - x888 * x528) * theta_dot
+                        + phi_dot
+                            * (rF
+                                * (x19
+                                    * (x896 * x890 + ((-x1236 - x1237) * x93 - x1164) * x629)
+                                    - (x19 * x1229 + x896 * x765) * x93 / f64::sqrt(x173)
+                                    - x1051 * x1447) + x100 * (x0 * x1229 - x5 * x774) + x1239
+                                + x5 * x1238)
                         + delta_dot
                             * (rF
-                                * ((x1211 - x1453) * x75 / f64::sqrt(x175) - x1451 * x1071
-                                    + (x0 * x893 + (x75 * x1491 - x1492) * x19) * x630) - x1490)
-                        + (x1247 - x890 * x641
-                            + rF
-                                * ((x630 * (x75 * (-x1245 - x1246) - x1221) + x906 * x893)
-                                    * x19 - x1451 * x1052
-                                    - x75 * (x906 * x745 + x1232 * x19) / f64::sqrt(x175))
-                            + x68 * (x1232 * x0 - x5 * x730)) * phi_dot),
+                                * ((x0 * x890 + (x93 * x1489 - x1488) * x19) * x629
+                                    + x93 * (x1194 - x1453) / f64::sqrt(x173) - x1447 * x1069)
+                                - x1487)),
                 ],
                 [
                     0.0,
                     0.0,
-                    (x221 * x1494 - x218 * (x547 - x1493) - x1438) * x1,
-                    (x550 + x1493) * x221 - x218 * x1494,
+                    (x208 * x1491 - x205 * (x534 - x1490) - x1429) * x1,
+                    (x539 + x1490) * x208 - x205 * x1491,
                     0.0,
                     0.0,
                     0.0,
@@ -5821,375 +5798,379 @@ pub mod lagrange {
                     0.0,
                 ],
                 [
-                    -((x478 * x1500 - x20 * x1574 + x1577 * x28 + x1578 * x25) * mH
-                        + mF * (x1582 * x30 + x31 * x1586 + x511 * x1500 - x20 * x1593)),
-                    -((x50 * x1586 + x1593 * x55 - x511 * x47 + x52 * x1582) * mF
-                        + (x1574 * x55 + x1578 * x49 - x478 * x47 + x1577 * x47) * mH),
-                    -x1598 * x225 - x193 * x1602 - x75 * x1606
-                        - x95 * (x1607 + x1608 - x1609) - x95 * x582
-                        - mF
-                            * (x506 * x1509 + x1592 * x102 + x103 * x1582 + x1507 * x502
-                                + x1586 * x91 - x511 * x90)
-                        - (x1505 * x488 + x113 * x1578 - x478 * x107 + x107 * x1577
-                            + x112 * x1610 - x1503 * x454) * mH - x226 * x1613,
-                    (x1614 * x0 + x19 * x1606) * x98
-                        - mF
-                            * (x0 * x596 + x147 * x1592
-                                + x19 * (x1511 * x511 + x144 * x1586 + x1582 * x142))
-                        - (x597 * x0 + x138 * x1610
-                            + x19 * (x134 * x1577 + x1578 * x111 + x478 * x1530)) * mH
-                        - x233 * x1613 - x1160 - x1602 * x136 - x235 * x1598,
-                    x19 * (x1614 + x1448 - x29 * x1613 - x22 * x1598)
+                    -(mH * (x25 * x1574 - x1571 * x20 + x1575 * x28 + x449 * x1497)
+                        + mF * (x492 * x1497 - x1586 * x20 + x30 * x1588 + x31 * x1590)),
+                    -(mF * (x1586 * x55 + x52 * x1588 + x50 * x1590 - x47 * x492)
+                        + mH * (x1575 * x47 - x449 * x47 + x1571 * x55 + x49 * x1574)),
+                    -x189 * x1595 - x70 * (x1597 - x1598 + x1599)
+                        - (x1600 * x86 - x1506 * x469 + x466 * x1505 - x449 * x98
+                            + x98 * x1575 + x94 * x1574) * mH - x1604 * x93
+                        - (x483 * x1503 + x487 * x1504 + x108 * x1588 + x111 * x1585
+                            + x112 * x1590 - x107 * x492) * mF - x1607 * x190
+                        - x188 * x1610 - x594 * x70,
+                    (x0 * x1611 + x19 * x1604) * x74 - x1610 * x135
                         - mH
-                            * (x19 * (x109 * x454 + x162 * x1574) + x1578 * x166
-                                + (x478 * x162 + x164 * x1577) * x0)
+                            * (x19 * (x133 * x1575 + x449 * x1527 + x76 * x1574)
+                                + x0 * x597 + x137 * x1600) - x1607 * x246 - x248 * x1595
+                        - x1157
                         - mF
-                            * (x1582 * x159 + x1586 * x161
-                                + x19 * (x1514 * x502 + x1592 * x151 + x1515 * x506)
-                                + x511 * x1516) - x0 * x1606,
+                            * (x19 * (x492 * x1508 + x144 * x1588 + x142 * x1590)
+                                + x1585 * x140 + x0 * x596),
+                    x19 * (x1444 - x1607 * x29 + x1611 - x22 * x1595)
+                        - mF
+                            * (x1513 * x492
+                                + (x1512 * x487 + x1585 * x149 + x483 * x1511) * x19
+                                + x157 * x1588 + x159 * x1590) - x0 * x1604
+                        - mH
+                            * (x164 * x1574 + x0 * (x449 * x160 + x162 * x1575)
+                                + x19 * (x73 * x469 + x1571 * x160)),
                     0.0,
-                    x22 * x1613 + x1600 * x297 - x1598 * x29 - x607 * x430 - x1599
-                        + (x487 - x1570 + x1615 + x1571) * x168
-                        + (x1615 - x1589 - x1591 + x1587 + x500) * x169,
-                    -x1603,
+                    (x1578 - x1582 + x475 + x1612 - x1584) * x167 - x1608 + x1596 * x300
+                        + x1607 * x22 - x605 * x403
+                        + (x1612 + x465 - x1567 + x1568) * x166 - x1595 * x29,
+                    -x1601,
                     0.0,
                     0.0,
-                    x903 * x_dot
+                    x788 * x1613
+                        - theta_dot
+                            * (x93
+                                * (x70 * x656 / f64::sqrt(x173) - x350 * x1614
+                                    + x651 * x919 / f64::sqrt(x173))
+                                - x916 * x350 / f64::sqrt(x173)
+                                - rF
+                                    * (x1615 * x49 + x348 * x1620 + x1621 * x55
+                                        - 2.0 * (x916 * x45)
+                                        + x93
+                                            * (x1624 * x55 + x348 * x1613 - 2.0 * (x913 * x45)
+                                                + 2.0 * (x670 * x70) - x704 * x47 + x685 * x1554))
+                                - x100 * f64::sqrt(x173) * x1472)
+                        - (x967 * x100 * f64::sqrt(x173)
+                            + (x723 * x70 / f64::sqrt(x173)
+                                - x100 * x968 / f64::sqrt(x173) - x1614 * x274) * x93
+                            - x916 * x274 / f64::sqrt(x173)
+                            - rF
+                                * ((x189 * x1625 + x190 * x1626 + x52 * x1623 + x1618
+                                    + x1622 * x50 + x1629 * x55 + x93 * (x1630 + x1613 + x1631))
+                                    * x173 + x276 * (x1617 + x1619)
+                                    + (2.0 * (x739 * x70) - 2.0 * (x1535 * x637) - x742 * x47
+                                        - 2.0 * (x913 * x278) + x735 * x1533 + x1632 * x55
+                                        + x276 * x1613) * x93 - x746 * x70)) * psi_dot
+                        - ((x2
+                            * (-x913 * x317 / f64::sqrt(x173)
+                                - x638
+                                    * (x100 / f64::sqrt(x173) + x1543 / f64::powf(x173, 1.5)))
+                            + x762 * x70 / f64::sqrt(x173)) * x93
+                            + x100 * f64::sqrt(x173) * (x1206 - x758 * x19)
+                            - x318 * x916 / f64::sqrt(x173)
+                            - (x1633 * x55
+                                + x173
+                                    * (x74
+                                        * (x19 * (delta_dot * x55 - x731 - x1630 + x732 - x1631)
+                                            - (x685 - delta_dot * x47) * x0) + x1634 * x50 + x1635 * x55
+                                        - x1171 * x47 + x248 * x1625 + x246 * x1626 + x52 * x1636)
+                                + (x1638 * x55 - 2.0 * (x913 * x311) - x781 * x47
+                                    + x1546 * x685 + x310 * x1613 + 2.0 * (x786 * x70)
+                                    - 2.0 * (x1544 * x637)) * x93 + x1618 * x310
+                                - 2.0 * (x916 * x311)) * rF) * phi_dot
+                        - (x100
+                            * (x20 * x916 / f64::sqrt(x173)
+                                + x93
+                                    * (x20 * x1614 - x1639 / f64::sqrt(x173)
+                                        - x1640 / f64::sqrt(x173)) + x1643 * f64::sqrt(x173))
+                            - rF
+                                * ((x93 * x1613 + x1620) * x370 - x799 * x1559
+                                    + x337
+                                        * (-2.0 * (x49 * x916)
+                                            - x93 * (2.0 * (x913 * x49) - 2.0 * (x737 * x70)))))
+                            * delta_dot + x918 * x_dot,
+                    x918 * y_dot
                         - phi_dot
-                            * (f64::sqrt(x175) * x68 * (x1202 - x19 * x721)
-                                - x320 * x896 / f64::sqrt(x175)
+                            * (x100 * (x1181 - x860 * x19) * f64::sqrt(x173)
                                 - rF
-                                    * (x75
-                                        * (x1624 * x55 + x1625 * x313 - 2.0 * (x312 * x900)
-                                            - x757 * x47 - 2.0 * (x1548 * x638) + 2.0 * (x753 * x95)
-                                            + x687 * x1547) + x313 * x1628
-                                        + x175
-                                            * (x52 * x1622 - x1217 * x47 + x1629 * x233 + x1620 * x50
-                                                + ((delta_dot * x55 - x1630 - x741 - x1631 + x742) * x19
-                                                    - x0 * (x687 - delta_dot * x47)) * x98 + x235 * x1632
-                                                + x1619 * x55) - 2.0 * (x896 * x312) + x1633 * x55)
-                                + x75
-                                    * ((-(x1549 / f64::powf(x175, 1.5) + x68 / f64::sqrt(x175))
-                                        * x639 - x319 * x900 / f64::sqrt(x175)) * x2
-                                        + x95 * x725 / f64::sqrt(x175)))
-                        - ((x95 * x775 / f64::sqrt(x175) - x969 * x68 / f64::sqrt(x175)
-                            - x1637 * x279) * x75
-                            - rF
-                                * (x75
-                                    * (x1625 * x272 - 2.0 * (x1538 * x638) + x1634 * x55
-                                        - x780 * x47 - 2.0 * (x271 * x900) + x1535 * x785
-                                        + 2.0 * (x95 * x787)) - x95 * x784
-                                    + (x1632 * x225 + x52 * x1621
-                                        + (x1625 + x1630 + x1631) * x75 + x50 * x1623 + x1635 * x55
-                                        + x1628 + x1629 * x226) * x175 + (x1636 + x1626) * x272)
-                            + f64::sqrt(x175) * x68 * x956
-                            - x896 * x279 / f64::sqrt(x175)) * psi_dot
+                                    * (x20 * x1633
+                                        - (x246 * x1644 + x31 * x1634 + x1636 * x30 + x1645 * x248
+                                            + x74
+                                                * (x19 * (-x1646 - x1641 - x1642 - delta_dot * x20 - x1647)
+                                                    - x0 * (x811 + delta_dot * x1497)) + x1171 * x1497
+                                            - x20 * x1635) * x173
+                                        + (2.0 * (x637 * x1548) - x1643 * x310 - x781 * x1497
+                                            - 2.0 * (x875 * x70) + 2.0 * (x913 * x327) - x811 * x1546
+                                            + x20 * x1638) * x93 + 2.0 * (x327 * x916) - x1648 * x310)
+                                + (x325 * x1649 - x638 * x1549 / f64::sqrt(x173)) * x8
+                                - x869 * x1518 / f64::sqrt(x173))
+                        - psi_dot
+                            * (x93
+                                * (x70 * x819 / f64::sqrt(x173) - x1651 - x1614 * x280)
+                                - ((2.0 * (x913 * x284) + x20 * x1632 - x1533 * x826
+                                    - x742 * x1497 - x1643 * x276 - 2.0 * (x830 * x70)
+                                    + 2.0 * (x1537 * x637)) * x93 - x836 * x70
+                                    - x276 * (x1640 - x1650)
+                                    - (x30 * x1623 + x190 * x1644 + x1648
+                                        + x93 * (x1643 + x1646 + x1647) - x20 * x1629 + x1622 * x31
+                                        + x1645 * x189) * x173) * rF - x916 * x280 / f64::sqrt(x173)
+                                + x1652) - x1643 * x788
                         - theta_dot
-                            * (x75
-                                * (x95 * x658 / f64::sqrt(x175) - x348 * x1637
-                                    + x895 * x656 / f64::sqrt(x175))
-                                - f64::sqrt(x175) * x68 * x1478
+                            * ((x919 * x851 / f64::sqrt(x173) + x1230 * x70
+                                - x913 * x355 / f64::sqrt(x173)) * x93
+                                - x355 * x916 / f64::sqrt(x173)
                                 - rF
-                                    * (x1638 * x55 - 2.0 * (x896 * x45)
-                                        + (x1639 * x55 + x687 * x1557 + 2.0 * (x95 * x672)
-                                            - 2.0 * (x900 * x45) + x1625 * x352 - x706 * x47) * x75
-                                        + x1640 * x352 + x49 * x1641)
-                                - x896 * x348 / f64::sqrt(x175))
+                                    * (x93
+                                        * (x20 * x1624 - x811 * x1554 - x704 * x1497 - x1643 * x348
+                                            - 2.0 * (x913 * x3) - 2.0 * (x843 * x70)) - x1615 * x25
+                                        + x20 * x1621 - x1653 * x348 - 2.0 * (x916 * x3))
+                                - x100 * x1460 * f64::sqrt(x173))
                         - delta_dot
-                            * (x68
-                                * (x20 * x896 / f64::sqrt(x175) + f64::sqrt(x175) * x1644
-                                    + x75
-                                        * (x20 * x1637 - x1645 / f64::sqrt(x175)
-                                            - x1646 / f64::sqrt(x175)))
+                            * (x100
+                                * (x93
+                                    * (-x1617 / f64::sqrt(x173) - x1616 / f64::sqrt(x173)
+                                        - x1614 * x55) - x916 * x55 / f64::sqrt(x173)
+                                    + f64::sqrt(x173) * x1613)
                                 - rF
-                                    * (x369 * (x1640 + x1625 * x75) - x812 * x1562
-                                        + x338
-                                            * (-x75 * (2.0 * (x49 * x900) - 2.0 * (x95 * x739))
-                                                - 2.0 * (x896 * x49)))) + x1625 * x789,
-                    x903 * y_dot
-                        - delta_dot
-                            * (x68
-                                * ((-x1637 * x55 - x1627 / f64::sqrt(x175)
-                                    - x1626 / f64::sqrt(x175)) * x75
-                                    - x896 * x55 / f64::sqrt(x175) + f64::sqrt(x175) * x1625)
-                                - rF
-                                    * (x812 * x1564 - (x1649 + x1644 * x75) * x369
-                                        + (x25 * (2.0 * x901 + 2.0 * x896) + 2.0 * (x827 * x1521))
-                                            * x338))
-                        - (f64::sqrt(x175) * x68 * (x1187 - x19 * x848)
-                            + x8 * (x1650 * x326 - x1552 * x639 / f64::sqrt(x175))
-                            - rF
-                                * (2.0 * (x896 * x328)
-                                    - x175
-                                        * (x1217 * x1500
-                                            + (x19 * (-x1642 - delta_dot * x20 - x1651 - x1652 - x1643)
-                                                - x0 * (x798 + delta_dot * x1500)) * x98 + x235 * x1653
-                                            - x20 * x1619 + x1654 * x233 + x31 * x1620 + x30 * x1622)
-                                    + (2.0 * (x1551 * x638) + x20 * x1624 - x757 * x1500
-                                        - x798 * x1547 - x1644 * x313 + 2.0 * (x328 * x900)
-                                        - 2.0 * (x95 * x831)) * x75 - x1647 * x313 + x20 * x1633)
-                            - x1521 * x849 / f64::sqrt(x175)) * phi_dot
-                        - (x75 * (x95 * x886 / f64::sqrt(x175) - x1637 * x287 - x1655)
-                            - x896 * x287 / f64::sqrt(x175) + x1656
-                            - (x75
-                                * (2.0 * (x1540 * x638) - x1644 * x272 + x20 * x1634
-                                    - x875 * x1535 + 2.0 * (x900 * x285) - x780 * x1500
-                                    - 2.0 * (x95 * x877)) - (x1646 - x1648) * x272 - x95 * x883
-                                - x175
-                                    * (x1654 * x226 - x20 * x1635 + x1647 + x30 * x1621
-                                        + x1653 * x225 + x31 * x1623
-                                        + (x1644 + x1651 + x1652) * x75)) * rF) * psi_dot
-                        - theta_dot
-                            * (x75
-                                * (x95 * x1223 + x895 * x862 / f64::sqrt(x175)
-                                    - x356 * x900 / f64::sqrt(x175))
-                                - (x20 * x1638 - x352 * x1649 - 2.0 * (x896 * x3)
-                                    + (x20 * x1639 - 2.0 * (x900 * x3) - 2.0 * (x855 * x95)
-                                        - x706 * x1500 - x798 * x1557 - x352 * x1644) * x75
-                                    - x25 * x1641) * rF - f64::sqrt(x175) * x68 * x1461
-                                - x356 * x896 / f64::sqrt(x175)) - x789 * x1644,
-                    -(delta_dot
-                        * (x68 * x900
-                            + rF
-                                * (x1657 / f64::sqrt(x175)
-                                    - 2.0 * (x95 * x900 / f64::sqrt(x175))
-                                    + x75
-                                        * ((x898 * x92 + x634) / f64::sqrt(x175)
-                                            - 3.0 * (x95 * x896 / f64::powf(x175, 1.5))
-                                            + x75
-                                                * (x1657 / f64::powf(x175, 1.5)
-                                                    - x95 * (3.0 * x1239 + 2.0 * x1240)))))
-                        + (rF
-                            * (x630
-                                * (x75
-                                    * (x19 * (delta_dot / f64::sqrt(x175) + x1491)
-                                        - (x638 / f64::powf(x175, 1.5)
-                                            + x1618 / f64::powf(x175, 1.5)) * x260)
-                                    - x19 * x900 / f64::sqrt(x175)
-                                    - (x1618 / f64::sqrt(x175) + x638 / f64::sqrt(x175)) * x0)
-                                + x836 * x1351) - x1490) * theta_dot + phi_dot * x1241),
+                                    * (x799 * x1561 - (x1653 + x1643 * x93) * x370
+                                        + x337
+                                            * (x25 * (2.0 * x914 + 2.0 * x916)
+                                                + 2.0 * (x818 * x1518)))),
+                    -(x1247 * phi_dot
+                        + delta_dot
+                            * (x913 * x100
+                                + rF
+                                    * (x1654 / f64::sqrt(x173)
+                                        + ((x1654 / f64::powf(x173, 1.5)
+                                            - (2.0 * x1243 + 3.0 * x1245) * x70) * x93
+                                            - 3.0 * (x916 * x70 / f64::powf(x173, 1.5))
+                                            + (x633 + x64 * x911) / f64::sqrt(x173)) * x93
+                                        - 2.0 * (x913 * x70 / f64::sqrt(x173))))
+                        + theta_dot
+                            * (rF
+                                * ((x93
+                                    * (x19 * (delta_dot / f64::sqrt(x173) + x1489)
+                                        - (x1637 / f64::powf(x173, 1.5)
+                                            + x637 / f64::powf(x173, 1.5)) * x253)
+                                    - x0 * (x637 / f64::sqrt(x173) + x1637 / f64::sqrt(x173))
+                                    - x913 * x19 / f64::sqrt(x173)) * x629 + x856 * x1347)
+                                - x1487)),
                 ],
                 [
                     0.0,
                     0.0,
-                    x225 * x588 - x226 * x1658 - x1660 * x225,
-                    x235 * x588 - x235 * x1660 - x233 * x1658,
-                    x19 * (x22 * x1661 - x1658 * x29),
+                    x189 * x578 - x190 * x1655 - x189 * x1657,
+                    x248 * x578 - x1655 * x246 - x248 * x1657,
+                    x19 * (x22 * x1658 - x1655 * x29),
                     0.0,
-                    x22 * x1658 + x1661 * x29,
+                    x1658 * x29 + x22 * x1655,
                     0.0,
                     0.0,
                     0.0,
                     rF
-                        * (x270 * x1664
-                            + (x270 * x1666 + x175 * (x52 * x1665 + x1667 * x233))
-                                * phi_dot
-                            + (x270 * x1668 + (x52 * x1663 + x1667 * x226) * x175)
-                                * psi_dot),
-                    rF
-                        * (-psi_dot
-                            * (x282 * x1668 + x175 * (x1663 * x30 + x1669 * x226))
-                            - x282 * x1664
-                            - (x282 * x1666 + x175 * (x1669 * x233 + x1665 * x30))
-                                * phi_dot),
+                        * ((x173 * (x52 * x1659 + x1660 * x246) + x1663 * x277) * phi_dot
+                            + x277 * x1664
+                            + psi_dot
+                                * (x1665 * x277 + x173 * (x52 * x1662 + x190 * x1660))),
+                    (-((x190 * x1666 + x1662 * x30) * x173 + x1665 * x281) * psi_dot
+                        - x281 * x1664
+                        - (x281 * x1663 + (x30 * x1659 + x1666 * x246) * x173) * phi_dot)
+                        * rF,
                     0.0,
                 ],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1670, 0.0, x1671, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1670, 0.0, x1671, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1667, 0.0, x1668, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1667, 0.0, x1668, 0.0],
                 [
-                    -((x28 * x1685 - x20 * x1682 + x1686 * x25) * mH
-                        + mB * (x1689 * x16 - x1687 * x3 + x11 * x1690)
-                        + mF * (x31 * x1693 + x1694 * x30 - x1695 * x20)
-                        + x60 * (2.0 * x681 - 2.0 * x613)),
-                    -(x60 * (2.0 * x621 + 2.0 * x645)
-                        + (x50 * x1693 + x1695 * x55 + x52 * x1694) * mF
-                        + mH * (x1685 * x47 + x1686 * x49 + x1682 * x55)
-                        + (x1690 * x37 + x1687 * x45 + x41 * x1689) * mB),
-                    ((x1702 - x1137 - x1138) * x5 + x4 * x1704 - x218 * x1708
-                        + x1710 * x221 - x1711 * x9 - x98 * x1715) * x1
-                        - mF * (x1695 * x102 + x1693 * x91 + x1694 * x103) - x226 * x1698
-                        - (x1682 * x112 + x107 * x1685 + x113 * x1686) * mH
-                        - x1131 * x525
-                        - (x118 * x1687 + (x119 * x1689 + x121 * x1690) * x5) * mB
-                        - x1701 * x225 + x75 * x1722 - x1723 * x95,
-                    (x19 * (x1716 - x1717 + x1718 + x1719 + x1720 - x1721) - x1723 * x0)
-                        * x98 - x233 * x1698 - x1711 * x4 - x136 * x1715 - x1701 * x235
-                        - x221 * x1708
-                        - mH * (x1682 * x138 + x19 * (x134 * x1685 + x1686 * x111))
-                        - x9 * x1704 + x526 - x1687 * x128 - x218 * x1710
-                        - mF * (x19 * (x1694 * x142 + x144 * x1693) + x1695 * x147),
-                    x0 * x1722 - x19 * (x1723 + x1698 * x29 + x1701 * x22)
-                        + (x605 + x1702) * x1
-                        - (x165 * x1685 + x163 * x1682 + x1686 * x166) * mH
-                        - mF * (x161 * x1693 + x1694 * x159 + x1695 * x152)
-                        - (-x1689 * xB - x1690 * x115) * mB,
-                    -x1139,
-                    x22 * x1698 - x1701 * x29 + (x202 - x1712) * x436 - x1695 * x169
-                        - x1713 - x1682 * x168 - x1714 + x607 * x75,
-                    -x1719,
+                    -((x1672 * x25 - x20 * x1681 + x1683 * x28) * mH
+                        + (x1685 * x16 + x11 * x1686 - x1687 * x3) * mB
+                        + mF * (x1690 * x31 - x20 * x1691 + x30 * x1692)
+                        + x99 * (2.0 * x677 - 2.0 * x612)),
+                    -(x99 * (2.0 * x620 + 2.0 * x641)
+                        + mF * (x1690 * x50 + x52 * x1692 + x1691 * x55)
+                        + (x1686 * x37 + x1687 * x45 + x41 * x1685) * mB
+                        + (x1681 * x55 + x1672 * x49 + x1683 * x47) * mH),
+                    (x4 * x1695 + (x1696 - x1126 - x1127) * x5 + x1698 * x208
+                        - x74 * x1702 - x205 * x1706 - x9 * x1707) * x1 - x1693 * x70
+                        - x190 * x1710
+                        - mF * (x1690 * x112 + x111 * x1691 + x108 * x1692)
+                        - x1120 * x571 - (x1672 * x94 + x1683 * x98 + x1681 * x86) * mH
+                        + x93 * x1717 - x189 * x1720
+                        - mB * ((x120 * x1686 + x118 * x1685) * x5 + x117 * x1687),
+                    x74
+                        * (x19 * (x1712 - x1711 + x1713 + x1714 - x1715 + x1716)
+                            - x1693 * x0) - x205 * x1698 - x248 * x1720 - x9 * x1695
+                        - mF * (x1691 * x140 + x19 * (x144 * x1692 + x1690 * x142))
+                        - x208 * x1706 - x246 * x1710 + x572 - x135 * x1702
+                        - x1687 * x127 - x4 * x1707
+                        - mH * (x19 * (x133 * x1683 + x1672 * x76) + x137 * x1681),
+                    (x600 + x1696) * x1 - mB * (-x1686 * x114 - x1685 * xB)
+                        - (x161 * x1681 + x1683 * x163 + x1672 * x164) * mH
+                        - x19 * (x1710 * x29 + x1693 + x22 * x1720) + x0 * x1717
+                        - (x157 * x1692 + x1690 * x159 + x150 * x1691) * mF,
+                    -x1135,
+                    x605 * x93 - x1699 - x1681 * x166 - x1691 * x167
+                        + (x229 - x1700) * x390 + x22 * x1710 - x1701 - x1720 * x29,
+                    -x1714,
                     rR
-                        * ((x1724 * x612 - x539 * x2) * x1
-                            + (x628 * (2.0 * x173 - x1) - x625) * x5),
-                    ((x623 * x1724 + x539 * x8) * x1
-                        + x5 * (x616 * (x1 - 2.0 * x173) - x615)) * rR,
-                    x762 - psi_dot * x937 - x944 * phi_dot - delta_dot * x952
-                        - theta_dot * x949 - x776 + rF * (x788 - x20 * thF_dot),
-                    x889 - x887 - x950 * theta_dot + rF * (x884 + thF_dot * x921)
-                        - delta_dot * x953 - x946 * phi_dot - psi_dot * x940,
-                    0.0,
-                ],
-                [
-                    -((x1733 * x28 - x20 * x1740 + x25 * x1742) * mH
-                        + x60 * (2.0 * x378 - 2.0 * x615)
-                        + (x1744 * x11 - x1743 * x3 + x1745 * x16) * mB
-                        + mF * (x30 * x1749 - x20 * x1746 + x31 * x1750)),
-                    -(mF * (x50 * x1750 + x52 * x1749 + x1746 * x55)
-                        + (x1744 * x37 + x1745 * x41 + x1743 * x45) * mB
-                        + x60 * (2.0 * x625 + 2.0 * x514)
-                        + mH * (x1740 * x55 + x49 * x1742 + x1733 * x47)),
-                    x75 * x1763 - x1751 * x95
-                        - mB * ((x1744 * x121 + x1745 * x119) * x5 + x118 * x1743)
-                        - x226 * x1756 - x225 * x1766
-                        - (x1740 * x112 + x113 * x1742 + x1733 * x107) * mH - x526
-                        - x5 * (x1768 - x1767 + x379 * IByy + x1769 - x1770)
-                        - (x103 * x1749 + x1750 * x91 + x1746 * x102) * mF
-                        + (x1772 * x221 - x263 * psi_dot + x4 * x1773 - x1777 * x98
-                            - x9 * x1778 - x1779 * x218) * x1,
-                    ((x1758 - x1757 + x1759 + x1760 + x1761 - x1762) * x19 - x1751 * x0)
-                        * x98 - mF * (x19 * (x144 * x1750 + x1749 * x142) + x1746 * x147)
-                        - x235 * x1766 - x1743 * x128 - x9 * x1773
-                        - mH * (x138 * x1740 + x19 * (x111 * x1742 + x1733 * x134))
-                        - x1779 * x221 - x218 * x1772 - x4 * x1778 - x1777 * x136
-                        - x233 * x1756,
-                    x0 * x1763 - x19 * (x29 * x1756 + x1751 + x22 * x1766) + x1767
-                        - (-x1745 * xB - x1744 * x115) * mB - x1768
-                        - mF * (x152 * x1746 + x1750 * x161 + x1749 * x159) - x1769
-                        + x1770 - (x1733 * x165 + x163 * x1740 + x1742 * x166) * mH
-                        - x379 * x224,
-                    -(IRyy * x379),
-                    x1776 - x1774 - x1775 + (x19 * x560 - x1432) * x98 - x1746 * x169
-                        + x22 * x1756 - x168 * x1740 - x1766 * x29,
-                    -x1758,
+                        * (x1 * (x1721 * x611 - x2 * x537)
+                            + (x627 * (2.0 * x171 - x1) - x624) * x5),
                     rR
-                        * (x616 * x1780
-                            + ((2.0 * x173 - x1040 + x1043) * x623 - x538 * x8) * x5)
-                        + x_dot * x998 / f64::sqrt(x172),
+                        * ((x622 * x1721 + x8 * x537) * x1
+                            + x5 * (x615 * (x1 - 2.0 * x171) - x614)),
+                    rF * (x747 - x20 * thF_dot) - x951 * delta_dot - phi_dot * x943
+                        + x710 - x936 * psi_dot - x724 - theta_dot * x948,
+                    rF * (x837 + thF_dot * x920) - theta_dot * x949 - x945 * phi_dot
+                        - psi_dot * x939 - x820 - delta_dot * x952 + x839,
+                    0.0,
+                ],
+                [
+                    -(mB * (x1723 * x11 - x3 * x1722 + x1724 * x16)
+                        + mH * (x25 * x1729 + x1735 * x28 - x20 * x1742)
+                        + x99 * (2.0 * x494 - 2.0 * x614)
+                        + mF * (x1745 * x30 - x20 * x1746 + x31 * x1747)),
+                    -((x1723 * x37 + x1724 * x41 + x1722 * x45) * mB
+                        + (x1742 * x55 + x49 * x1729 + x1735 * x47) * mH
+                        + x99 * (2.0 * x624 + 2.0 * x515)
+                        + mF * (x1746 * x55 + x50 * x1747 + x52 * x1745)),
+                    x1754 * x93
+                        - mB * ((x1723 * x120 + x1724 * x118) * x5 + x117 * x1722)
+                        - x1755 * x70 - (x94 * x1729 + x1742 * x86 + x1735 * x98) * mH
+                        - x572 - x190 * x1760 - x1763 * x189
+                        - (x111 * x1746 + x1745 * x108 + x112 * x1747) * mF
+                        - x5 * (x1765 - x1764 + x377 * IByy + x1766 - x1767)
+                        + (x1769 * x208 - x205 * x1770 - x1774 * x74 + x4 * x1775
+                            - x387 * IRyy - x9 * x1776) * x1,
+                    x74
+                        * (x19 * (x1748 + x1749 + x1750 + x1751 - x1752 - x1753)
+                            - x0 * x1755) - x246 * x1760
+                        - mH * (x19 * (x76 * x1729 + x133 * x1735) + x137 * x1742)
+                        - x1722 * x127 - x205 * x1769 - x4 * x1776 - x1775 * x9
+                        - x1763 * x248 - x1770 * x208
+                        - (x19 * (x142 * x1747 + x1745 * x144) + x1746 * x140) * mF
+                        - x1774 * x135,
+                    x1754 * x0 - mH * (x161 * x1742 + x164 * x1729 + x1735 * x163)
+                        + x1764 - (-x1724 * xB - x1723 * x114) * mB - x1765
+                        - mF * (x150 * x1746 + x159 * x1747 + x1745 * x157) - x1766
+                        + x1767 - x19 * (x1760 * x29 + x1755 + x22 * x1763)
+                        - x377 * x220,
+                    -(IRyy * x377),
+                    x1771 - x1763 * x29 - x1742 * x166 + x22 * x1760 - x1746 * x167
+                        - x1772 - x1773 + x74 * (x19 * x547 - x1415),
+                    -x1749,
                     rR
-                        * (x5 * ((x1040 - 2.0 * x173 - x1043) * x612 - x538 * x2)
-                            + x628 * x1780) + y_dot * x998 / f64::sqrt(x172),
-                    x75 * (x1234 + x_dot * x331 / f64::sqrt(x175)) - delta_dot * x1068
-                        - x726 - psi_dot * x1034 + rF * (x760 + x1005 * thF_dot)
-                        - theta_dot * x1057 - phi_dot * x1047,
-                    x75
-                        * (y_dot * x331 / f64::sqrt(x175) - x789 * x2
-                            + x327 * x638 / f64::sqrt(x175)) - psi_dot * x1039
-                        - delta_dot * x1070 - theta_dot * x1060 + x835 - x850
-                        - x1051 * phi_dot,
-                    theta_dot * x1781 + rF * x1233 - delta_dot * x1072 - x905
-                        + phi_dot * (x1243 * x1 - x323 - x1053 - x325) - x913,
+                        * (x615 * x1777
+                            + ((2.0 * x171 - x1039 + x1042) * x622 - x536 * x8) * x5)
+                        + x_dot * x997 / f64::sqrt(x170),
+                    rR
+                        * (x5 * ((x1039 - 2.0 * x171 - x1042) * x611 - x536 * x2)
+                            + x627 * x1777) + y_dot * x997 / f64::sqrt(x170),
+                    rF * (x787 + thF_dot * x1004) - x1046 * phi_dot - delta_dot * x1066
+                        - x1033 * psi_dot - theta_dot * x1055
+                        + x93 * (x1224 + x332 * x_dot / f64::sqrt(x173)) - x763,
+                    x93
+                        * (x332 * y_dot / f64::sqrt(x173) - x788 * x2
+                            + x637 * x326 / f64::sqrt(x173)) - delta_dot * x1068 - x870
+                        - x1038 * psi_dot + x878 - x1050 * phi_dot - x1058 * theta_dot,
+                    x1778 * theta_dot - delta_dot * x1070 - x905 - x909 + rF * x1228
+                        + (x1234 * x1 - x323 - x1052 - x324) * phi_dot,
                 ],
                 [
-                    -(mH * (x1786 * x28 - x20 * x1785 + x25 * x1787)
-                        + mB * (-(2.0 * x1282 - 2.0 * x1283) * x386 - x1789 * x3)
-                        + mF * (x31 * x1794 - x20 * x1791 + x30 * x1795)),
-                    -(mF * (x1791 * x55 + x52 * x1795 + x50 * x1794)
-                        + mB * (x1789 * x45 - x386 * (2.0 * x1291 - 2.0 * (x41 * x115)))
-                        + mH * (x49 * x1787 + x1786 * x47 + x1785 * x55)),
-                    (x1803 * x221 - x218 * x1800 - x9 * x1801 + x4 * x1804 - x1806 * x98)
-                        * x1 - x1799 * x95
-                        - (x118 * x1789
-                            - x1141 * (2.0 * (x121 * xB) - 2.0 * (x119 * x115))) * mB
-                        - x1809 * x226 - mF * (x103 * x1795 + x1791 * x102 + x1794 * x91)
-                        + x1812 * x360 - x225 * x1815
-                        - (x1786 * x107 + x1785 * x112 + x113 * x1787) * mH,
-                    ((x1605 - x1810 - x1811) * x292 - x1799 * x0) * x98 - x4 * x1801
-                        - x1789 * x128
-                        - mF * (x19 * (x142 * x1795 + x144 * x1794) + x1791 * x147)
-                        - x235 * x1815 - x218 * x1803
-                        - (x1785 * x138 + x19 * (x111 * x1787 + x1786 * x134)) * mH
-                        - x1806 * x136 - x9 * x1804 - x221 * x1800 - x1809 * x233,
-                    (x1812 * x0 - x1797 - x22 * x1815 - x1798 - x1809 * x29) * x19
-                        - mF * (x159 * x1795 + x1791 * x152 + x161 * x1794)
-                        - (x1787 * x166 + x1786 * x165 + x163 * x1785) * mH,
+                    -(mF * (x30 * x1784 + x31 * x1785 - x20 * x1786)
+                        + (x1789 * x28 - x20 * x1788 + x25 * x1790) * mH
+                        + (-(2.0 * x1279 - 2.0 * x1280) * x388 - x1792 * x3) * mB),
+                    -(mF * (x50 * x1785 + x52 * x1784 + x1786 * x55)
+                        + (x1792 * x45 - (2.0 * x1288 - 2.0 * (x41 * x114)) * x388) * mB
+                        + (x1788 * x55 + x1789 * x47 + x49 * x1790) * mH),
+                    x1
+                        * (x1802 * x208 - x205 * x1797 - x1799 * x74 - x9 * x1800
+                            + x4 * x1803)
+                        - mH * (x94 * x1790 + x86 * x1788 + x98 * x1789)
+                        - (x117 * x1792
+                            - x1136 * (2.0 * (x120 * xB) - 2.0 * (x118 * x114))) * mB
+                        - mF * (x112 * x1785 + x108 * x1784 + x111 * x1786) - x70 * x1796
+                        - x189 * x1807 - x190 * x1809 + x359 * x1812,
+                    (x290 * (x1603 - x1810 - x1811) - x0 * x1796) * x74 - x4 * x1800
+                        - x1792 * x127 - x248 * x1807
+                        - mF * (x19 * (x142 * x1785 + x144 * x1784) + x1786 * x140)
+                        - x205 * x1802 - x1799 * x135
+                        - mH * ((x76 * x1790 + x133 * x1789) * x19 + x137 * x1788)
+                        - x9 * x1803 - x208 * x1797 - x246 * x1809,
+                    (x0 * x1812 - x22 * x1807 - x1794 - x1809 * x29 - x1795) * x19
+                        - mF * (x159 * x1785 + x1784 * x157 + x150 * x1786)
+                        - (x161 * x1788 + x1790 * x164 + x163 * x1789) * mH,
                     0.0,
-                    x22 * x1809 - x1791 * x169 - x1785 * x168 - x1415
-                        + x0 * (x607 - x1805) + x1796 * x297 - x1815 * x29,
-                    x1329 * x1783,
-                    x1816,
-                    x1817,
-                    rF * (x710 - thF_dot * x862) - phi_dot * x1333 - psi_dot * x1321
-                        + x75 * (x1484 - x_dot * x1062 / f64::sqrt(x175))
-                        - delta_dot * x1349 - theta_dot * x1340 - x659,
-                    x75
-                        * (x356 * x638 / f64::sqrt(x175)
-                            - x1062 * y_dot / f64::sqrt(x175)) - x1324 * psi_dot
-                        - phi_dot * x1335 + (thF_dot * x656 + x858) * rF
-                        - theta_dot * x1343 - delta_dot * x1350 - x865,
-                    (x361 - x154) * x836 + x1781 * phi_dot
-                        + (-theta_dot * (2.0 * x120 + 2.0 * x130 + x1345)
-                            - (x638 * x1339 * x892
-                                + delta_dot
-                                    * (2.0 * x1348 + rF * x260 / f64::sqrt(x175) - x1352))
-                                * x98) * x1 - x894,
-                ],
-                [
-                    0.0,
-                    0.0,
-                    -(x1 * (x218 * x1819 - x1818 * x221)),
-                    -(x218 * x1818 + x221 * x1819),
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    x1816,
-                    x1817,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [
-                    -((x25 * x1820 - 2.0 * (x448 * x28)) * x168
-                        + mF * (x31 * x1821 - x20 * x1822 + x1823 * x30)),
-                    -((x49 * x1820 - 2.0 * (x448 * x47)) * x168
-                        + (x50 * x1821 + x1822 * x55 + x1823 * x52) * mF),
-                    -(x113 * x1820 - 2.0 * x1672) * x168
-                        - mF * (x1823 * x103 + x102 * x1822 + x1821 * x91) - x1824 * x256
-                        - x95 * x1825 - x1827 * x75,
-                    x19 * (x1827 * x98 - (x111 * x1820 - 2.0 * x1734) * x168)
-                        - mF * (x19 * (x1823 * x142 + x144 * x1821) + x147 * x1822)
-                        - x1825 * x232 - x301 * x1824,
-                    (-x338 * x1824 - x1825) * x19 - x1827 * x0
-                        - (x166 * x1820 - 2.0 * (x448 * x165)) * x168
-                        - (x1823 * x159 + x161 * x1821 + x152 * x1822) * mF,
-                    0.0,
-                    -(x169 * x1822),
-                    -x1826,
-                    0.0,
-                    0.0,
-                    theta_dot * x1558 - x1539 * psi_dot - phi_dot * x1550
-                        - delta_dot * x1563 - x1656
-                        + (x1655 - x95 * x_dot / f64::sqrt(x175)) * x75
-                        + rF * (x814 - x736),
-                    x75 * (x68 * x709 / f64::sqrt(x175) - x95 * y_dot / f64::sqrt(x175))
-                        - f64::sqrt(x175) * x68 * x687 - delta_dot * x1565
-                        - phi_dot * x1553 - psi_dot * x1542
-                        + rF * (x874 - thF_dot * x1500) + x1560 * theta_dot,
-                    rF * x1650 - x895 - phi_dot * x1072 - delta_dot * x1567
-                        - x631 * x1353,
+                    (x605 - x1798) * x0 - x29 * x1807 + x22 * x1809 - x1404
+                        - x1786 * x167 - x1788 * x166 + x1793 * x300,
+                    x1325 * x1779,
+                    x1813,
+                    x1814,
+                    rF * (x708 - thF_dot * x851) - psi_dot * x1317 - delta_dot * x1345
+                        + (x1481 - x1060 * x_dot / f64::sqrt(x173)) * x93
+                        - x1329 * phi_dot - x1336 * theta_dot - x657,
+                    (x355 * x637 / f64::sqrt(x173) - x1060 * y_dot / f64::sqrt(x173))
+                        * x93 - x1346 * delta_dot - psi_dot * x1320 - theta_dot * x1338
+                        - x1331 * phi_dot + rF * (thF_dot * x651 + x848) - x855,
+                    x1778 * phi_dot
+                        + (-x74
+                            * (delta_dot
+                                * (2.0 * x1343 - x1348 + rF * x253 / f64::sqrt(x173))
+                                + x637 * x889 * x1334)
+                            - theta_dot * (x1339 + 2.0 * x119 + 2.0 * x130 + x1341)) * x1
+                        + (x360 - x152) * x856 - x892,
                 ],
                 [
                     0.0,
                     0.0,
-                    (x226 * x497 - x504 * x225) * IFyy,
-                    (x233 * x497 - x235 * x504) * IFyy,
-                    x1329 * (x497 * x29 - x22 * x504),
-                    0.0,
-                    -((x504 * x29 + x22 * x497) * IFyy),
+                    -(x1 * (x205 * x1816 - x1815 * x208)),
+                    -(x205 * x1815 + x208 * x1816),
                     0.0,
                     0.0,
                     0.0,
-                    rF * x687,
-                    -(x798 * rF),
+                    0.0,
+                    x1813,
+                    x1814,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    -((x25 * x1817 - 2.0 * (x446 * x28)) * x166
+                        + (x1819 * x30 - x20 * x1818 + x31 * x1820) * mF),
+                    -((x49 * x1817 - 2.0 * (x446 * x47)) * x166
+                        + mF * (x52 * x1819 + x1818 * x55 + x1820 * x50)),
+                    -x1821 * x70 - x1823 * x93 - x257 * x1824
+                        - (x1819 * x108 + x1820 * x112 + x111 * x1818) * mF
+                        - (x94 * x1817 - 2.0 * x1677) * x166,
+                    x19 * (x74 * x1823 - x166 * (x76 * x1817 - 2.0 * x1740))
+                        - ((x1820 * x142 + x1819 * x144) * x19 + x1818 * x140) * mF
+                        - x1824 * x298 - x1821 * x232,
+                    x19 * (-x1821 - x1824 * x337)
+                        - (x1817 * x164 - 2.0 * (x446 * x163)) * x166 - x0 * x1823
+                        - mF * (x150 * x1818 + x1820 * x159 + x1819 * x157),
+                    0.0,
+                    -(x1818 * x167),
+                    -x1822,
+                    0.0,
+                    0.0,
+                    (x802 - x726) * rF - x1547 * phi_dot - psi_dot * x1536
+                        + (x1651 - x_dot * x70 / f64::sqrt(x173)) * x93
+                        + x1555 * theta_dot - delta_dot * x1560 - x1652,
+                    theta_dot * x1557 - delta_dot * x1562 - x1539 * psi_dot
+                        + x93
+                            * (x100 * x707 / f64::sqrt(x173)
+                                - y_dot * x70 / f64::sqrt(x173))
+                        - x100 * x685 * f64::sqrt(x173) + rF * (x887 - thF_dot * x1497)
+                        - phi_dot * x1550,
+                    rF * x1649 - x1070 * phi_dot - x630 * x1349 - delta_dot * x1564
+                        - x919,
+                ],
+                [
+                    0.0,
+                    0.0,
+                    IFyy * (x190 * x482 - x485 * x189),
+                    (x246 * x482 - x485 * x248) * IFyy,
+                    (x482 * x29 - x22 * x485) * x1325,
+                    0.0,
+                    -(IFyy * (x22 * x482 + x485 * x29)),
+                    0.0,
+                    0.0,
+                    0.0,
+                    rF * x685,
+                    -(x811 * rF),
                     0.0,
                 ],
             ],

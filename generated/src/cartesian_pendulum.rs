@@ -1002,69 +1002,70 @@ pub mod maggi {
         let x7 = x6 - x5;
         let x8 = 2.0 * (x * x_dot) + 2.0 * (y * y_dot);
         let x9 = y * x3;
-        let x10 = x8 * x9 - y_dot;
-        let x11 = x7 * x10 * x4;
-        let x12 = w_ - x11;
-        let x13 = x12 * y;
-        let x14 = x * x3;
-        let x15 = x7 * x3;
-        let x16 = (x_dot - x8 * x14) * x15;
-        let x17 = g + x16;
-        let x18 = -(x * x17);
-        let x19 = 4.0 * x0 + 4.0 * x1;
-        let x20 = x4 * (2.0 - x3 * x19);
-        let x21 = x7 * x14;
-        let x22 = x7 * x;
-        let x23 = ((x8 * (y_dot - 4.0 * x21) + 2.0 * (x7 * x_dot)) * y
-            + 2.0 * (x22 * y_dot)) * x3 - y_dot * y_dot;
-        let x24 = x_dot * y_dot;
-        let x25 = (x8 * (x5 - x6 + x * (4.0 * x21 - y_dot)) - 4.0 * (x22 * x_dot)) * x3
-            + x24;
-        let x26 = x9 * x14;
-        let x27 = x_dot + 4.0 * (x7 * x9);
-        let x28 = x7 * y;
-        let x29 = x24 + (x8 * (x7 - x27 * y) + 4.0 * (x28 * y_dot)) * x3;
-        let x30 = (x * (x8 * x27 - 2.0 * (x7 * y_dot)) - 2.0 * (x_dot * x28)) * x3;
-        let x31 = x_dot * x_dot;
-        let x32 = x8 * y;
-        let x33 = x6 - 2.0 * x5 + (x32 - 2.0 * x22) * x14;
-        let x34 = (2.0 * x22 - x32) * x3 + y_dot;
-        let x35 = x4 * x3;
-        let x36 = x8 * x + 2.0 * x28;
-        let x37 = x5 - 2.0 * x6 + x9 * x36;
-        let x38 = x_dot - x36 * x3;
+        let x10 = x7 * (x8 * x9 - y_dot);
+        let x11 = x10 * x4;
+        let x12 = y * (w_ - x11);
+        let x13 = x * x3;
+        let x14 = x7 * (x_dot - x8 * x13) * x3;
+        let x15 = g + x14;
+        let x16 = -(x15 * x);
+        let x17 = 4.0 * x0 + 4.0 * x1;
+        let x18 = x4 * (2.0 - x3 * x17);
+        let x19 = x_dot * y_dot;
+        let x20 = x7 * x_dot;
+        let x21 = x7 * x13;
+        let x22 = x19
+            + (x8 * (x5 - x6 + x * (4.0 * x21 - y_dot)) - 4.0 * (x20 * x)) * x3;
+        let x23 = x7 * y_dot;
+        let x24 = ((x8 * (y_dot - 4.0 * x21) + 2.0 * x20) * y + 2.0 * (x23 * x)) * x3
+            - y_dot * y_dot;
+        let x25 = x9 * x13;
+        let x26 = x_dot + 4.0 * (x7 * x9);
+        let x27 = x19 + (x8 * (x7 - x26 * y) + 4.0 * (x23 * y)) * x3;
+        let x28 = (x * (x8 * x26 - 2.0 * x23) - 2.0 * (x20 * y)) * x3;
+        let x29 = x_dot * x_dot;
+        let x30 = x8 * y;
+        let x31 = x7 * x;
+        let x32 = x6 - 2.0 * x5 + (x30 - 2.0 * x31) * x13;
+        let x33 = (2.0 * x31 - x30) * x3 + y_dot;
+        let x34 = x4 * x3;
+        let x35 = x8 * x + 2.0 * (x7 * y);
+        let x36 = x_dot - x35 * x3;
+        let x37 = x5 - 2.0 * x6 + x9 * x35;
         Derivatives {
             qdot: [x_dot, y_dot],
             matrix: [[x4]],
-            force: [(x18 * mb - x13) * x3],
-            checks: [x2, x19],
+            force: [x3 * (mb * x16 - x12)],
+            checks: [x2, x17],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            d_matrix: [[[x20 * x14]], [[x9 * x20]], [[0.0]], [[0.0]]],
+            d_matrix: [[[x18 * x13]], [[x9 * x18]], [[0.0]], [[0.0]]],
             d_force: [
                 [
-                    (mb * ((x23 * y - x * (2.0 * x18 + x25)) * x3 - g - x16)
-                        + 2.0 * (x13 * x14)) * x3,
+                    (2.0 * (x12 * x13)
+                        + mb * ((x24 * y - x * (x22 + 2.0 * x16)) * x3 - g - x14)) * x3,
                 ],
                 [
-                    ((mb * (y * x29 + (x31 - x30 + 2.0 * (y * x17)) * x)
-                        + 2.0 * (x12 * x0)) * x3 - w_ + x11) * x3,
+                    (x11 - w_
+                        + x3
+                            * ((y * x27 + (x29 - x28 + 2.0 * (x15 * y)) * x) * mb
+                                + 2.0 * (x12 * y))) * x3,
                 ],
-                [(x34 * x0 - x * x33) * x35],
-                [(x37 * y - x38 * x1) * x35],
+                [(x0 * x33 - x * x32) * x34],
+                [(y * x37 - x36 * x1) * x34],
             ],
-            w: [[-x9], [x14]],
-            c: [x10 * x15, x16],
+            w: [[-x9], [x13]],
+            c: [x10 * x3, x14],
             d_w: [
-                [[2.0 * x26], [(1.0 - 2.0 * (x * x14)) * x3]],
-                [[(2.0 * (x9 * y) - 1.0) * x3], [-(2.0 * x26)]],
+                [[2.0 * x25], [(1.0 - 2.0 * (x * x13)) * x3]],
+                [[(2.0 * (x9 * y) - 1.0) * x3], [-(2.0 * x25)]],
                 [[0.0], [0.0]],
                 [[0.0], [0.0]],
             ],
             d_c: [
-                [x23 * x3, x25 * x3],
-                [x3 * x29, (x30 - x31) * x3],
-                [x34 * x9, x33 * x3],
-                [x37 * x3, x38 * x14],
+                [x24 * x3, x22 * x3],
+                [x3 * x27, (x28 - x29) * x3],
+                [x9 * x33, x32 * x3],
+                [x3 * x37, x36 * x13],
             ],
             power: w_ * x_dot,
             d_power: [0.0, 0.0, w_, 0.0],

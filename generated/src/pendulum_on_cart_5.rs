@@ -887,8 +887,8 @@ pub mod lagrange {
         let x5 = -(x3 * x4);
         let x6 = l0 * x5;
         let x7 = f64::cos(q2);
-        let x8 = -(l1 * x2);
-        let x9 = x7 * x8;
+        let x8 = -(x2 * x7);
+        let x9 = l1 * x8;
         let x10 = f64::cos(q3);
         let x11 = -(x1 * l2);
         let x12 = x10 * x11;
@@ -977,7 +977,7 @@ pub mod lagrange {
         let x95 = x13 * x37 - x32 * x17;
         let x96 = x22 * x20;
         let x97 = l0 * x72;
-        let x98 = x97 * x8;
+        let x98 = -(l1 * x97 * x2);
         let x99 = l0 * x76;
         let x100 = x11 * x99;
         let x101 = l0 * x78;
@@ -1180,7 +1180,7 @@ pub mod lagrange {
                     x111 * x16,
                 ],
                 [
-                    -(x2 * x62 * x7),
+                    x8 * x62,
                     l0 * x2 * x105,
                     (x86 * x7 - m4 * x120 - (x47 * x71 + x120) * m5 - m2 * x108
                         - x119 * m3) * l1,
@@ -1933,8 +1933,8 @@ pub mod maggi {
         let x5 = -(x3 * x4);
         let x6 = l0 * x5;
         let x7 = f64::cos(q2);
-        let x8 = -(l1 * x2);
-        let x9 = x7 * x8;
+        let x8 = -(x2 * x7);
+        let x9 = l1 * x8;
         let x10 = f64::cos(q3);
         let x11 = -(x1 * l2);
         let x12 = x10 * x11;
@@ -2023,7 +2023,7 @@ pub mod maggi {
         let x95 = x13 * x37 - x32 * x17;
         let x96 = x22 * x20;
         let x97 = l0 * x72;
-        let x98 = x97 * x8;
+        let x98 = -(l1 * x97 * x2);
         let x99 = l0 * x76;
         let x100 = x11 * x99;
         let x101 = l0 * x78;
@@ -2226,7 +2226,7 @@ pub mod maggi {
                     x111 * x16,
                 ],
                 [
-                    -(x2 * x62 * x7),
+                    x8 * x62,
                     l0 * x2 * x105,
                     (x86 * x7 - m4 * x120 - (x47 * x71 + x120) * m5 - m2 * x108
                         - x119 * m3) * l1,
@@ -3075,8 +3075,8 @@ pub mod kane {
         let x5 = -(x3 * x4);
         let x6 = l0 * x5;
         let x7 = f64::cos(q2);
-        let x8 = -(l1 * x2);
-        let x9 = x7 * x8;
+        let x8 = -(x2 * x7);
+        let x9 = l1 * x8;
         let x10 = f64::cos(q3);
         let x11 = -(x1 * l2);
         let x12 = x10 * x11;
@@ -3165,7 +3165,7 @@ pub mod kane {
         let x95 = x13 * x37 - x32 * x17;
         let x96 = x22 * x20;
         let x97 = l0 * x72;
-        let x98 = x97 * x8;
+        let x98 = -(l1 * x97 * x2);
         let x99 = l0 * x76;
         let x100 = x11 * x99;
         let x101 = l0 * x78;
@@ -3368,7 +3368,7 @@ pub mod kane {
                     x111 * x16,
                 ],
                 [
-                    -(x2 * x62 * x7),
+                    x8 * x62,
                     l0 * x2 * x105,
                     (x86 * x7 - m4 * x120 - (x47 * x71 + x120) * m5 - m2 * x108
                         - x119 * m3) * l1,

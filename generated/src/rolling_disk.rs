@@ -351,8 +351,7 @@ pub mod lagrange {
         let x3 = f64::sin(psi);
         let x4 = -(R * x3);
         let x5 = R * phi_dot;
-        let x6 = x5 * x3;
-        let x7 = x1 * x5;
+        let x6 = psi_dot * x5;
         Assembly {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
             matrix: [
@@ -363,10 +362,10 @@ pub mod lagrange {
                 [1.0, 0.0, 0.0, x2, 0.0, 0.0],
                 [0.0, 1.0, 0.0, x4, 0.0, 0.0],
             ],
-            force: [0.0, 0.0, 0.0, tq, -(x6 * psi_dot), psi_dot * x7],
+            force: [0.0, 0.0, 0.0, tq, -(x6 * x3), x6 * x1],
             power: tq * phi_dot,
             checks: [],
-            residuals: [x_dot - x7, y_dot - x6],
+            residuals: [x_dot - x1 * x5, y_dot - x5 * x3],
             positions: [0.0, 0.0],
         }
     }

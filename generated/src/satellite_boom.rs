@@ -994,18 +994,18 @@ pub mod lagrange {
         let x102 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
         let x103 = -0.5 * x54 - 0.5;
         let x104 = theta_dot * theta_dot;
-        let x105 = rho_dot * x11;
-        let x106 = x35 * psi_dot;
-        let x107 = theta_dot * x5;
-        let x108 = x107 * x35;
-        let x109 = x9 * rho_dot;
-        let x110 = psi_dot * x33;
-        let x111 = 2.0 * x110 - 2.0 * x109;
-        let x112 = x6 * x111;
-        let x113 = -(m * (theta_dot * (x112 - x108) - x59 * (2.0 * x105 + x106)));
-        let x114 = 2.0 * x105 + 2.0 * x106;
+        let x105 = theta_dot * x5;
+        let x106 = x105 * x35;
+        let x107 = x9 * rho_dot;
+        let x108 = psi_dot * x33;
+        let x109 = 2.0 * x108 - 2.0 * x107;
+        let x110 = x109 * x6;
+        let x111 = x35 * psi_dot;
+        let x112 = rho_dot * x11;
+        let x113 = -((theta_dot * (x110 - x106) - x59 * (x111 + 2.0 * x112)) * m);
+        let x114 = 2.0 * x111 + 2.0 * x112;
         let x115 = x6 * x114;
-        let x116 = x107 * x33;
+        let x116 = x105 * x33;
         let x117 = x5 * rho_dot;
         let x118 = x6 * theta_dot;
         let x119 = x13 * x118;
@@ -1028,9 +1028,9 @@ pub mod lagrange {
         let x136 = theta_dot * Ixx;
         let x137 = x70 * x2;
         let x138 = x135 + x136 - x137;
-        let x139 = x107 * x2 + x6 * x74;
+        let x139 = x105 * x2 + x6 * x74;
         let x140 = Ixy * x139;
-        let x141 = x78 * x6 - x107 * x0;
+        let x141 = x78 * x6 - x105 * x0;
         let x142 = Ixz * x141;
         let x143 = x123 * x61;
         let x144 = x124 * x68;
@@ -1044,47 +1044,46 @@ pub mod lagrange {
             - Iyy * x139;
         let x151 = x137 - x135 - x136;
         let x152 = x50 * x52;
-        let x153 = psi_dot * x11;
-        let x154 = x98 + x104;
-        let x155 = x9 * psi_dot;
-        let x156 = x26 + 2.0 * x1 - x3;
-        let x157 = x5 * (x156 * x2 + (x28 - x17 + 2.0 * x18) * x0) - x127;
-        let x158 = x73 - x75;
-        let x159 = x68 * Izz;
-        let x160 = -x159 - x81;
-        let x161 = Ixy * x61 - x68 * Ixz;
-        let x162 = Iyz * x158 + x96 + x64 * x160 + x95 + x161 * x61 - Iyy * x79;
-        let x163 = x158 * Izz;
-        let x164 = x161 * x68;
-        let x165 = Iyy * x61;
-        let x166 = x165 + x69;
-        let x167 = x166 * x64;
-        let x168 = x158 * Ixz;
-        let x169 = x68 * x160;
-        let x170 = Ixy * x79;
-        let x171 = x68 * x83;
-        let x172 = m * x101;
-        let x173 = -(x154 * x5);
-        let x174 = x74 * x5 - x2 * x118;
-        let x175 = x78 * x5 + x118 * x0;
-        let x176 = x7 * x64 - x68 * x25 + x5 * (x146 - x145) - Iyz * x174 - x6 * x83
-            - Izz * x175;
-        let x177 = x70 * x6 + x5 * x149 - x20 * x64 + Iyz * x175 + x61 * x25
-            + Iyy * x174;
-        let x178 = x68 * x20;
-        let x179 = Ixy * x174;
-        let x180 = Ixz * x175;
-        let x181 = x7 * x61;
-        let x182 = x27 * x64 - x145 - x4 * x72 + x31 * x61 + x59 * Ixy;
-        let x183 = x29 * x64 - x31 * x68 + x59 * Ixz - x72 * x19 - x148;
-        let x184 = x72 * x23;
-        let x185 = x2 * x83;
-        let x186 = x29 * x61;
-        let x187 = x59 * Ixx;
-        let x188 = x70 * x0;
-        let x189 = x68 * x27;
-        let x190 = x68 * (Iyy - Ixx) - x159 - 2.0 * x81 - 2.0 * x82;
-        let x191 = (Iyy + Ixx - Izz) * x61 + Iyz * (2.0 * x66 + 2.0 * x67) + 2.0 * x65;
+        let x153 = x98 + x104;
+        let x154 = x26 + 2.0 * x1 - x3;
+        let x155 = x5 * (x154 * x2 + (x28 - x17 + 2.0 * x18) * x0) - x127;
+        let x156 = x73 - x75;
+        let x157 = x68 * Izz;
+        let x158 = -x157 - x81;
+        let x159 = Ixy * x61 - x68 * Ixz;
+        let x160 = Iyz * x156 + x96 + x64 * x158 + x95 + x159 * x61 - Iyy * x79;
+        let x161 = x156 * Izz;
+        let x162 = x159 * x68;
+        let x163 = Iyy * x61;
+        let x164 = x163 + x69;
+        let x165 = x164 * x64;
+        let x166 = x156 * Ixz;
+        let x167 = x68 * x158;
+        let x168 = Ixy * x79;
+        let x169 = x68 * x83;
+        let x170 = m * x101;
+        let x171 = -(x153 * x5);
+        let x172 = psi_dot * x118;
+        let x173 = x74 * x5 - x2 * x118;
+        let x174 = x78 * x5 + x118 * x0;
+        let x175 = x7 * x64 - x68 * x25 + x5 * (x146 - x145) - Iyz * x173 - x6 * x83
+            - Izz * x174;
+        let x176 = x70 * x6 + x5 * x149 - x20 * x64 + Iyz * x174 + x61 * x25
+            + Iyy * x173;
+        let x177 = x68 * x20;
+        let x178 = Ixy * x173;
+        let x179 = Ixz * x174;
+        let x180 = x7 * x61;
+        let x181 = x27 * x64 - x145 - x4 * x72 + x31 * x61 + x59 * Ixy;
+        let x182 = x29 * x64 - x31 * x68 + x59 * Ixz - x72 * x19 - x148;
+        let x183 = x72 * x23;
+        let x184 = x2 * x83;
+        let x185 = x29 * x61;
+        let x186 = x59 * Ixx;
+        let x187 = x70 * x0;
+        let x188 = x68 * x27;
+        let x189 = x68 * (Iyy - Ixx) - x157 - 2.0 * x81 - 2.0 * x82;
+        let x190 = (Iyy + Ixx - Izz) * x61 + Iyz * (2.0 * x66 + 2.0 * x67) + 2.0 * x65;
         Derivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
@@ -1113,7 +1112,7 @@ pub mod lagrange {
                 x77 - x71 + x80 + x84 + x86,
                 x102 - m * ((l * (-0.25 * x54 - 0.25) + rho * x103) * x98 - x13 * x104),
                 x113,
-                -(m * ((2.0 * x109 - x110) * x59 + theta_dot * (-x115 - x116))),
+                -((x59 * (2.0 * x107 - x108) + theta_dot * (-x115 - x116)) * m),
                 -((x119 - 2.0 * x117) * x120),
             ],
             checks: [],
@@ -1162,10 +1161,10 @@ pub mod lagrange {
                     [0.0, x131, 0.0, x134, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x5 * (x7 * x0 - x20 * x2 + x32), x157, x128, 0.0, 0.0, 0.0, 0.0],
+                    [x5 * (x7 * x0 - x20 * x2 + x32), x155, x128, 0.0, 0.0, 0.0, 0.0],
                     [
-                        x157,
-                        (x17 - x28 - 2.0 * x18) * x2 + x156 * x0,
+                        x155,
+                        (x17 - x28 - 2.0 * x18) * x2 + x154 * x0,
                         x23,
                         0.0,
                         0.0,
@@ -1180,7 +1179,7 @@ pub mod lagrange {
                 ],
                 [
                     [x15 * x5 * x125, 0.0, 0.0, 0.0, x122, x46, 0.0],
-                    [0.0, x172, 0.0, 0.0, x132, x133, x134],
+                    [0.0, x170, 0.0, 0.0, x132, x133, x134],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [x122, x132, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1284,7 +1283,7 @@ pub mod lagrange {
                     0.0,
                     0.0,
                     0.0,
-                    -((theta_dot * (x115 + x116) + x59 * (x110 - 2.0 * x109)) * m),
+                    -((theta_dot * (x115 + x116) + x59 * (x108 - 2.0 * x107)) * m),
                     x113,
                     0.0,
                 ],
@@ -1298,17 +1297,17 @@ pub mod lagrange {
                     (x2 * x147 - x40 * x50 * x54 - x150 * x0) * psi_dot,
                     (x142 - x140 + x143 + x6 * x151 - x144) * psi_dot,
                     -(x13 * psi_dot * x152),
-                    -(m * ((2.0 * (rho_dot * x153) + x154 * x35) * x6 + x107 * x111)),
-                    -((x6 * (x154 * x33 - 2.0 * (x155 * rho_dot)) - x107 * x114) * m),
-                    -((x107 * x13 + 2.0 * (x6 * rho_dot)) * x120),
+                    -((x6 * (2.0 * (psi_dot * x112) + x153 * x35) + x109 * x105) * m),
+                    -(m * (x6 * (x153 * x33 - 2.0 * (x107 * psi_dot)) - x105 * x114)),
+                    -((x105 * x13 + 2.0 * (x6 * rho_dot)) * x120),
                 ],
                 [
                     x5
-                        * (x2 * x162
-                            + (2.0 * x88 - x89 - x163 + x90 - x164 - x167 - x91) * x0)
-                        + x6 * (x169 - x168 - x170 + x171 + (x70 - x165 - x69) * x61),
-                    x2 * (x163 - 2.0 * x88 + x92 + x164 + x167) + x0 * x162,
-                    x168 - x169 + x170 + (x166 - x62 + x65 + x69) * x61 - x171,
+                        * (x2 * x160
+                            + (2.0 * x88 - x89 - x161 + x90 - x162 - x165 - x91) * x0)
+                        + x6 * (x167 - x166 - x168 + x169 + (x70 - x163 - x69) * x61),
+                    x2 * (x161 - 2.0 * x88 + x92 + x162 + x165) + x0 * x160,
+                    x166 - x167 + x168 + (x164 - x62 + x65 + x69) * x61 - x169,
                     0.0,
                     0.0,
                     0.0,
@@ -1319,36 +1318,36 @@ pub mod lagrange {
                     -((2.0 * x100 + x13 * x99) * m),
                     0.0,
                     -((x98 * x103 - x104) * m),
-                    -(m * (x173 * x9 + 2.0 * (x118 * x153))),
-                    -(m * (x173 * x11 - 2.0 * (x155 * x118))),
+                    -(m * (x171 * x9 + 2.0 * (x172 * x11))),
+                    -(m * (x171 * x11 - 2.0 * (x9 * x172))),
                     -(x120 * x118),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x6 * (x178 + x5 * x151 - x179 + x180 - x181)
-                        - (x176 * x0 + x177 * x2) * x5 - x58 * m,
-                    x176 * x2 - x177 * x0 - x40 * x152,
-                    x5 * x138 - x178 + x179 - x180 + x181,
+                    x6 * (x177 + x5 * x151 - x178 + x179 - x180)
+                        - (x175 * x0 + x176 * x2) * x5 - x58 * m,
+                    x175 * x2 - x176 * x0 - x40 * x152,
+                    x5 * x138 - x177 + x178 - x179 + x180,
                     -((rho * (-x54 - 1.0) + l * x103) * x50),
-                    -((2.0 * (x118 * x33) - x5 * x114) * m),
+                    -((2.0 * (x118 * x33) - x114 * x5) * m),
                     -(m * ((2.0 * x117 - 2.0 * x119) * x9 - 2.0 * (x59 * x33))),
                     0.0,
                 ],
                 [
-                    x6 * (x184 + x185 - x186 - x187 + x188 - x189)
-                        - x5 * (x2 * x182 + x183 * x0) - (-0.25 * x37 - x39) * x152,
-                    x2 * x183 - rho_dot * x172 - x182 * x0,
-                    x186 - x184 - x185 + x187 - x188 + x189,
+                    x6 * (x183 + x184 - x185 - x186 + x187 - x188)
+                        - x5 * (x2 * x181 + x182 * x0) - (-0.25 * x37 - x39) * x152,
+                    x2 * x182 - rho_dot * x170 - x181 * x0,
+                    x185 - x183 - x184 + x186 - x187 + x188,
                     x120 * x101,
-                    -((x112 - 2.0 * x108) * m),
-                    -((-x115 - 2.0 * x116) * m),
+                    -(m * (x110 - 2.0 * x106)),
+                    -(m * (-x115 - 2.0 * x116)),
                     -((2.0 * x119 - 2.0 * x117) * m),
                 ],
                 [
-                    -(x5 * (x190 * x0 + x191 * x2)),
-                    x2 * x190 - x191 * x0,
+                    -(x5 * (x189 * x0 + x190 * x2)),
+                    x2 * x189 - x190 * x0,
                     0.0,
                     0.0,
                     0.0,
@@ -1603,55 +1602,54 @@ pub mod lagrange {
         let x86 = x4 * (2.0 * x83 + 2.0 * x84);
         let x87 = x6 * x9;
         let x88 = x87 * theta_dot;
-        let x89 = x3 * rho_dot;
-        let x90 = x4 * x5;
-        let x91 = theta_dot * x90;
-        let x92 = -x4;
-        let x93 = theta_dot * x46;
-        let x94 = x45 * x2;
-        let x95 = x3 * x2;
-        let x96 = x95 * x0;
+        let x89 = x4 * x5 * theta_dot;
+        let x90 = x3 * rho_dot;
+        let x91 = -x4;
+        let x92 = theta_dot * x46;
+        let x93 = x45 * x2;
+        let x94 = x3 * x2;
+        let x95 = x3 * x0;
+        let x96 = x2 * x95;
         let x97 = x0 * x0;
         let x98 = x45 * x50;
         let x99 = x98;
         let x100 = x47 * x0;
-        let x101 = x3 * x0;
-        let x102 = -x96;
-        let x103 = x2 * x2;
-        let x104 = x4 * x0;
-        let x105 = -x95;
-        let x106 = -x0;
-        let x107 = x55 - x53;
-        let x108 = x46 - phi_dot;
-        let x109 = x50 * x108;
-        let x110 = x64 - x98;
-        let x111 = x45 * x45;
-        let x112 = x47 * x108;
-        let x113 = x111 + x112;
-        let x114 = -(x4 * x2);
-        let x115 = -x101;
-        let x116 = x48 - x49;
-        let x117 = x50 * x116;
-        let x118 = x117 - x112;
-        let x119 = x64 - x45 * x116;
-        let x120 = x58 + x59;
-        let x121 = x45 * x108;
-        let x122 = (x103 - x97) * x3;
-        let x123 = x120 + x47 * x45;
-        let x124 = x47 * x116 + x107;
-        let x125 = x10 * x6;
-        let x126 = -x87;
-        let x127 = -(x90 * x8);
-        let x128 = -(x90 * x9);
-        let x129 = -x6;
-        let x130 = x8 * x3;
-        let x131 = x3 * x9;
-        let x132 = -(0.5 * x30);
-        let x133 = 0.5 * x29;
-        let x134 = -(0.5 * x8 * x23);
-        let x135 = -(0.5 * x23 * x9);
-        let x136 = -(0.5 * x28);
-        let x137 = 0.5 * x70 + 0.5 * x77;
+        let x101 = -x96;
+        let x102 = x2 * x2;
+        let x103 = x4 * x0;
+        let x104 = -x94;
+        let x105 = -x0;
+        let x106 = x55 - x53;
+        let x107 = x46 - phi_dot;
+        let x108 = x50 * x107;
+        let x109 = x64 - x98;
+        let x110 = x45 * x45;
+        let x111 = x47 * x107;
+        let x112 = x110 + x111;
+        let x113 = -(x4 * x2);
+        let x114 = -x95;
+        let x115 = x48 - x49;
+        let x116 = x50 * x115;
+        let x117 = x116 - x111;
+        let x118 = x64 - x45 * x115;
+        let x119 = x58 + x59;
+        let x120 = x45 * x107;
+        let x121 = (x102 - x97) * x3;
+        let x122 = x119 + x47 * x45;
+        let x123 = x47 * x115 + x106;
+        let x124 = x10 * x6;
+        let x125 = -x87;
+        let x126 = -(x4 * x22);
+        let x127 = -(x4 * x25);
+        let x128 = -x6;
+        let x129 = x8 * x3;
+        let x130 = x3 * x9;
+        let x131 = -(0.5 * x30);
+        let x132 = 0.5 * x29;
+        let x133 = -(0.5 * x8 * x23);
+        let x134 = -(0.5 * x23 * x9);
+        let x135 = -(0.5 * x28);
+        let x136 = -((0.5 * x70 + 0.5 * x77) * x3);
         ParameterDerivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
@@ -1682,7 +1680,7 @@ pub mod lagrange {
                 x74 - m * ((l * x75 + rho * x76) * x70 - x78),
                 -((theta_dot * (x4 * (2.0 * x82 - 2.0 * x81) - x80) - x85) * m),
                 -((theta_dot * (-x86 - x88) + (2.0 * x81 - x82) * x42) * m),
-                -(theta_dot * m * (x91 - 2.0 * x89)),
+                -(theta_dot * (x89 - 2.0 * x90) * m),
             ],
             checks: [],
             d_qdot: [
@@ -1707,16 +1705,16 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
                 ],
                 [
-                    [x4 * x4, 0.0, x92, 0.0, 0.0, 0.0, 0.0],
+                    [x4 * x4, 0.0, x91, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x92, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                    [x91, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x95 * x95, x96, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x94 * x94, x96, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [x96, x97, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1725,8 +1723,8 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x101 * x101, x102, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x102, x103, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x95 * x95, x101, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x101, x102, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1734,26 +1732,26 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [2.0 * x4 * x95, x104, x105, 0.0, 0.0, 0.0, 0.0],
-                    [x104, 0.0, x106, 0.0, 0.0, 0.0, 0.0],
-                    [x105, x106, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [2.0 * x4 * x94, x103, x104, 0.0, 0.0, 0.0, 0.0],
+                    [x103, 0.0, x105, 0.0, 0.0, 0.0, 0.0],
+                    [x104, x105, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [2.0 * x4 * x101, x114, x115, 0.0, 0.0, 0.0, 0.0],
-                    [x114, 0.0, x2, 0.0, 0.0, 0.0, 0.0],
-                    [x115, x2, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [2.0 * x4 * x95, x113, x114, 0.0, 0.0, 0.0, 0.0],
+                    [x113, 0.0, x2, 0.0, 0.0, 0.0, 0.0],
+                    [x114, x2, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [-(2.0 * x95 * x101), x122, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x122, 2.0 * x2 * x0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [-(2.0 * x94 * x95), x121, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x121, 2.0 * x2 * x0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1761,29 +1759,29 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x125 * x6, 0.0, 0.0, 0.0, x126, x79, 0.0],
-                    [0.0, x21, 0.0, 0.0, x127, x128, x129],
+                    [x124 * x6, 0.0, 0.0, 0.0, x125, x79, 0.0],
+                    [0.0, x21, 0.0, 0.0, x126, x127, x128],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 1.0, x130, x131, x92],
-                    [x126, x127, 0.0, x130, 1.0, 0.0, 0.0],
-                    [x79, x128, 0.0, x131, 0.0, 1.0, 0.0],
-                    [0.0, x129, 0.0, x92, 0.0, 0.0, 1.0],
+                    [0.0, 0.0, 0.0, 1.0, x129, x130, x91],
+                    [x125, x126, 0.0, x129, 1.0, 0.0, 0.0],
+                    [x79, x127, 0.0, x130, 0.0, 1.0, 0.0],
+                    [0.0, x128, 0.0, x91, 0.0, 0.0, 1.0],
                 ],
                 [
-                    [x125 * x28, 0.0, 0.0, 0.0, x132, x133, 0.0],
-                    [0.0, x5 * m, 0.0, 0.0, x134, x135, x136],
+                    [x124 * x28, 0.0, 0.0, 0.0, x131, x132, 0.0],
+                    [0.0, x5 * m, 0.0, 0.0, x133, x134, x135],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x131, x133, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [x132, x134, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x133, x135, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x136, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x135, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x47 * (x45 * x0 - x50 * x2) - x93) * x3,
-                    -(x47 * (x94 + x50 * x0)),
+                    (x47 * (x45 * x0 - x50 * x2) - x92) * x3,
+                    -(x47 * (x93 + x50 * x0)),
                     x64,
                     0.0,
                     0.0,
@@ -1792,7 +1790,7 @@ pub mod lagrange {
                 ],
                 [
                     -x4 * x99 - (x2 * x56 + x100 * x45) * x3,
-                    x94 * x47 - x56 * x0,
+                    x93 * x47 - x56 * x0,
                     x99,
                     0.0,
                     0.0,
@@ -1800,7 +1798,7 @@ pub mod lagrange {
                     0.0,
                 ],
                 [
-                    x50 * (x4 * x45 + x47 * x95) - x60 * x101,
+                    x50 * (x4 * x45 + x47 * x94) - x60 * x95,
                     x100 * x50 + x2 * x60,
                     -x99,
                     0.0,
@@ -1809,27 +1807,27 @@ pub mod lagrange {
                     0.0,
                 ],
                 [
-                    x4 * (x107 - x109) - x3 * (x2 * x110 + x0 * x113),
-                    x2 * x113 - x0 * x110,
-                    x56 + x109,
+                    x4 * (x106 - x108) - x3 * (x2 * x109 + x0 * x112),
+                    x2 * x112 - x0 * x109,
+                    x56 + x108,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x4 * (x120 + x121) - x3 * (x2 * x118 + x119 * x0),
-                    x2 * x119 - x118 * x0,
-                    x60 - x121,
+                    x4 * (x119 + x120) - x3 * (x2 * x117 + x118 * x0),
+                    x2 * x118 - x117 * x0,
+                    x60 - x120,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x4 * (-x111 - x117) - (x123 * x2 + x124 * x0) * x3,
-                    x124 * x2 - x123 * x0,
-                    x111 + x117,
+                    x4 * (-x110 - x116) - (x122 * x2 + x123 * x0) * x3,
+                    x123 * x2 - x122 * x0,
+                    x110 + x116,
                     0.0,
                     0.0,
                     0.0,
@@ -1843,15 +1841,15 @@ pub mod lagrange {
                     x78 + (rho * x40 + l * (0.25 * x38 + 0.25)) * x70,
                     x85 + theta_dot * (x80 + (2.0 * x81 - 2.0 * x82) * x4),
                     x42 * (x82 - 2.0 * x81) + theta_dot * (x86 + x88),
-                    theta_dot * (2.0 * x89 - x91),
+                    theta_dot * (2.0 * x90 - x89),
                 ],
                 [
                     -(x33 * (x41 - x5 * x36)),
                     -((x71 * (0.5 * rho + 0.25 * l) + x72) * m),
                     0.0,
                     -(m * (x70 * x75 - 0.5 * x77)),
-                    -((x93 * x9 - x137 * x130) * m),
-                    -(m * (-x93 * x8 - x137 * x131)),
+                    -(m * (x92 * x9 + x8 * x136)),
+                    -(m * (x136 * x9 - x92 * x8)),
                     -(0.5 * x77 * x23),
                 ],
             ],
@@ -2653,360 +2651,362 @@ pub mod maggi {
         let x22 = x21 * x1;
         let x23 = x0 * x16 + x22;
         let x24 = x23 * x1;
-        let x25 = f64::cos(theta);
-        let x26 = 1.0 / x25;
-        let x27 = x26 * x0;
-        let x28 = f64::sin(theta);
-        let x29 = x28 * x4;
-        let x30 = x25 * x16 - x29;
-        let x31 = x30 * x1;
-        let x32 = Iyy * x0;
-        let x33 = x32 - x11;
-        let x34 = x33 * x25 + x28 * Ixy;
-        let x35 = x34 * x0;
-        let x36 = rho + 0.5 * l;
-        let x37 = x36 * m;
-        let x38 = x25 * x37;
-        let x39 = x36 * x38;
-        let x40 = f64::cos(psi);
-        let x41 = x40 * x40;
-        let x42 = f64::sin(psi);
-        let x43 = x42 * x42;
-        let x44 = Izz * x1;
-        let x45 = x44 - x14;
-        let x46 = x25 * x45 + x28 * Ixz;
-        let x47 = x46 * x1;
-        let x48 = (x35 + x39 * (x41 + x43)) + x47;
-        let x49 = (x6 * x28 + x31) + x48 * x0;
-        let x50 = x26 * x1;
-        let x51 = x23 * x0;
-        let x52 = x49 * x50 - x51;
-        let x53 = x28 * x40;
-        let x54 = x0 * x42 + x53 * x1;
-        let x55 = -(x54 * x37);
-        let x56 = x28 * x42;
-        let x57 = x56 * x1;
-        let x58 = x40 * x0;
-        let x59 = x58 - x57;
-        let x60 = x37 * x59;
-        let x61 = x38 * x1;
-        let x62 = -x61;
-        let x63 = x48 * x1;
-        let x64 = x30 * x0;
-        let x65 = x63 - x64 + x28 * x9;
-        let x66 = x21 * x0;
-        let x67 = x16 * x1 - x66;
-        let x68 = x53 * x0 - x1 * x42;
-        let x69 = x37 * x68;
-        let x70 = x56 * x0 + x40 * x1;
-        let x71 = x37 * x70;
-        let x72 = x0 * x38;
-        let x73 = x25 * m;
-        let x74 = x73 * x40;
-        let x75 = x73 * x42;
-        let x76 = -(x28 * m);
-        let x77 = m + mg;
-        let x78 = x25 * psi_dot;
-        let x79 = x78 * phi_dot;
-        let x80 = x28 * psi_dot;
-        let x81 = phi_dot + x80;
-        let x82 = theta_dot * x1;
-        let x83 = -x0 * x79 - x81 * x82;
-        let x84 = x83 * Ixz;
-        let x85 = x78 * x0;
-        let x86 = x85 + x82;
-        let x87 = theta_dot * x0;
-        let x88 = x78 * x1 - x87;
-        let x89 = Izz * x88;
-        let x90 = phi_dot - x80;
-        let x91 = Ixz * x90;
-        let x92 = Iyz * x86;
-        let x93 = x89 + (-x91 - x92);
-        let x94 = x86 * x93;
-        let x95 = Ixy * x90;
-        let x96 = Iyz * x88;
-        let x97 = Iyy * x86 - x95 - x96;
-        let x98 = x97 * x88;
-        let x99 = x87 * x81;
-        let x100 = x79 * x1;
-        let x101 = x100 - x99;
-        let x102 = Ixy * x101;
-        let x103 = 2.0 * theta;
-        let x104 = f64::sin(x103);
-        let x105 = x26 * psi_dot * x104;
-        let x106 = 0.5 * x105 + phi_dot;
-        let x107 = x106 * x26;
-        let x108 = x28 * Ixx;
-        let x109 = -(x25 * x2);
-        let x110 = x109 - x108;
-        let x111 = x107 * x110;
-        let x112 = 3.0 * theta;
-        let x113 = x26 * f64::cos(x112);
-        let x114 = 0.25 - 0.25 * x113;
-        let x115 = x28 * phi_dot;
-        let x116 = (x114 * psi_dot + x115) * x26;
-        let x117 = x116 * Ixx;
-        let x118 = ((x84 - x94) + (x98 + x102)) + (x4 * x79 - theta_dot * (x111 + x117));
-        let x119 = x48 * x25;
-        let x120 = x119 - x28 * x110;
-        let x121 = x120 * x107;
-        let x122 = x116 + x78;
-        let x123 = x122 * x110;
-        let x124 = psi_dot * phi_dot;
-        let x125 = Ixx * x90 - Ixy * x86 - Ixz * x88;
-        let x126 = x125 * x86;
-        let x127 = x78 * theta_dot;
-        let x128 = (-x126 - Iyz * x101) + ((x97 * x90 + x127 * Ixz) + x83 * Izz);
-        let x129 = x128 * x1;
-        let x130 = x83 * Iyz;
-        let x131 = x93 * x90;
-        let x132 = Iyy * x101;
-        let x133 = Ixy * x127;
-        let x134 = (x132 - x131) + x133;
-        let x135 = x125 * x88 - x130 + x134;
-        let x136 = x135 * x0;
-        let x137 = psi_dot * m;
-        let x138 = theta_dot * x104;
-        let x139 = f64::cos(x103);
-        let x140 = x139 + 1.0;
-        let x141 = rho_dot * x140;
-        let x142 = 0.5 * x139 + 0.5;
-        let x143 = rho * (x141 - x18 * x138) + (x142 * rho_dot - 0.25 * (l * x138)) * l;
-        let x144 = x94 - x84 - x98 - x102 - x127 * Ixx;
-        let x145 = ((x124 * x30 - x129 - x136) * x25 - (x121 + x123) * theta_dot)
-            + (x28 * x144 - x137 * x143);
-        let x146 = x145 + x28 * x118;
-        let x147 = x4 * x122;
-        let x148 = x107 * x30;
-        let x149 = psi_dot * psi_dot;
-        let x150 = x149 * x104;
-        let x151 = theta_dot * rho_dot;
-        let x152 = 2.0 * rho + l;
-        let x153 = x0 * x128 - theta_dot * (x147 + x148) - x135 * x1 + x21 * x79
-            - m * (x150 * (rho * (0.5 * rho + 0.5 * l) + 0.125 * x17) + x151 * x152);
-        let x154 = x153 * x1;
-        let x155 = x153 * x0;
-        let x156 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x157 = -0.5 * x139 - 0.5;
-        let x158 = theta_dot * theta_dot;
-        let x159 = rho_dot * x42;
-        let x160 = x36 * x40;
-        let x161 = x160 * psi_dot;
-        let x162 = theta_dot * x106;
-        let x163 = x162 * x42 - x53 * x79;
-        let x164 = theta_dot * x25;
-        let x165 = x164 * x160;
-        let x166 = x40 * rho_dot;
-        let x167 = x36 * x42;
-        let x168 = psi_dot * x167;
-        let x169 = 2.0 * x168 - 2.0 * x166;
-        let x170 = x28 * x169;
-        let x171 = m
-            * (x78 * (2.0 * x159 + x161) + x36 * x163 - theta_dot * (x170 - x165));
-        let x172 = x56 * x79;
-        let x173 = x40 * x162;
-        let x174 = x36 * (x172 + x173);
-        let x175 = 2.0 * x159 + 2.0 * x161;
-        let x176 = x28 * x175;
-        let x177 = x164 * x167;
-        let x178 = x25 * rho_dot;
-        let x179 = x28 * theta_dot;
-        let x180 = x36 * x179;
-        let x181 = x25 * x79;
-        let x182 = -x0;
-        let x183 = x28 * x27;
-        let x184 = x28 * x50;
-        let x185 = theta_dot * x26;
-        let x186 = x37 * (x57 - x58);
-        let x187 = -(x37 * x70);
-        let x188 = -x75;
-        let x189 = Ixx * x25;
-        let x190 = x28 * x2;
-        let x191 = x190 - x189;
-        let x192 = Ixx + (x191 - x190) * x26;
-        let x193 = x192 * x0;
-        let x194 = x192 * x1;
-        let x195 = x28 * x16;
-        let x196 = -x4 * x25 - x195;
-        let x197 = x4 + x26 * (x196 + x195);
-        let x198 = Ixy * x25 + x28 * (x11 - x32);
-        let x199 = x28 * (x14 - x44) + x25 * Ixz;
-        let x200 = 2.0 * x41 + 2.0 * x43;
-        let x201 = x25 * (x108 - x109 + x0 * x198 + x199 * x1)
-            + x28 * (x189 - x35 - x47 - x190 - x39 * x200);
-        let x202 = x26 * ((x48 + x191) * x28 + x201) + x110;
-        let x203 = x6 + x26 * (x196 * x1 + (x26 * x49 + x193) * x28 + x202 * x0);
-        let x204 = x0 * x0;
-        let x205 = x203 * x1 - x197 * x204;
-        let x206 = -(x61 * x40);
-        let x207 = -(x61 * x42);
-        let x208 = x28 * x37;
-        let x209 = x208 * x1;
-        let x210 = x72 * x40;
-        let x211 = x72 * x42;
-        let x212 = -(x208 * x0);
-        let x213 = -(x53 * m);
-        let x214 = -(x56 * m);
-        let x215 = -x73;
-        let x216 = x0 * x115 - x164 * x1;
-        let x217 = x216 * Ixz;
-        let x218 = x4 * phi_dot;
-        let x219 = theta_dot * Ixx;
-        let x220 = x0 * x93;
-        let x221 = x97 * x1;
-        let x222 = (x220 - x219) - x221;
-        let x223 = x164 * x0 + x115 * x1;
-        let x224 = Ixy * x223;
-        let x225 = x198 * x88;
-        let x226 = x199 * x86;
-        let x227 = psi_dot * x139;
-        let x228 = x28 * (x105 + phi_dot);
-        let x229 = x227 + x228;
-        let x230 = x26 * x229;
-        let x231 = x26 * x26;
-        let x232 = x90
-            + (0.75 * (psi_dot * f64::sin(x112))
-                + x28 * ((0.25 - 0.5 * x113) * psi_dot + x115)) * x231;
-        let x233 = psi_dot * (x217 + x28 * (x222 - x218) - x224 + x225 - x226)
-            + theta_dot * (-(x110 * x230 + x106 * x191) * x26 - Ixx * x232);
-        let x234 = x125 * x0;
-        let x235 = theta_dot * Ixz;
-        let x236 = x198 * x90 + Iyz * x223 + x216 * Izz + x28 * (x234 - x235) - x25 * x97
-            - x86 * x191;
-        let x237 = x20 * x137;
-        let x238 = x125 * x1;
-        let x239 = Ixy * theta_dot + x238;
-        let x240 = x191 * x88 - x239 * x28 - x199 * x90 - Iyz * x216 + x25 * x93
-            - Iyy * x223;
-        let x241 = (-x4 * x232 - x26 * (x30 * x230 + x106 * x196)) * theta_dot
-            + psi_dot * (x0 * x236 - x21 * x115 - x237 * x139 - x240 * x1);
-        let x242 = (x219 - x220) + x221;
-        let x243 = x30 * phi_dot;
-        let x244 = x26
-            * (x28 * (x129 + x136)
-                + (x28 * (x28 * x242 - x217 - x243 + x224 - x225 + x226)
-                    - ((-0.5 * x17 - rho * (2.0 * rho + 2.0 * l)) * theta_dot * x139
-                        - rho_dot * x152 * x104) * m
-                    + x25 * (phi_dot * x196 - x0 * x240 - x236 * x1)) * psi_dot
-                + (-x26 * (x120 * x230 + x106 * x201) - x191 * x122 - x110 * x232)
-                    * theta_dot + x28 * (x26 * x146 + x233) + x144 * x25) + x118;
-        let x245 = psi_dot * x42;
-        let x246 = x149 + x158;
-        let x247 = x28 * x28;
-        let x248 = x124 * (x247 - x25 * x25);
-        let x249 = x28 * x106;
-        let x250 = x40 * psi_dot;
-        let x251 = x247 * x231 + 1.0;
-        let x252 = x26 * x109 + x2;
-        let x253 = -(x252 * x0);
-        let x254 = x10 + 2.0 * x11 - x32;
-        let x255 = (x44 - x13 - 2.0 * x14) * x0 + x254 * x1;
-        let x256 = x25 * (x254 * x0 + (x13 - x44 + 2.0 * x14) * x1);
-        let x257 = x256 - x190;
-        let x258 = x255 * x1 + (x257 * x0 + x28 * (x3 + x5) + x31) * x26 - x66;
-        let x259 = x34 * x1 - x46 * x0;
-        let x260 = x29 + x259;
-        let x261 = x260 * x0 + (x48 + x257) * x1;
-        let x262 = (x1 * x261 - x0 * x49) * x26 - x0 * x258 - x24;
-        let x263 = x54 * x37;
-        let x264 = x86 * Izz;
-        let x265 = -x264 - x96;
-        let x266 = x86 * x265;
-        let x267 = Iyy * x88;
-        let x268 = x267 + x92;
-        let x269 = x83 * Ixy;
-        let x270 = x99 - x100;
-        let x271 = x270 * Ixz;
-        let x272 = x86 * x97;
-        let x273 = (x91 - x89 + x268 + x92) * x88 - x4 * x162 - x266 + x269 + x79 * x2
-            + x271 - x272;
-        let x274 = Ixy * x88 - x86 * Ixz;
-        let x275 = Iyz * x270 + x126 + x274 * x88 + x265 * x90 + x128 - x83 * Iyy;
-        let x276 = x274 * x86;
-        let x277 = x268 * x90;
-        let x278 = x270 * Izz;
-        let x279 = x25
-            * (x0 * x275 + (x131 - x132 + 2.0 * x130 - x276 - x277 - x278 - x133) * x1
-                + x124 * x257 - x147 * theta_dot) - (x30 + x259) * x162
-            + x28 * (x266 + x88 * (x93 - x267 - x92) - x269 - x271 + x272);
-        let x280 = (x276 - 2.0 * x130 + x277 + x278 + x134) * x0
-            - (x122 * x2 + x107 * x257) * theta_dot + x275 * x1 + x255 * x79;
-        let x281 = x1 * x1;
-        let x282 = x36 * x200;
-        let x283 = (x282 - 2.0 * rho - l) * m * x0 * x1;
-        let x284 = -(x54 * m);
-        let x285 = m * x59;
-        let x286 = -(x73 * x1);
-        let x287 = m * x68;
-        let x288 = m * x70;
-        let x289 = x73 * x0;
-        let x290 = x79 * x152 - 2.0 * x151 - x36 * x150;
-        let x291 = (x141 - x138 * x152) * psi_dot + x164 * x106 * x282;
-        let x292 = x40 * x25;
-        let x293 = x25 * x42;
-        let x294 = x25 * phi_dot;
-        let x295 = x0 * x294 + x179 * x1;
-        let x296 = x295 * Ixz;
-        let x297 = x86 * x46;
-        let x298 = x1 * x294 - x0 * x179;
-        let x299 = Ixy * x298;
-        let x300 = x25 + x114 * x26;
-        let x301 = x104 * x231;
-        let x302 = x34 * x88;
-        let x303 = x25 * (x218 + x242) - x296 - x297 + x299
-            - theta_dot * (Ixx * x300 + 0.5 * (x110 * x301)) + x302;
-        let x304 = x239 * x25 + Iyz * x295 + Iyy * x298 - x46 * x90 + x28 * x93
-            + x110 * x88;
-        let x305 = (x235 - x234) * x25 - x295 * Izz - x28 * x97 - Iyz * x298 - x86 * x110
-            + x34 * x90;
-        let x306 = x28 * x303 - x143 * m + x25 * (x243 - x304 * x0 - x305 * x1)
-            - theta_dot * (x110 * x300 + 0.5 * (x120 * x301))
-            + x28 * (x25 * x222 + x296 + x297 - x299 - x302);
-        let x307 = x21 * x294 - x237 * x104 - x304 * x1
-            - theta_dot * (x4 * x300 + 0.5 * (x30 * x301)) + x0 * x305;
-        let x308 = x104 * x185;
-        let x309 = x81 * x2;
-        let x310 = x93 * x1;
-        let x311 = x15 * x88;
-        let x312 = x97 * x0;
-        let x313 = x86 * x12;
-        let x314 = x311 - x111 - x309 - x310 - x312 + x313 - x117;
-        let x315 = x4 * x88 - x234 - x33 * x81 + x12 * x90 + x78 * Ixy;
-        let x316 = x15 * x90 - x238 - x4 * x86 + x78 * Ixz - x81 * x45;
-        let x317 = x28 * x314 - x137 * (-0.25 * x17 - x19) * x104
-            - (x0 * x315 + x1 * x316) * x25 - x121 - x123
-            + x28 * (x309 + x310 - x311 - x78 * Ixx + x312 - x313);
-        let x318 = x0 * x316 - x147 - x1 * x315 - m * rho_dot * x152 - x148;
-        let x319 = x164 * x26;
-        let x320 = x319 * x2 + x78 * x4;
-        let x321 = x86 * (Iyy - Ixx) - 2.0 * x95 - x264 - 2.0 * x96;
-        let x322 = 2.0 * x91 + (Iyy + Ixx - Izz) * x88 + Iyz * (2.0 * x85 + 2.0 * x82);
-        let x323 = x28 * x320 - x319 * x48
-            + (x30 * psi_dot - x321 * x1 - x0 * x322) * x25;
-        let x324 = x78 * x21 + x0 * x321 - x319 * x16 - x322 * x1;
-        let x325 = psi_dot * (rho * x140 + l * x142);
+        let x25 = f64::sin(theta);
+        let x26 = x25 * x4;
+        let x27 = f64::cos(theta);
+        let x28 = x27 * x16;
+        let x29 = x28 - x26;
+        let x30 = x29 * x1;
+        let x31 = Iyy * x0;
+        let x32 = x31 - x11;
+        let x33 = x32 * x27 + x25 * Ixy;
+        let x34 = x33 * x0;
+        let x35 = rho + 0.5 * l;
+        let x36 = x35 * m;
+        let x37 = x27 * x36;
+        let x38 = x35 * x37;
+        let x39 = f64::cos(psi);
+        let x40 = x39 * x39;
+        let x41 = f64::sin(psi);
+        let x42 = x41 * x41;
+        let x43 = Izz * x1;
+        let x44 = x43 - x14;
+        let x45 = x27 * x44 + x25 * Ixz;
+        let x46 = x45 * x1;
+        let x47 = (x34 + x38 * (x40 + x42)) + x46;
+        let x48 = (x6 * x25 + x30) + x47 * x0;
+        let x49 = 1.0 / x27;
+        let x50 = x49 * x0;
+        let x51 = x49 * x1;
+        let x52 = x23 * x0;
+        let x53 = x48 * x51 - x52;
+        let x54 = x25 * x39;
+        let x55 = x0 * x41 + x54 * x1;
+        let x56 = -(x55 * x36);
+        let x57 = x25 * x41;
+        let x58 = x57 * x1;
+        let x59 = x39 * x0;
+        let x60 = x59 - x58;
+        let x61 = x36 * x60;
+        let x62 = x37 * x1;
+        let x63 = -x62;
+        let x64 = x0 * x29;
+        let x65 = x47 * x1;
+        let x66 = x65 - x64 + x25 * x9;
+        let x67 = x21 * x0;
+        let x68 = x16 * x1 - x67;
+        let x69 = x54 * x0 - x1 * x41;
+        let x70 = x36 * x69;
+        let x71 = x57 * x0 + x39 * x1;
+        let x72 = x36 * x71;
+        let x73 = x0 * x37;
+        let x74 = x27 * m;
+        let x75 = x74 * x39;
+        let x76 = x74 * x41;
+        let x77 = -(x25 * m);
+        let x78 = m + mg;
+        let x79 = x27 * psi_dot;
+        let x80 = x79 * phi_dot;
+        let x81 = x25 * psi_dot;
+        let x82 = phi_dot + x81;
+        let x83 = theta_dot * x1;
+        let x84 = -x0 * x80 - x82 * x83;
+        let x85 = x84 * Ixz;
+        let x86 = x79 * x0;
+        let x87 = x86 + x83;
+        let x88 = theta_dot * x0;
+        let x89 = x79 * x1 - x88;
+        let x90 = Izz * x89;
+        let x91 = phi_dot - x81;
+        let x92 = Ixz * x91;
+        let x93 = Iyz * x87;
+        let x94 = x90 + (-x92 - x93);
+        let x95 = x87 * x94;
+        let x96 = Ixy * x91;
+        let x97 = Iyz * x89;
+        let x98 = Iyy * x87 - x96 - x97;
+        let x99 = x98 * x89;
+        let x100 = x88 * x82;
+        let x101 = x80 * x1;
+        let x102 = x101 - x100;
+        let x103 = Ixy * x102;
+        let x104 = 2.0 * theta;
+        let x105 = f64::sin(x104);
+        let x106 = x49 * x105;
+        let x107 = x106 * psi_dot;
+        let x108 = 0.5 * x107 + phi_dot;
+        let x109 = x49 * x108;
+        let x110 = x25 * Ixx;
+        let x111 = -(x27 * x2);
+        let x112 = x111 - x110;
+        let x113 = x109 * x112;
+        let x114 = 3.0 * theta;
+        let x115 = x49 * f64::cos(x114);
+        let x116 = 0.25 - 0.25 * x115;
+        let x117 = x25 * phi_dot;
+        let x118 = (x116 * psi_dot + x117) * x49;
+        let x119 = x118 * Ixx;
+        let x120 = ((x85 - x95) + (x99 + x103)) + (x4 * x80 - theta_dot * (x113 + x119));
+        let x121 = psi_dot * phi_dot;
+        let x122 = Ixx * x91 - Ixy * x87 - Ixz * x89;
+        let x123 = x122 * x87;
+        let x124 = x79 * theta_dot;
+        let x125 = (-x123 - Iyz * x102) + ((x98 * x91 + x124 * Ixz) + x84 * Izz);
+        let x126 = x125 * x1;
+        let x127 = x84 * Iyz;
+        let x128 = x94 * x91;
+        let x129 = Iyy * x102;
+        let x130 = Ixy * x124;
+        let x131 = (x129 - x128) + x130;
+        let x132 = x122 * x89 - x127 + x131;
+        let x133 = x132 * x0;
+        let x134 = x47 * x27;
+        let x135 = x134 - x25 * x112;
+        let x136 = x135 * x109;
+        let x137 = x118 + x79;
+        let x138 = x137 * x112;
+        let x139 = psi_dot * m;
+        let x140 = theta_dot * x105;
+        let x141 = f64::cos(x104);
+        let x142 = x141 + 1.0;
+        let x143 = rho_dot * x142;
+        let x144 = 0.5 * x141 + 0.5;
+        let x145 = rho * (x143 - x18 * x140) + (x144 * rho_dot - 0.25 * (l * x140)) * l;
+        let x146 = x95 - x85 - x99 - x103 - x124 * Ixx;
+        let x147 = (x27 * (x121 * x29 - x126 - x133) - theta_dot * (x136 + x138))
+            + (x25 * x146 - x139 * x145);
+        let x148 = x25 * x120 + x147;
+        let x149 = x4 * x137;
+        let x150 = x109 * x29;
+        let x151 = psi_dot * psi_dot;
+        let x152 = x151 * x105;
+        let x153 = theta_dot * rho_dot;
+        let x154 = 2.0 * rho + l;
+        let x155 = x0 * x125 - x132 * x1 - theta_dot * (x149 + x150) + x21 * x80
+            - m * (x152 * (rho * (0.5 * rho + 0.5 * l) + 0.125 * x17) + x153 * x154);
+        let x156 = x155 * x1;
+        let x157 = x0 * x155;
+        let x158 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x159 = -0.5 * x141 - 0.5;
+        let x160 = theta_dot * theta_dot;
+        let x161 = theta_dot * x27;
+        let x162 = x35 * x39;
+        let x163 = x161 * x162;
+        let x164 = x39 * rho_dot;
+        let x165 = x35 * x41;
+        let x166 = psi_dot * x165;
+        let x167 = 2.0 * x166 - 2.0 * x164;
+        let x168 = x167 * x25;
+        let x169 = theta_dot * x108;
+        let x170 = x41 * x169 - x54 * x80;
+        let x171 = x162 * psi_dot;
+        let x172 = rho_dot * x41;
+        let x173 = m
+            * (x35 * x170 - theta_dot * (x168 - x163) + x79 * (x171 + 2.0 * x172));
+        let x174 = x57 * x80;
+        let x175 = x39 * x169;
+        let x176 = x35 * (x174 + x175);
+        let x177 = 2.0 * x171 + 2.0 * x172;
+        let x178 = x25 * x177;
+        let x179 = x161 * x165;
+        let x180 = x25 * x35 * theta_dot;
+        let x181 = x27 * rho_dot;
+        let x182 = x35 * x80;
+        let x183 = -x0;
+        let x184 = x25 * x50;
+        let x185 = x25 * x51;
+        let x186 = theta_dot * x49;
+        let x187 = x36 * (x58 - x59);
+        let x188 = -(x36 * x71);
+        let x189 = -x76;
+        let x190 = Ixx * x27;
+        let x191 = x25 * x2;
+        let x192 = x191 - x190;
+        let x193 = Ixx + (x192 - x191) * x49;
+        let x194 = x193 * x0;
+        let x195 = x193 * x1;
+        let x196 = x25 * x16;
+        let x197 = -x4 * x27 - x196;
+        let x198 = x4 + x49 * (x197 + x196);
+        let x199 = Ixy * x27 + x25 * (x11 - x31);
+        let x200 = x25 * (x14 - x43) + x27 * Ixz;
+        let x201 = 2.0 * x40 + 2.0 * x42;
+        let x202 = x27 * (x110 - x111 + x0 * x199 + x200 * x1)
+            + x25 * (x190 - x34 - x46 - x191 - x38 * x201);
+        let x203 = x49 * ((x47 + x192) * x25 + x202) + x112;
+        let x204 = x6 + x49 * (x197 * x1 + x25 * (x48 * x49 + x194) + x203 * x0);
+        let x205 = x0 * x0;
+        let x206 = x204 * x1 - x198 * x205;
+        let x207 = -(x62 * x39);
+        let x208 = -(x62 * x41);
+        let x209 = x25 * x36;
+        let x210 = x209 * x1;
+        let x211 = x73 * x39;
+        let x212 = x73 * x41;
+        let x213 = -(x209 * x0);
+        let x214 = -(x54 * m);
+        let x215 = -(x57 * m);
+        let x216 = -x74;
+        let x217 = x0 * x117 - x161 * x1;
+        let x218 = x217 * Ixz;
+        let x219 = x4 * phi_dot;
+        let x220 = theta_dot * Ixx;
+        let x221 = x0 * x94;
+        let x222 = x98 * x1;
+        let x223 = (x221 - x220) - x222;
+        let x224 = x161 * x0 + x117 * x1;
+        let x225 = Ixy * x224;
+        let x226 = x199 * x89;
+        let x227 = x200 * x87;
+        let x228 = x49 * x49;
+        let x229 = x91
+            + (0.75 * (psi_dot * f64::sin(x114))
+                + x25 * ((0.25 - 0.5 * x115) * psi_dot + x117)) * x228;
+        let x230 = psi_dot * x141;
+        let x231 = x25 * (x107 + phi_dot);
+        let x232 = x230 + x231;
+        let x233 = x49 * x232;
+        let x234 = psi_dot * (x218 + x25 * (x223 - x219) - x225 + x226 - x227)
+            + (-Ixx * x229 - x49 * (x108 * x192 + x233 * x112)) * theta_dot;
+        let x235 = x122 * x0;
+        let x236 = theta_dot * Ixz;
+        let x237 = x199 * x91 + Iyz * x224 + x217 * Izz + x25 * (x235 - x236) - x27 * x98
+            - x87 * x192;
+        let x238 = x20 * x139;
+        let x239 = x122 * x1;
+        let x240 = Ixy * theta_dot + x239;
+        let x241 = x192 * x89 - x240 * x25 - x200 * x91 - Iyz * x217 + x27 * x94
+            - Iyy * x224;
+        let x242 = psi_dot * (x0 * x237 - x21 * x117 - x238 * x141 - x241 * x1)
+            + theta_dot * (-x4 * x229 - x49 * (x108 * x197 + x233 * x29));
+        let x243 = x29 * phi_dot;
+        let x244 = (x220 - x221) + x222;
+        let x245 = (x25 * (x126 + x133) + x25 * (x49 * x148 + x234)
+            + theta_dot
+                * (-x192 * x137 - x49 * (x108 * x202 + x135 * x233) - x112 * x229)
+            + x146 * x27
+            + psi_dot
+                * (x25 * (x25 * x244 - x218 - x243 + x225 - x226 + x227)
+                    - ((-0.5 * x17 - rho * (2.0 * rho + 2.0 * l)) * theta_dot * x141
+                        - rho_dot * x154 * x105) * m
+                    + x27 * (phi_dot * x197 - x0 * x241 - x237 * x1))) * x49 + x120;
+        let x246 = x25 * x25;
+        let x247 = x121 * (x246 - x27 * x27);
+        let x248 = x25 * x108;
+        let x249 = x41 * x186;
+        let x250 = x151 + x160;
+        let x251 = x39 * x186;
+        let x252 = x246 * x228 + 1.0;
+        let x253 = x49 * x111 + x2;
+        let x254 = -(x253 * x0);
+        let x255 = x33 * x1 - x45 * x0;
+        let x256 = x26 + x255;
+        let x257 = x10 + 2.0 * x11 - x31;
+        let x258 = x27 * (x257 * x0 + (x13 - x43 + 2.0 * x14) * x1);
+        let x259 = x258 - x191;
+        let x260 = x256 * x0 + (x47 + x259) * x1;
+        let x261 = (x43 - x13 - 2.0 * x14) * x0 + x257 * x1;
+        let x262 = x261 * x1 - x67 + x49 * (x259 * x0 + x25 * (x3 + x5) + x30);
+        let x263 = x49 * (x1 * x260 - x48 * x0) - x24 - x262 * x0;
+        let x264 = x55 * x36;
+        let x265 = x87 * Izz;
+        let x266 = -x265 - x97;
+        let x267 = x87 * x266;
+        let x268 = Iyy * x89;
+        let x269 = x268 + x93;
+        let x270 = x84 * Ixy;
+        let x271 = x100 - x101;
+        let x272 = x271 * Ixz;
+        let x273 = x87 * x98;
+        let x274 = (x92 - x90 + x269 + x93) * x89 - x4 * x169 - x267 + x270 + x80 * x2
+            + x272 - x273;
+        let x275 = Ixy * x89 - x87 * Ixz;
+        let x276 = x275 * x87;
+        let x277 = x269 * x91;
+        let x278 = x271 * Izz;
+        let x279 = Iyz * x271 + x123 + x275 * x89 + x266 * x91 + x125 - x84 * Iyy;
+        let x280 = (x276 - 2.0 * x127 + x277 + x278 + x131) * x0
+            - theta_dot * (x137 * x2 + x259 * x109) + x279 * x1 + x261 * x80;
+        let x281 = x27
+            * (x0 * x279 + (x128 - x129 + 2.0 * x127 - x276 - x277 - x278 - x130) * x1
+                + x121 * x259 - x149 * theta_dot)
+            + x25 * (x267 + x89 * (x94 - x268 - x93) - x270 - x272 + x273)
+            - (x255 + x29) * x169;
+        let x282 = x1 * x1;
+        let x283 = x35 * x201;
+        let x284 = (x283 - 2.0 * rho - l) * m * x0 * x1;
+        let x285 = -(x55 * m);
+        let x286 = m * x60;
+        let x287 = -(x74 * x1);
+        let x288 = m * x69;
+        let x289 = m * x71;
+        let x290 = x74 * x0;
+        let x291 = x80 * x154 - 2.0 * x153 - x35 * x152;
+        let x292 = (x143 - x140 * x154) * psi_dot + x161 * x283 * x108;
+        let x293 = -(x250 * x27);
+        let x294 = theta_dot * x57;
+        let x295 = x54 * theta_dot;
+        let x296 = x27 * phi_dot;
+        let x297 = x25 * x83 + x0 * x296;
+        let x298 = Ixz * x297;
+        let x299 = x87 * x45;
+        let x300 = x1 * x296 - x25 * x88;
+        let x301 = Ixy * x300;
+        let x302 = x106 * x49;
+        let x303 = x27 + x116 * x49;
+        let x304 = x33 * x89;
+        let x305 = x27 * (x219 + x244) - x298 - x299 + x301
+            - theta_dot * (0.5 * (x302 * x112) + Ixx * x303) + x304;
+        let x306 = x240 * x27 + Iyz * x297 - x45 * x91 + x25 * x94 + Iyy * x300
+            + x112 * x89;
+        let x307 = (x236 - x235) * x27 - x25 * x98 - Iyz * x300 - Izz * x297 - x87 * x112
+            + x33 * x91;
+        let x308 = x21 * x296 - x238 * x105
+            - theta_dot * (x4 * x303 + 0.5 * (x302 * x29)) - x306 * x1 + x307 * x0;
+        let x309 = x27 * (x243 - x0 * x306 - x307 * x1) - x145 * m
+            + x25 * (x27 * x223 + x298 + x299 - x301 - x304) + x25 * x305
+            - theta_dot * (x112 * x303 + 0.5 * (x135 * x302));
+        let x310 = x82 * x2;
+        let x311 = x94 * x1;
+        let x312 = x15 * x89;
+        let x313 = x98 * x0;
+        let x314 = x87 * x12;
+        let x315 = x312 - x310 - x311 - x113 - x313 + x314 - x119;
+        let x316 = x4 * x89 - x235 - x32 * x82 + x12 * x91 + x79 * Ixy;
+        let x317 = x15 * x91 - x239 - x4 * x87 + x79 * Ixz - x82 * x44;
+        let x318 = x25 * x315 - x139 * (-0.25 * x17 - x19) * x105 - x136
+            - (x0 * x316 + x1 * x317) * x27 - x138
+            + x25 * (x310 + x311 - x312 - x79 * Ixx + x313 - x314);
+        let x319 = x0 * x317 - x149 - x1 * x316 - m * rho_dot * x154 - x150;
+        let x320 = x79 * x4 - x111 * x186;
+        let x321 = x87 * (Iyy - Ixx) - 2.0 * x96 - x265 - 2.0 * x97;
+        let x322 = 2.0 * x92 + (Iyy + Ixx - Izz) * x89 + Iyz * (2.0 * x86 + 2.0 * x83);
+        let x323 = x79 * x21 - x28 * x186 + x0 * x321 - x322 * x1;
+        let x324 = (psi_dot * x29 - x321 * x1 - x0 * x322) * x27 - x134 * x186
+            + x25 * x320;
+        let x325 = psi_dot * (rho * x142 + l * x144);
         Derivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [Ixx, x6, x9, 0.0, 0.0, 0.0, 0.0],
-                [x6, x24 + x27 * x49, x52, 0.0, x55, x60, x62],
-                [x9, x52, x65 * x50 - x0 * x67, 0.0, x69, x71, x72],
-                [0.0, 0.0, 0.0, m, x74, x75, x76],
-                [0.0, x55, x69, x74, x77, 0.0, 0.0],
-                [0.0, x60, x71, x75, 0.0, x77, 0.0],
-                [0.0, x62, x72, x76, 0.0, 0.0, x77],
+                [x6, x24 + x48 * x50, x53, 0.0, x56, x61, x63],
+                [x9, x53, x66 * x51 - x0 * x68, 0.0, x70, x72, x73],
+                [0.0, 0.0, 0.0, m, x75, x76, x77],
+                [0.0, x56, x70, x75, x78, 0.0, 0.0],
+                [0.0, x61, x72, x76, 0.0, x78, 0.0],
+                [0.0, x63, x73, x77, 0.0, 0.0, x78],
             ],
             force: [
-                x118,
-                x27 * x146 + x154,
-                x50 * x146 - x155,
-                x156
-                    - m * ((l * (-0.25 * x139 - 0.25) + rho * x157) * x149 - x36 * x158),
-                x171,
-                (-(2.0 * x166 - x168) * x78 - x174 - theta_dot * (-x176 - x177)) * m,
-                -((theta_dot * (x180 - 2.0 * x178) + x36 * x181) * m),
+                x120,
+                x50 * x148 + x156,
+                x148 * x51 - x157,
+                x158
+                    - m * ((l * (-0.25 * x141 - 0.25) + rho * x159) * x151 - x35 * x160),
+                x173,
+                (-x79 * (2.0 * x164 - x166) - x176 - theta_dot * (-x178 - x179)) * m,
+                -((theta_dot * (x180 - 2.0 * x181) + x27 * x182) * m),
             ],
-            checks: [x25],
+            checks: [x27],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3026,70 +3026,70 @@ pub mod maggi {
             d_matrix: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x186, x55, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x187, x69, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x188, x74, 0.0],
-                    [0.0, x186, x187, x188, 0.0, 0.0, 0.0],
-                    [0.0, x55, x69, x74, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x187, x56, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x188, x70, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x189, x75, 0.0],
+                    [0.0, x187, x188, x189, 0.0, 0.0, 0.0],
+                    [0.0, x56, x70, x75, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x193, x194, 0.0, 0.0, 0.0, 0.0],
-                    [x193, (x197 * x1 + x203) * x0, x205, 0.0, x206, x207, x209],
+                    [0.0, x194, x195, 0.0, 0.0, 0.0, 0.0],
+                    [x194, (x198 * x1 + x204) * x0, x206, 0.0, x207, x208, x210],
                     [
-                        x194,
-                        x205,
-                        (x9 - x197 * x0
-                            + x26 * (x28 * (x65 * x26 + x194) - x0 * x196 + x202 * x1))
+                        x195,
+                        x206,
+                        (x9 - x198 * x0
+                            + x49 * (x203 * x1 - x0 * x197 + x25 * (x195 + x66 * x49)))
                             * x1,
                         0.0,
-                        x210,
                         x211,
                         x212,
+                        x213,
                     ],
-                    [0.0, 0.0, 0.0, 0.0, x213, x214, x215],
-                    [0.0, x206, x210, x213, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x214, x215, x216],
                     [0.0, x207, x211, x214, 0.0, 0.0, 0.0],
-                    [0.0, x209, x212, x215, 0.0, 0.0, 0.0],
+                    [0.0, x208, x212, x215, 0.0, 0.0, 0.0],
+                    [0.0, x210, x213, x216, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x253, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x254, 0.0, 0.0, 0.0, 0.0],
                     [
                         0.0,
-                        x258 * x1 - x51 + x26 * (x0 * x261 + x49 * x1),
-                        x262,
+                        (x0 * x260 + x48 * x1) * x49 - x52 + x262 * x1,
+                        x263,
                         0.0,
-                        x69,
-                        x71,
+                        x70,
                         x72,
+                        x73,
                     ],
                     [
-                        x253,
-                        x262,
-                        x26
-                            * ((x0 * (x190 - x26 * x119 - x256) + x260 * x1) * x1
-                                + (x64 - x63 + x28 * (x7 - x252 * x1 + x8)) * x0) - x1 * x67
+                        x254,
+                        x263,
+                        ((x0 * (x191 - x49 * x134 - x258) + x256 * x1) * x1
+                            + (x64 - x65 + x25 * (x7 - x253 * x1 + x8)) * x0) * x49
+                            - x1 * x68
                             - x0
-                                * (x26 * (x257 * x1 - x64 + x28 * (x8 - x7)) - x255 * x0
+                                * (x49 * (x259 * x1 - x64 + x25 * (x8 - x7)) - x261 * x0
                                     - x22),
                         0.0,
-                        x263,
-                        x186,
-                        x61,
+                        x264,
+                        x187,
+                        x62,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x69, x263, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x71, x186, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x72, x61, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x70, x264, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, x187, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x73, x62, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, m * (x281 * x152 + x282 * x204), x283, 0.0, x284, x285, x286],
-                    [0.0, x283, m * (x281 * x282 + x204 * x152), 0.0, x287, x288, x289],
+                    [0.0, m * (x282 * x154 + x283 * x205), x284, 0.0, x285, x286, x287],
+                    [0.0, x284, m * (x282 * x283 + x205 * x154), 0.0, x288, x289, x290],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x284, x287, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x285, x288, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x286, x289, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x287, x290, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3188,32 +3188,31 @@ pub mod maggi {
                     0.0,
                     0.0,
                     0.0,
-                    m * (x174 - theta_dot * (x176 + x177) - x78 * (x168 - 2.0 * x166)),
-                    x171,
+                    m * (x176 - theta_dot * (x178 + x179) - x79 * (x166 - 2.0 * x164)),
+                    x173,
                     0.0,
                 ],
                 [
-                    x233,
-                    x241 * x1 + x0 * x244,
-                    x244 * x1 - x241 * x0,
-                    -(x150 * x37),
+                    x234,
+                    x242 * x1 + x0 * x245,
+                    x245 * x1 - x242 * x0,
+                    -(x152 * x36),
+                    (x35 * (x39 * x247 + (x232 - x248) * x249)
+                        - x25 * (2.0 * (psi_dot * x172) + x250 * x162) - x167 * x161)
+                        * m,
                     m
-                        * ((x40 * x248 + (x229 - x249) * x42 * x185) * x36
-                            - (2.0 * (rho_dot * x245) + x246 * x160) * x28
-                            - x164 * x169),
+                        * (x35 * ((x248 - x230 - x231) * x251 + x247 * x41) + x161 * x177
+                            - x25 * (x250 * x165 - 2.0 * (x164 * psi_dot))),
                     m
-                        * (x164 * x175 - x28 * (x246 * x167 - 2.0 * (x250 * rho_dot))
-                            + x36 * ((x249 - x227 - x228) * x40 * x185 + x248 * x42)),
-                    m
-                        * (2.0 * (x28 * x36 * x79)
-                            - theta_dot * (x164 * x36 + 2.0 * (x28 * rho_dot))),
+                        * (2.0 * (x25 * x182)
+                            - theta_dot * (x161 * x35 + 2.0 * (x25 * rho_dot))),
                 ],
                 [
-                    x273,
-                    (x279 * x0 + x28 * (x118 * x1 + x0 * x273) + x145 * x1) * x26
-                        + x280 * x1 - x155,
-                    x26 * (x279 * x1 - x145 * x0 + (x273 * x1 - x0 * x118) * x28)
-                        - x0 * x280 - x154,
+                    x274,
+                    x280 * x1 - x157
+                        + x49 * (x147 * x1 + x25 * (x274 * x0 + x120 * x1) + x0 * x281),
+                    (x281 * x1 - x147 * x0 + x25 * (x274 * x1 - x0 * x120)) * x49
+                        - x0 * x280 - x156,
                     0.0,
                     0.0,
                     0.0,
@@ -3221,68 +3220,69 @@ pub mod maggi {
                 ],
                 [
                     0.0,
-                    m * (x290 * x1 - x27 * x291),
-                    m * (-x291 * x50 - x290 * x0),
-                    -((x149 * x157 - x158) * m),
-                    (x246 * x292 - 2.0 * (x179 * x245) + x163) * m,
-                    m * (2.0 * (x250 * x179) - x172 - x173 + x246 * x293),
-                    -(m * (theta_dot * x179 + x181)),
+                    (x291 * x1 - x292 * x50) * m,
+                    m * (-x292 * x51 - x291 * x0),
+                    -((x151 * x159 - x160) * m),
+                    (x170 - x293 * x39 - 2.0 * (x294 * psi_dot)) * m,
+                    (2.0 * (x295 * psi_dot) - x174 - x175 - x293 * x41) * m,
+                    -((x27 * x80 + x25 * x160) * m),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x303,
-                    x27 * x306 + x307 * x1,
-                    x306 * x50 - x307 * x0,
-                    -((rho * (-x139 - 1.0) + l * x157) * x137),
-                    (x25 * x175 + x36 * (0.5 * (x308 * x42) - x292 * x115)
-                        - 2.0 * (x179 * x167)) * m,
-                    (2.0 * (x78 * x167) - (2.0 * x178 - 2.0 * x180) * x40
-                        - x36 * (0.5 * (x308 * x40) + x293 * x115)) * m,
-                    -(x38 * x294),
+                    x305,
+                    x1 * x308 + x50 * x309,
+                    x309 * x51 - x0 * x308,
+                    -((rho * (-x141 - 1.0) + l * x159) * x139),
+                    m
+                        * (x177 * x27 - 2.0 * (x35 * x294)
+                            + x35 * (0.5 * (x249 * x105) - x54 * x296)),
+                    (2.0 * (x79 * x165) - x35 * (x57 * x296 + 0.5 * (x251 * x105))
+                        - x39 * (2.0 * x181 - 2.0 * x180)) * m,
+                    -(x37 * x296),
                 ],
                 [
-                    x314,
-                    x317 * x27 + x318 * x1,
-                    x317 * x50 - x0 * x318,
-                    theta_dot * m * x152,
-                    m * (2.0 * x165 + x106 * x167 - x170),
-                    m * (x176 - x106 * x160 + 2.0 * x177),
-                    -((2.0 * x180 - 2.0 * x178) * m),
+                    x315,
+                    x318 * x50 + x319 * x1,
+                    x318 * x51 - x319 * x0,
+                    theta_dot * m * x154,
+                    (2.0 * x163 - x168 + x108 * x165) * m,
+                    (x178 - x162 * x108 + 2.0 * x179) * m,
+                    -((2.0 * x180 - 2.0 * x181) * m),
                 ],
                 [
                     x320,
-                    x323 * x27 + x1 * x324,
-                    x323 * x50 - x0 * x324,
+                    x323 * x1 + x324 * x50,
+                    x324 * x51 - x323 * x0,
                     0.0,
-                    x37 * (theta_dot * x42 - x53 * x78),
-                    -(x37 * (theta_dot * x40 + x78 * x56)),
-                    -(x78 * x38),
+                    x36 * (theta_dot * x41 - x54 * x79),
+                    -(x36 * (theta_dot * x39 + x79 * x57)),
+                    -(x79 * x37),
                 ],
                 [
                     0.0,
-                    -((x152 * x82 + x27 * x325) * m),
-                    (x87 * x152 - x325 * x50) * m,
+                    -((x154 * x83 + x50 * x325) * m),
+                    (x88 * x154 - x325 * x51) * m,
                     0.0,
-                    m * (2.0 * (x78 * x42) + 2.0 * (x40 * x179)),
-                    -(m * (2.0 * (x78 * x40) - 2.0 * (x179 * x42))),
-                    2.0 * x164 * m,
+                    m * (2.0 * (x79 * x41) + 2.0 * x295),
+                    -((2.0 * (x79 * x39) - 2.0 * x294) * m),
+                    2.0 * x161 * m,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             w: [
-                [0.0, x27, x50, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x1, x182, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x183, x184, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x50, x51, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x1, x183, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x184, x185, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [x106 * x185, -x79, theta_dot * x122, 0.0, 0.0, 0.0, 0.0],
+            c: [x108 * x186, -x80, theta_dot * x137, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3294,18 +3294,18 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x26 * x183, x26 * x184, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x49 * x184, x49 * x185, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x251 * x0, x251 * x1, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x252 * x0, x252 * x1, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x50, -x27, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x182, -x1, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x184, -x183, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x51, -x50, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x183, -x1, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x185, -x184, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3413,21 +3413,21 @@ pub mod maggi {
             ],
             d_c: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x230 * x185, psi_dot * x115, theta_dot * x232, 0.0, 0.0, 0.0, 0.0],
+                [x233 * x186, x25 * x121, theta_dot * x229, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.5 * x308 * x26, -x294, theta_dot * x300, 0.0, 0.0, 0.0, 0.0],
-                [x107, 0.0, x122, 0.0, 0.0, 0.0, 0.0],
-                [x185, -x78, x26 * x179, 0.0, 0.0, 0.0, 0.0],
+                [0.5 * x106 * x186, -x296, theta_dot * x303, 0.0, 0.0, 0.0, 0.0],
+                [x109, 0.0, x137, 0.0, 0.0, 0.0, 0.0],
+                [x186, -x79, x25 * x186, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
-            power: x156 * rho_dot,
+            power: x158 * rho_dot,
             d_power: [
                 0.0,
                 0.0,
@@ -3439,7 +3439,7 @@ pub mod maggi {
                 0.0,
                 0.0,
                 0.0,
-                x156,
+                x158,
                 0.0,
                 0.0,
                 0.0,
@@ -3633,8 +3633,8 @@ pub mod maggi {
         let x40 = x21 * x1;
         let x41 = x40 - x39;
         let x42 = x27 * x41;
-        let x43 = m * x0;
-        let x44 = -(x43 * x25);
+        let x43 = x17 * x27;
+        let x44 = -(x43 * x0);
         let x45 = x0 * x22;
         let x46 = x34 * x1;
         let x47 = x46 - x45;
@@ -3643,170 +3643,170 @@ pub mod maggi {
         let x50 = x21 * x0;
         let x51 = x49 + x50;
         let x52 = x27 * x51;
-        let x53 = m * x1;
-        let x54 = x25 * x53;
-        let x55 = x21 * x17;
-        let x56 = m * x55;
-        let x57 = x17 * x22;
-        let x58 = m * x57;
-        let x59 = -(x20 * m);
-        let x60 = m + mg;
-        let x61 = x20 * psi_dot;
-        let x62 = phi_dot - x61;
-        let x63 = x17 * psi_dot;
-        let x64 = x63 * x0;
-        let x65 = theta_dot * x1;
-        let x66 = x64 - x65;
-        let x67 = theta_dot * x0;
-        let x68 = x63 * x1 + x67;
-        let x69 = Iyy * x68 - x62 * Ixy - Iyz * x66;
-        let x70 = x69 * x66;
-        let x71 = x63 * phi_dot;
-        let x72 = 2.0 * theta;
-        let x73 = f64::sin(x72);
-        let x74 = x18 * x73;
-        let x75 = x74 * psi_dot;
-        let x76 = 0.5 * x75 + phi_dot;
-        let x77 = x76 * x18;
-        let x78 = -x20 * Ixx - x17 * x3;
-        let x79 = x18 * f64::cos(3.0 * theta);
-        let x80 = x20 * phi_dot;
-        let x81 = ((0.25 - 0.25 * x79) * psi_dot + x80) * x18;
-        let x82 = Izz * x66 - x62 * Ixz - Iyz * x68;
-        let x83 = x82 * x68;
-        let x84 = x71 * x0;
-        let x85 = x61 + phi_dot;
-        let x86 = x65 * x85;
-        let x87 = x84 - x86;
-        let x88 = Ixy * x87;
-        let x89 = x85 * x67;
-        let x90 = x1 * x71;
-        let x91 = -x89 - x90;
-        let x92 = x91 * Ixz;
-        let x93 = x70 + x2 * x71 - theta_dot * (x77 * x78 + x81 * Ixx) - x83 + x88 + x92;
-        let x94 = x63 + x81;
-        let x95 = theta_dot * x73;
-        let x96 = x12 * x95;
-        let x97 = f64::cos(x72);
-        let x98 = l * x95;
-        let x99 = 0.5 * x97 + 0.5;
-        let x100 = x99 * rho_dot;
-        let x101 = x63 * theta_dot;
-        let x102 = x62 * Ixx - Ixy * x68 - Ixz * x66;
-        let x103 = x91 * Izz + x101 * Ixz + x69 * x62 - x102 * x68 - Iyz * x87;
-        let x104 = x102 * x66 - Iyz * x91 + Iyy * x87 - x62 * x82 + Ixy * x101;
-        let x105 = x20 * x93 - theta_dot * ((x28 * x17 - x20 * x78) * x77 + x94 * x78)
-            - (rho * (rho_dot * (x97 + 1.0) - x96) + (x100 - 0.25 * x98) * l) * psi_dot
-                * m + (psi_dot * phi_dot * x29 - x103 * x0 - x1 * x104) * x17
-            + x20 * (x83 - x70 - x88 - x92 - x101 * Ixx);
-        let x106 = rho * (0.5 * rho + 0.5 * l);
-        let x107 = psi_dot * psi_dot;
-        let x108 = x107 * x73;
-        let x109 = theta_dot * rho_dot;
-        let x110 = x109 * (2.0 * rho + l);
-        let x111 = x103 * x1 - ((x106 + 0.125 * x11) * x108 + x110) * m
-            - theta_dot * (x77 * x29 + x2 * x94) - x104 * x0 + x15 * x71;
-        let x112 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x113 = -0.25 * x97 - 0.25;
-        let x114 = -0.5 * x97 - 0.5;
-        let x115 = theta_dot * theta_dot;
-        let x116 = x24 * x115;
-        let x117 = x76 * theta_dot;
-        let x118 = x117 * x22;
-        let x119 = x34 * x71;
-        let x120 = rho_dot * x22;
-        let x121 = x21 * psi_dot;
-        let x122 = x24 * x121;
-        let x123 = x21 * rho_dot;
-        let x124 = psi_dot * x22;
-        let x125 = x24 * x124;
-        let x126 = theta_dot * x21;
-        let x127 = x38 * x71;
-        let x128 = x117 * x21;
-        let x129 = theta_dot * x22;
-        let x130 = x17 * rho_dot;
-        let x131 = x20 * theta_dot;
-        let x132 = x24 * x131;
-        let x133 = x71 * x25;
-        let x134 = theta_dot * x94;
-        let x135 = x18 * (0.5 * (x74 * x61) + (0.25 * x79 - 0.25) * psi_dot);
-        let x136 = x62 * x0;
-        let x137 = x66 * x0 + x68 * x1;
-        let x138 = x20 * x77;
-        let x139 = x62 * x17 * (x68 * x0 - x1 * x66) + (x81 - x138) * x131 + x135 * x131;
-        let x140 = x62 * x1;
-        let x141 = x0 * x0;
-        let x142 = x1 * x1;
-        let x143 = x141 + x142;
-        let x144 = x68 * x66;
-        let x145 = x144;
-        let x146 = x117 * x1;
-        let x147 = x146 - x86;
-        let x148 = -x136 * x68 - x1 * x147;
-        let x149 = x68 * x140 - x0 * x147;
-        let x150 = x142 * x143;
-        let x151 = x141 * x143;
-        let x152 = x117 * x0;
-        let x153 = x152 - x89;
-        let x154 = x140 * x66 - x153 * x0;
-        let x155 = x136 * x66 + x153 * x1;
-        let x156 = -x143;
-        let x157 = 0.5 * x75 - x61;
-        let x158 = x61 - phi_dot;
-        let x159 = x158 * x66;
-        let x160 = x65 * x157 + x159;
-        let x161 = x86 - x84;
-        let x162 = x144 - x101;
-        let x163 = x61 * phi_dot;
-        let x164 = x68 * x68;
-        let x165 = x62 * x158;
-        let x166 = x20 * (x161 - x159 - 2.0 * x146)
-            + x17 * ((x134 + x162) * x1 + (x163 - x164 - x165) * x0) + x20 * x160;
-        let x167 = (theta_dot * (x94 - x138) + x162) * x0 + (x164 + x165) * x1;
-        let x168 = x68 * x158;
-        let x169 = x157 * x67 - x168;
-        let x170 = x89 + x90;
-        let x171 = x65 - x64;
-        let x172 = x68 * x171;
-        let x173 = x171 * x66;
-        let x174 = x20 * (x170 - 2.0 * x152 + x168)
-            + x17 * (x0 * (x172 - x101 + x134) + (x165 - x173 - x163) * x1) + x20 * x169;
-        let x175 = x1 * (x101 - x172 + theta_dot * (x138 - x63 - x81))
-            - (x173 - x165) * x0;
-        let x176 = -x150 - x151;
-        let x177 = x173 + x164;
-        let x178 = x62 * x171;
-        let x179 = x142 - x141;
-        let x180 = x62 * x68;
-        let x181 = (x84 + x86 + x178) * x1 - x117 * x179 - (x170 + x180) * x0;
-        let x182 = ((2.0 * x152 - x89 - x90 - x180) * x1 - (x161 + x178) * x0
-            + x71 * x179) * x17 + x20 * (-x173 - x164) + x177 * x20;
-        let x183 = x24 * x23;
-        let x184 = x24 * x183;
-        let x185 = x1 * x0;
-        let x186 = (x184 - 0.25 * x11 - x13) * x185;
-        let x187 = -(x36 * x24);
-        let x188 = x24 * x41;
-        let x189 = -(x25 * x0);
-        let x190 = x24 * x47;
-        let x191 = x24 * x51;
-        let x192 = x1 * x25;
+        let x53 = x1 * x43;
+        let x54 = x17 * m;
+        let x55 = x54 * x21;
+        let x56 = x54 * x22;
+        let x57 = -(x20 * m);
+        let x58 = m + mg;
+        let x59 = x20 * psi_dot;
+        let x60 = phi_dot - x59;
+        let x61 = x17 * psi_dot;
+        let x62 = x61 * x0;
+        let x63 = theta_dot * x1;
+        let x64 = x62 - x63;
+        let x65 = theta_dot * x0;
+        let x66 = x61 * x1 + x65;
+        let x67 = Iyy * x66 - x60 * Ixy - Iyz * x64;
+        let x68 = x67 * x64;
+        let x69 = x61 * phi_dot;
+        let x70 = 2.0 * theta;
+        let x71 = f64::sin(x70);
+        let x72 = x18 * x71;
+        let x73 = x72 * psi_dot;
+        let x74 = 0.5 * x73 + phi_dot;
+        let x75 = x74 * x18;
+        let x76 = -x20 * Ixx - x17 * x3;
+        let x77 = x18 * f64::cos(3.0 * theta);
+        let x78 = x20 * phi_dot;
+        let x79 = ((0.25 - 0.25 * x77) * psi_dot + x78) * x18;
+        let x80 = Izz * x64 - x60 * Ixz - Iyz * x66;
+        let x81 = x80 * x66;
+        let x82 = x69 * x0;
+        let x83 = x59 + phi_dot;
+        let x84 = x63 * x83;
+        let x85 = x82 - x84;
+        let x86 = Ixy * x85;
+        let x87 = x83 * x65;
+        let x88 = x1 * x69;
+        let x89 = -x87 - x88;
+        let x90 = x89 * Ixz;
+        let x91 = x68 + x2 * x69 - theta_dot * (x75 * x76 + x79 * Ixx) - x81 + x86 + x90;
+        let x92 = x61 + x79;
+        let x93 = theta_dot * x71;
+        let x94 = x12 * x93;
+        let x95 = f64::cos(x70);
+        let x96 = l * x93;
+        let x97 = 0.5 * x95 + 0.5;
+        let x98 = x97 * rho_dot;
+        let x99 = x61 * theta_dot;
+        let x100 = x60 * Ixx - Ixy * x66 - Ixz * x64;
+        let x101 = x89 * Izz + x99 * Ixz + x67 * x60 - x100 * x66 - Iyz * x85;
+        let x102 = x100 * x64 - Iyz * x89 + Iyy * x85 - x60 * x80 + Ixy * x99;
+        let x103 = x20 * x91 - theta_dot * ((x28 * x17 - x20 * x76) * x75 + x92 * x76)
+            - (rho * (rho_dot * (x95 + 1.0) - x94) + (x98 - 0.25 * x96) * l) * psi_dot
+                * m + (psi_dot * phi_dot * x29 - x101 * x0 - x1 * x102) * x17
+            + x20 * (x81 - x68 - x86 - x90 - x99 * Ixx);
+        let x104 = rho * (0.5 * rho + 0.5 * l);
+        let x105 = psi_dot * psi_dot;
+        let x106 = x105 * x71;
+        let x107 = theta_dot * rho_dot;
+        let x108 = x107 * (2.0 * rho + l);
+        let x109 = x101 * x1 - ((x104 + 0.125 * x11) * x106 + x108) * m
+            - theta_dot * (x75 * x29 + x2 * x92) - x102 * x0 + x15 * x69;
+        let x110 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x111 = -0.25 * x95 - 0.25;
+        let x112 = -0.5 * x95 - 0.5;
+        let x113 = theta_dot * theta_dot;
+        let x114 = x24 * x113;
+        let x115 = x74 * theta_dot;
+        let x116 = x115 * x22;
+        let x117 = x34 * x69;
+        let x118 = rho_dot * x22;
+        let x119 = x21 * psi_dot;
+        let x120 = x24 * x119;
+        let x121 = x21 * rho_dot;
+        let x122 = psi_dot * x22;
+        let x123 = x24 * x122;
+        let x124 = theta_dot * x21;
+        let x125 = x38 * x69;
+        let x126 = x115 * x21;
+        let x127 = theta_dot * x22;
+        let x128 = x17 * rho_dot;
+        let x129 = x20 * theta_dot;
+        let x130 = x24 * x129;
+        let x131 = x69 * x25;
+        let x132 = theta_dot * x92;
+        let x133 = x18 * (0.5 * (x72 * x59) + (0.25 * x77 - 0.25) * psi_dot);
+        let x134 = x60 * x0;
+        let x135 = x64 * x0 + x66 * x1;
+        let x136 = x20 * x75;
+        let x137 = x60 * x17 * (x66 * x0 - x1 * x64) + (x79 - x136) * x129 + x133 * x129;
+        let x138 = x60 * x1;
+        let x139 = x0 * x0;
+        let x140 = x1 * x1;
+        let x141 = x139 + x140;
+        let x142 = x66 * x64;
+        let x143 = x142;
+        let x144 = x115 * x1;
+        let x145 = x144 - x84;
+        let x146 = -x134 * x66 - x1 * x145;
+        let x147 = x66 * x138 - x0 * x145;
+        let x148 = x140 * x141;
+        let x149 = x139 * x141;
+        let x150 = x115 * x0;
+        let x151 = x150 - x87;
+        let x152 = x138 * x64 - x151 * x0;
+        let x153 = x134 * x64 + x151 * x1;
+        let x154 = -x141;
+        let x155 = 0.5 * x73 - x59;
+        let x156 = x59 - phi_dot;
+        let x157 = x156 * x64;
+        let x158 = x63 * x155 + x157;
+        let x159 = x84 - x82;
+        let x160 = x142 - x99;
+        let x161 = x59 * phi_dot;
+        let x162 = x66 * x66;
+        let x163 = x60 * x156;
+        let x164 = x20 * (x159 - x157 - 2.0 * x144)
+            + x17 * ((x132 + x160) * x1 + (x161 - x162 - x163) * x0) + x20 * x158;
+        let x165 = (theta_dot * (x92 - x136) + x160) * x0 + (x162 + x163) * x1;
+        let x166 = x66 * x156;
+        let x167 = x155 * x65 - x166;
+        let x168 = x87 + x88;
+        let x169 = x63 - x62;
+        let x170 = x66 * x169;
+        let x171 = x169 * x64;
+        let x172 = x20 * (x168 - 2.0 * x150 + x166)
+            + x17 * (x0 * (x170 - x99 + x132) + (x163 - x171 - x161) * x1) + x20 * x167;
+        let x173 = x1 * (x99 - x170 + theta_dot * (x136 - x61 - x79))
+            - (x171 - x163) * x0;
+        let x174 = -x148 - x149;
+        let x175 = x171 + x162;
+        let x176 = x60 * x169;
+        let x177 = x140 - x139;
+        let x178 = x60 * x66;
+        let x179 = (x82 + x84 + x176) * x1 - x115 * x177 - (x168 + x178) * x0;
+        let x180 = ((2.0 * x150 - x87 - x88 - x178) * x1 - (x159 + x176) * x0
+            + x69 * x177) * x17 + x20 * (-x171 - x162) + x175 * x20;
+        let x181 = x24 * x23;
+        let x182 = x24 * x181;
+        let x183 = x1 * x0;
+        let x184 = (x182 - 0.25 * x11 - x13) * x183;
+        let x185 = -(x36 * x24);
+        let x186 = x24 * x41;
+        let x187 = -(x25 * x0);
+        let x188 = x24 * x47;
+        let x189 = x24 * x51;
+        let x190 = x1 * x25;
+        let x191 = x21 * x17;
+        let x192 = x17 * x22;
         let x193 = -x20;
         let x194 = psi_dot
-            * ((-x106 - 0.125 * x11) * psi_dot * x73 + x14 * x17 * phi_dot) - x110;
-        let x195 = (l * (0.25 * x98 + rho_dot * x114)
-            + rho * ((-x97 - 1.0) * rho_dot + x96)) * psi_dot - x117 * x183 * x25;
-        let x196 = (psi_dot - x80) * psi_dot + x115;
-        let x197 = (x23 - 1.0) * x27 * x185;
+            * ((-x104 - 0.125 * x11) * psi_dot * x71 + x14 * x17 * phi_dot) - x108;
+        let x195 = (l * (0.25 * x96 + rho_dot * x112)
+            + rho * ((-x95 - 1.0) * rho_dot + x94)) * psi_dot - x115 * x181 * x25;
+        let x196 = (psi_dot - x78) * psi_dot + x113;
+        let x197 = (x23 - 1.0) * x27 * x183;
         let x198 = -((0.5 * x33 + 0.5 * x35) * m);
         let x199 = (0.5 * x40 - 0.5 * x39) * m;
-        let x200 = -(0.5 * x43 * x17);
+        let x200 = -(0.5 * x54 * x0);
         let x201 = m * (0.5 * x46 - 0.5 * x45);
         let x202 = (0.5 * x49 + 0.5 * x50) * m;
-        let x203 = 0.5 * x17 * x53;
-        let x204 = x26 * x117 + (x100 - x24 * x95) * psi_dot;
-        let x205 = x24 * x71 - x108 * (0.5 * rho + 0.25 * l) - x109;
-        let x206 = 0.5 * x107 + 0.5 * x115;
+        let x203 = 0.5 * x54 * x1;
+        let x204 = x26 * x115 + (x98 - x24 * x93) * psi_dot;
+        let x205 = x24 * x69 - x106 * (0.5 * rho + 0.25 * l) - x107;
+        let x206 = 0.5 * x105 + 0.5 * x113;
         ParameterDerivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
@@ -3819,25 +3819,25 @@ pub mod maggi {
                     0.0,
                     x48,
                     x52,
-                    x54,
+                    x53,
                 ],
-                [0.0, 0.0, 0.0, m, x56, x58, x59],
-                [0.0, x37, x48, x56, x60, 0.0, 0.0],
-                [0.0, x42, x52, x58, 0.0, x60, 0.0],
-                [0.0, x44, x54, x59, 0.0, 0.0, x60],
+                [0.0, 0.0, 0.0, m, x55, x56, x57],
+                [0.0, x37, x48, x55, x58, 0.0, 0.0],
+                [0.0, x42, x52, x56, 0.0, x58, 0.0],
+                [0.0, x44, x53, x57, 0.0, 0.0, x58],
             ],
             force: [
-                x93,
-                x105 * x19 + x111 * x0,
-                x105 * x31 - x111 * x1,
-                x112 - m * ((l * x113 + rho * x114) * x107 - x116),
-                (x24 * (x118 - x119) + x63 * (2.0 * x120 + x122)
-                    - theta_dot * (x20 * (2.0 * x125 - 2.0 * x123) - x126 * x25)) * m,
+                x91,
+                x103 * x19 + x109 * x0,
+                x103 * x31 - x109 * x1,
+                x110 - m * ((l * x111 + rho * x112) * x105 - x114),
+                (x24 * (x116 - x117) + x61 * (2.0 * x118 + x120)
+                    - theta_dot * (x20 * (2.0 * x123 - 2.0 * x121) - x124 * x25)) * m,
                 m
-                    * (-x24 * (x127 + x128)
-                        - theta_dot * (-x129 * x25 - x20 * (2.0 * x120 + 2.0 * x122))
-                        - x63 * (2.0 * x123 - x125)),
-                -((theta_dot * (x132 - 2.0 * x130) + x133) * m),
+                    * (-x24 * (x125 + x126)
+                        - theta_dot * (-x127 * x25 - x20 * (2.0 * x118 + 2.0 * x120))
+                        - x61 * (2.0 * x121 - x123)),
+                -((theta_dot * (x130 - 2.0 * x128) + x131) * m),
             ],
             checks: [x17],
             d_qdot: [
@@ -3872,7 +3872,7 @@ pub mod maggi {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x143 * x143, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x141 * x141, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3882,15 +3882,15 @@ pub mod maggi {
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x150 + x151, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x148 + x149, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x156, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x156, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x154, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x154, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3898,18 +3898,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x156, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x154, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x156, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x176, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x176, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x154, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3917,17 +3908,26 @@ pub mod maggi {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x141 * x14 + x184 * x142, x186, 0.0, x187, x188, x189],
-                    [0.0, x186, x14 * x142 + x141 * x184, 0.0, x190, x191, x192],
-                    [0.0, 0.0, 0.0, 1.0, x55, x57, x193],
-                    [0.0, x187, x190, x55, 1.0, 0.0, 0.0],
-                    [0.0, x188, x191, x57, 0.0, 1.0, 0.0],
-                    [0.0, x189, x192, x193, 0.0, 0.0, 1.0],
+                    [0.0, 0.0, x174, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x174, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x27 * (x141 + x142 * x23), x197, 0.0, x198, x199, x200],
-                    [0.0, x197, x27 * (x142 + x141 * x23), 0.0, x201, x202, x203],
+                    [0.0, x139 * x14 + x182 * x140, x184, 0.0, x185, x186, x187],
+                    [0.0, x184, x14 * x140 + x139 * x182, 0.0, x188, x189, x190],
+                    [0.0, 0.0, 0.0, 1.0, x191, x192, x193],
+                    [0.0, x185, x188, x191, 1.0, 0.0, 0.0],
+                    [0.0, x186, x189, x192, 0.0, 1.0, 0.0],
+                    [0.0, x187, x190, x193, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x27 * (x139 + x140 * x23), x197, 0.0, x198, x199, x200],
+                    [0.0, x197, x27 * (x140 + x139 * x23), 0.0, x201, x202, x203],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x198, x201, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x199, x202, 0.0, 0.0, 0.0, 0.0],
@@ -3937,46 +3937,46 @@ pub mod maggi {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x135 * theta_dot,
-                    x139 * x19 - x136 * x137,
-                    x137 * x140 + x139 * x31,
+                    x133 * theta_dot,
+                    x137 * x19 - x134 * x135,
+                    x135 * x138 + x137 * x31,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
-                [x145, x148 * x1 + x149 * x0, x148 * x0 - x1 * x149, 0.0, 0.0, 0.0, 0.0],
+                [x143, x146 * x1 + x147 * x0, x146 * x0 - x1 * x147, 0.0, 0.0, 0.0, 0.0],
                 [
-                    -x145,
-                    x154 * x1 + x155 * x0,
-                    x154 * x0 - x155 * x1,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [
-                    x160,
-                    x166 * x19 + x167 * x0,
-                    x166 * x31 - x1 * x167,
+                    -x143,
+                    x152 * x1 + x153 * x0,
+                    x152 * x0 - x153 * x1,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x169,
-                    x19 * x174 + x175 * x0,
-                    x174 * x31 - x175 * x1,
+                    x158,
+                    x164 * x19 + x165 * x0,
+                    x164 * x31 - x1 * x165,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x177,
-                    x181 * x0 + x182 * x19,
-                    x182 * x31 - x1 * x181,
+                    x167,
+                    x19 * x172 + x173 * x0,
+                    x172 * x31 - x173 * x1,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x175,
+                    x179 * x0 + x180 * x19,
+                    x180 * x31 - x1 * x179,
                     0.0,
                     0.0,
                     0.0,
@@ -3986,21 +3986,21 @@ pub mod maggi {
                     0.0,
                     x194 * x0 + x19 * x195,
                     x195 * x31 - x194 * x1,
-                    x116 + (rho * x99 + l * (0.25 * x97 + 0.25)) * x107,
-                    x24 * (x196 * x55 + x129 * (x76 - 2.0 * x61))
-                        + rho_dot * (2.0 * (x63 * x22) + 2.0 * (x21 * x131)),
-                    (2.0 * (x131 * x22) - 2.0 * (x63 * x21)) * rho_dot
-                        + (x196 * x57 + x126 * (2.0 * x61 - 0.5 * x75 - phi_dot)) * x24,
-                    (2.0 * x130 - x132) * theta_dot - x133,
+                    x114 + (rho * x97 + l * (0.25 * x95 + 0.25)) * x105,
+                    x24 * (x196 * x191 + x127 * (x74 - 2.0 * x59))
+                        + rho_dot * (2.0 * (x61 * x22) + 2.0 * (x21 * x129)),
+                    (2.0 * (x129 * x22) - 2.0 * (x61 * x21)) * rho_dot
+                        + (x196 * x192 + x124 * (2.0 * x59 - 0.5 * x73 - phi_dot)) * x24,
+                    (2.0 * x128 - x130) * theta_dot - x131,
                 ],
                 [
                     0.0,
                     m * (x205 * x0 - x19 * x204),
                     m * (-x204 * x31 - x1 * x205),
-                    -(m * (x107 * x113 - 0.5 * x115)),
-                    (0.5 * x118 + x206 * x55 - x131 * x124 - 0.5 * x119) * m,
-                    m * (x121 * x131 - 0.5 * x127 + x206 * x57 - 0.5 * x128),
-                    -(m * (0.5 * (theta_dot * x131) + 0.5 * (x17 * x71))),
+                    -(m * (x105 * x111 - 0.5 * x113)),
+                    (0.5 * x116 + x206 * x191 - x129 * x122 - 0.5 * x117) * m,
+                    m * (x119 * x129 - 0.5 * x125 + x206 * x192 - 0.5 * x126),
+                    -(m * (0.5 * (theta_dot * x129) + 0.5 * (x17 * x69))),
                 ],
             ],
             w: [
@@ -4012,7 +4012,7 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [x117 * x18, -x71, x134, 0.0, 0.0, 0.0, 0.0],
+            c: [x115 * x18, -x69, x132, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4107,7 +4107,7 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
-            power: x112 * rho_dot,
+            power: x110 * rho_dot,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }
@@ -4406,42 +4406,42 @@ pub mod kane {
         let x22 = x12 * x2 + x19 * x10;
         let x23 = x22 * x18;
         let x24 = x0 * x18 * x1;
-        let x25 = x0 * m;
-        let x26 = x25 * x12;
-        let x27 = x25 * x10;
-        let x28 = -(x4 * m);
-        let x29 = m + mg;
-        let x30 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x31 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x32 = x7 * u3;
-        let x33 = u1 * x32 - 2.0 * (u2 * u4);
-        let x34 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x35 = -(u2 * x7);
-        let x36 = 2.0 * (u3 * u4) - u1 * x35;
-        let x37 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x38 = u2 * x35 - u3 * x32;
-        let x39 = x38 * x0;
+        let x25 = x12 * x0;
+        let x26 = m * x25;
+        let x27 = x0 * x10;
+        let x28 = m * x27;
+        let x29 = -(x4 * m);
+        let x30 = m + mg;
+        let x31 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x32 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x33 = x7 * u3;
+        let x34 = u1 * x33 - 2.0 * (u2 * u4);
+        let x35 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x36 = -(u2 * x7);
+        let x37 = 2.0 * (u3 * u4) - u1 * x36;
+        let x38 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x39 = u2 * x36 - u3 * x33;
         Assembly {
             qdot: [x3, u2 * x2 - u3 * x1, x4 * x3 + u1, u4, u5, u6, u7],
             matrix: [
                 [Ixx, x5, x6, 0.0, 0.0, 0.0, 0.0],
                 [x5, Iyy - x7 * x8, x9, 0.0, x14, x16, x17],
                 [x6, x9, x7 * x18 + Izz, 0.0, x21, x23, x24],
-                [0.0, 0.0, 0.0, m, x26, x27, x28],
-                [0.0, x14, x21, x26, x29, 0.0, 0.0],
-                [0.0, x16, x23, x27, 0.0, x29, 0.0],
-                [0.0, x17, x24, x28, 0.0, 0.0, x29],
+                [0.0, 0.0, 0.0, m, x26, x28, x29],
+                [0.0, x14, x21, x26, x30, 0.0, 0.0],
+                [0.0, x16, x23, x28, 0.0, x30, 0.0],
+                [0.0, x17, x24, x29, 0.0, 0.0, x30],
             ],
             force: [
-                x31 * u3 - u2 * x30,
-                x30 * u1 - x33 * x8 - x34 * u3,
-                u2 * x34 - x36 * x18 - x31 * u1,
-                x37 - x38 * m,
-                -((x20 * x36 + x13 * x33 + x12 * x39) * m),
-                -((x15 * x33 + x36 * x22 + x10 * x39) * m),
-                -((x0 * (x33 * x2 + x36 * x1) - x4 * x38) * m),
+                x32 * u3 - u2 * x31,
+                x31 * u1 - x34 * x8 - x35 * u3,
+                u2 * x35 - x37 * x18 - x32 * u1,
+                x38 - x39 * m,
+                -(m * (x20 * x37 + x13 * x34 + x39 * x25)),
+                -((x39 * x27 + x15 * x34 + x37 * x22) * m),
+                -((x0 * (x34 * x2 + x37 * x1) - x4 * x39) * m),
             ],
-            power: x37 * u4,
+            power: x38 * u4,
             checks: [x0],
         }
     }
@@ -4804,32 +4804,32 @@ pub mod kane {
         let x14 = -(x13 * m);
         let x15 = -Iyz;
         let x16 = f64::sin(psi);
-        let x17 = x8 * x3;
-        let x18 = f64::cos(psi);
-        let x19 = x2 * x16 + x17 * x18;
+        let x17 = f64::cos(psi);
+        let x18 = x8 * x17;
+        let x19 = x2 * x16 + x18 * x3;
         let x20 = x19 * x14;
-        let x21 = x18 * x2;
-        let x22 = x17 * x16;
-        let x23 = x22 - x21;
-        let x24 = x23 * x14;
-        let x25 = x3 * x14;
-        let x26 = x25 * x0;
-        let x27 = x13 * m;
-        let x28 = x13 * x27;
-        let x29 = x8 * x2;
-        let x30 = x18 * x29;
-        let x31 = x3 * x16;
-        let x32 = x30 - x31;
-        let x33 = x32 * x27;
-        let x34 = x18 * x3 + x29 * x16;
-        let x35 = x34 * x27;
-        let x36 = x27 * x2;
+        let x21 = x8 * x16;
+        let x22 = x21 * x3;
+        let x23 = x17 * x2;
+        let x24 = x22 - x23;
+        let x25 = x24 * x14;
+        let x26 = x3 * x14;
+        let x27 = x26 * x0;
+        let x28 = x13 * m;
+        let x29 = x13 * x28;
+        let x30 = x3 * x16;
+        let x31 = x18 * x2;
+        let x32 = x31 - x30;
+        let x33 = x28 * x32;
+        let x34 = x21 * x2 + x17 * x3;
+        let x35 = x28 * x34;
+        let x36 = x28 * x2;
         let x37 = x0 * x36;
-        let x38 = x0 * m;
-        let x39 = x38 * x18;
-        let x40 = x38 * x16;
-        let x41 = x8 * m;
-        let x42 = -x41;
+        let x38 = x17 * x0;
+        let x39 = m * x38;
+        let x40 = x0 * x16;
+        let x41 = m * x40;
+        let x42 = -(x8 * m);
         let x43 = m + mg;
         let x44 = u2 * Iyz;
         let x45 = u1 * Ixz;
@@ -4850,71 +4850,70 @@ pub mod kane {
         let x60 = u2 * u2;
         let x61 = u3 * u3;
         let x62 = -x13 * x60 - x61 * x13;
-        let x63 = x18 * x0;
-        let x64 = -(m * (x19 * x51 + x63 * x62 + x32 * x58));
-        let x65 = x0 * x16;
-        let x66 = x65 * x62;
-        let x67 = x34 * x58;
-        let x68 = x2 * x58 + x51 * x3;
-        let x69 = (x68 * x0 - x8 * x62) * m;
-        let x70 = x21 - x22;
-        let x71 = x70 * x14;
-        let x72 = -(x34 * x27);
-        let x73 = -x40;
-        let x74 = x25 * x63;
-        let x75 = x25 * x65;
-        let x76 = -(x8 * x25);
-        let x77 = x63 * x36;
-        let x78 = x65 * x36;
-        let x79 = -(x8 * x36);
-        let x80 = -(x18 * x41);
-        let x81 = -(x41 * x16);
-        let x82 = -x38;
-        let x83 = x31 - x30;
-        let x84 = x83 * x14;
-        let x85 = -(x34 * x14);
-        let x86 = -(x0 * x2 * x14);
-        let x87 = x19 * x27;
-        let x88 = x23 * x27;
-        let x89 = x0 * x27 * x3;
-        let x90 = -(x19 * m);
-        let x91 = -(m * x23);
-        let x92 = -(x38 * x3);
-        let x93 = x32 * m;
-        let x94 = x34 * m;
-        let x95 = x38 * x2;
-        let x96 = x61 + x60;
-        let x97 = x19 * u3 + x32 * u2;
-        let x98 = u3 * x23 + u2 * x34;
-        let x99 = x4 * x0;
-        let x100 = Ixy * u3;
-        let x101 = u2 * Ixz;
-        let x102 = x28 - Ixx + Izz;
-        let x103 = (Ixx - Iyy) - x28;
-        let x104 = Iyy - Izz;
-        let x105 = Iyz * u1;
-        let x106 = 2.0 * rho + l;
-        let x107 = -(u2 * x106);
-        let x108 = -(u3 * x106);
+        let x63 = -(m * (x19 * x51 + x38 * x62 + x32 * x58));
+        let x64 = x40 * x62;
+        let x65 = x58 * x34;
+        let x66 = x2 * x58 + x51 * x3;
+        let x67 = (x66 * x0 - x8 * x62) * m;
+        let x68 = x23 - x22;
+        let x69 = x68 * x14;
+        let x70 = -(x28 * x34);
+        let x71 = -x41;
+        let x72 = x26 * x38;
+        let x73 = x26 * x40;
+        let x74 = -(x8 * x26);
+        let x75 = x38 * x36;
+        let x76 = x40 * x36;
+        let x77 = -(x8 * x36);
+        let x78 = -(x18 * m);
+        let x79 = -(x21 * m);
+        let x80 = x0 * m;
+        let x81 = -x80;
+        let x82 = x30 - x31;
+        let x83 = x82 * x14;
+        let x84 = -(x34 * x14);
+        let x85 = -(x0 * x2 * x14);
+        let x86 = x19 * x28;
+        let x87 = x28 * x24;
+        let x88 = x0 * x28 * x3;
+        let x89 = -(x19 * m);
+        let x90 = -(m * x24);
+        let x91 = -(x80 * x3);
+        let x92 = m * x32;
+        let x93 = m * x34;
+        let x94 = x80 * x2;
+        let x95 = x61 + x60;
+        let x96 = u2 * x32 + x19 * u3;
+        let x97 = u2 * x34 + u3 * x24;
+        let x98 = x4 * x0;
+        let x99 = Ixy * u3;
+        let x100 = u2 * Ixz;
+        let x101 = x29 - Ixx + Izz;
+        let x102 = (Ixx - Iyy) - x29;
+        let x103 = Iyy - Izz;
+        let x104 = Iyz * u1;
+        let x105 = 2.0 * rho + l;
+        let x106 = -(u2 * x105);
+        let x107 = -(u3 * x105);
         Derivatives {
             qdot: [x1 * x4, x7, x10 + u1, u4, u5, u6, u7],
             matrix: [
                 [Ixx, x11, x12, 0.0, 0.0, 0.0, 0.0],
-                [x11, Iyy - x13 * x14, x15, 0.0, x20, x24, x26],
-                [x12, x15, x28 + Izz, 0.0, x33, x35, x37],
-                [0.0, 0.0, 0.0, m, x39, x40, x42],
+                [x11, Iyy - x13 * x14, x15, 0.0, x20, x25, x27],
+                [x12, x15, x29 + Izz, 0.0, x33, x35, x37],
+                [0.0, 0.0, 0.0, m, x39, x41, x42],
                 [0.0, x20, x33, x39, x43, 0.0, 0.0],
-                [0.0, x24, x35, x40, 0.0, x43, 0.0],
-                [0.0, x26, x37, x42, 0.0, 0.0, x43],
+                [0.0, x25, x35, x41, 0.0, x43, 0.0],
+                [0.0, x27, x37, x42, 0.0, 0.0, x43],
             ],
             force: [
                 x49 * u3 - u2 * x46,
                 x46 * u1 - x51 * x14 - x54 * u3,
-                u2 * x54 - x27 * x58 - x49 * u1,
+                u2 * x54 - x28 * x58 - x49 * u1,
                 x59 - m * x62,
-                x64,
-                -((x66 + x23 * x51 + x67) * m),
-                -x69,
+                x63,
+                -((x64 + x51 * x24 + x65) * m),
+                -x67,
             ],
             checks: [x0],
             d_qdot: [
@@ -4936,39 +4935,39 @@ pub mod kane {
             d_matrix: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x71, x20, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x72, x33, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x73, x39, 0.0],
-                    [0.0, x71, x72, x73, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x69, x20, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x70, x33, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x71, x39, 0.0],
+                    [0.0, x69, x70, x71, 0.0, 0.0, 0.0],
                     [0.0, x20, x33, x39, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x74, x75, x76],
-                    [0.0, 0.0, 0.0, 0.0, x77, x78, x79],
-                    [0.0, 0.0, 0.0, 0.0, x80, x81, x82],
-                    [0.0, x74, x77, x80, 0.0, 0.0, 0.0],
-                    [0.0, x75, x78, x81, 0.0, 0.0, 0.0],
-                    [0.0, x76, x79, x82, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x72, x73, x74],
+                    [0.0, 0.0, 0.0, 0.0, x75, x76, x77],
+                    [0.0, 0.0, 0.0, 0.0, x78, x79, x81],
+                    [0.0, x72, x75, x78, 0.0, 0.0, 0.0],
+                    [0.0, x73, x76, x79, 0.0, 0.0, 0.0],
+                    [0.0, x74, x77, x81, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x84, x85, x86],
-                    [0.0, 0.0, 0.0, 0.0, x87, x88, x89],
+                    [0.0, 0.0, 0.0, 0.0, x83, x84, x85],
+                    [0.0, 0.0, 0.0, 0.0, x86, x87, x88],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x83, x86, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x84, x87, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x85, x88, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x86, x89, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, -(2.0 * x14), 0.0, 0.0, x90, x91, x92],
-                    [0.0, 0.0, 2.0 * x27, 0.0, x93, x94, x95],
+                    [0.0, -(2.0 * x14), 0.0, 0.0, x89, x90, x91],
+                    [0.0, 0.0, 2.0 * x28, 0.0, x92, x93, x94],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x89, x92, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x90, x93, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x91, x94, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x92, x95, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5062,72 +5061,72 @@ pub mod kane {
                 ],
             ],
             d_force: [
-                [0.0, 0.0, 0.0, 0.0, -(m * (x70 * x51 - x66 - x67)), x64, 0.0],
+                [0.0, 0.0, 0.0, 0.0, -(m * (x51 * x68 - x64 - x65)), x63, 0.0],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    -(x69 * x18),
-                    -(x69 * x16),
-                    -(m * (-x8 * x68 - x0 * x62)),
+                    -(x67 * x17),
+                    -(x67 * x16),
+                    -(m * (-x8 * x66 - x0 * x62)),
                 ],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    -((x51 * x83 + x19 * x58) * m),
-                    -((x23 * x58 - x34 * x51) * m),
-                    -(x38 * (x58 * x3 - x2 * x51)),
+                    -(m * (x19 * x58 + x82 * x51)),
+                    -((x24 * x58 - x51 * x34) * m),
+                    -(x80 * (x58 * x3 - x2 * x51)),
                 ],
                 [
                     0.0,
                     m * (x51 - u3 * x56),
                     (x57 - 2.0 * x55 - u2 * x50) * m,
-                    x96 * m,
-                    -(m * (x97 * u1 - x96 * x63)),
-                    -((x98 * u1 - x96 * x65) * m),
-                    -((x8 * x96 + x99 * u1) * m),
+                    x95 * m,
+                    -(m * (x96 * u1 - x95 * x38)),
+                    -((x97 * u1 - x95 * x40) * m),
+                    -((x8 * x95 + x98 * u1) * m),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x101 - x100,
-                    u3 * x102 - x44 - 2.0 * x45,
-                    x47 + 2.0 * x48 + u2 * x103,
+                    x100 - x99,
+                    u3 * x101 - x44 - 2.0 * x45,
+                    x47 + 2.0 * x48 + u2 * x102,
                     0.0,
-                    -(x97 * x27),
-                    -(x98 * x27),
-                    -(x99 * x27),
+                    -(x96 * x28),
+                    -(x97 * x28),
+                    -(x98 * x28),
                 ],
                 [
-                    2.0 * x44 + x45 + u3 * x104,
-                    x100 + 2.0 * (u4 * x14) - x105,
-                    x103 * u1 - x52 - 2.0 * x53,
+                    2.0 * x44 + x45 + u3 * x103,
+                    x99 + 2.0 * (u4 * x14) - x104,
+                    x102 * u1 - x52 - 2.0 * x53,
+                    -(m * x106),
+                    -((x38 * x106 - 2.0 * (x19 * u4) - x56 * x32) * m),
+                    -((x40 * x106 - 2.0 * (u4 * x24) - x56 * x34) * m),
+                    -((-x0 * (x56 * x2 + 2.0 * (u4 * x3)) - x8 * x106) * m),
+                ],
+                [
+                    u2 * x103 - 2.0 * x47 - x48,
+                    2.0 * x52 + u1 * x101 + x53,
+                    x104 - 2.0 * (u4 * x28) - x100,
                     -(m * x107),
-                    -((x63 * x107 - 2.0 * (x19 * u4) - x32 * x56) * m),
-                    -(m * (x65 * x107 - 2.0 * (u4 * x23) - x34 * x56)),
-                    -((-x0 * (x56 * x2 + 2.0 * (u4 * x3)) - x8 * x107) * m),
-                ],
-                [
-                    u2 * x104 - 2.0 * x47 - x48,
-                    2.0 * x52 + u1 * x102 + x53,
-                    x105 - 2.0 * (u4 * x27) - x101,
-                    -(m * x108),
-                    -((2.0 * (x32 * u4) + x63 * x108 + x19 * x50) * m),
-                    -((x23 * x50 + 2.0 * (x34 * u4) + x65 * x108) * m),
-                    -(m * ((2.0 * (u4 * x2) + x50 * x3) * x0 - x8 * x108)),
+                    -(m * (x19 * x50 + 2.0 * (u4 * x32) + x38 * x107)),
+                    -((x50 * x24 + 2.0 * (u4 * x34) + x40 * x107) * m),
+                    -(m * ((2.0 * (u4 * x2) + x50 * x3) * x0 - x8 * x107)),
                 ],
                 [
                     0.0,
                     2.0 * u2 * x14,
-                    -(2.0 * u3 * x27),
+                    -(2.0 * u3 * x28),
                     0.0,
-                    -((2.0 * (x32 * u3) - 2.0 * (u2 * x19)) * m),
-                    -((2.0 * (x34 * u3) - 2.0 * (u2 * x23)) * m),
-                    -(x38 * (2.0 * x5 - 2.0 * x6)),
+                    -(m * (2.0 * (u3 * x32) - 2.0 * (u2 * x19))),
+                    -(m * (2.0 * (u3 * x34) - 2.0 * (u2 * x24))),
+                    -(x80 * (2.0 * x5 - 2.0 * x6)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5308,73 +5307,72 @@ pub mod kane {
         let x26 = x25 * x21;
         let x27 = x0 * x1;
         let x28 = x27 * x21;
-        let x29 = x0 * m;
-        let x30 = x29 * x14;
-        let x31 = x29 * x12;
-        let x32 = -(x6 * m);
-        let x33 = m + mg;
-        let x34 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x35 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x36 = u2 * u4;
-        let x37 = u3 * u1;
-        let x38 = x9 * x37;
-        let x39 = x38 - 2.0 * x36;
-        let x40 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x41 = u2 * u1;
-        let x42 = x9 * x41;
-        let x43 = u3 * u4;
-        let x44 = x42 + 2.0 * x43;
-        let x45 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x46 = u2 * u2;
-        let x47 = x9 * x46;
-        let x48 = u3 * u3;
-        let x49 = x48 * x9;
-        let x50 = -x47 - x49;
-        let x51 = x14 * x0;
-        let x52 = (x15 * x39 + x51 * x50) + x44 * x23;
-        let x53 = x0 * x12;
-        let x54 = x17 * x39 + (x53 * x50 + x44 * x25);
-        let x55 = x6 * x50;
-        let x56 = x0 * (x3 * x39 + x44 * x1);
-        let x57 = -x37;
-        let x58 = u2 * u3;
-        let x59 = -x41;
-        let x60 = -x58;
-        let x61 = u1 * u1;
-        let x62 = x9 * x9;
-        let x63 = -(x9 * x15);
-        let x64 = -(x9 * x17);
-        let x65 = -(x9 * x19);
-        let x66 = x23 * x9;
-        let x67 = x9 * x25;
-        let x68 = x9 * x27;
-        let x69 = -x6;
-        let x70 = -(0.5 * x15 * m);
-        let x71 = -(0.5 * m * x17);
-        let x72 = -(0.5 * x29 * x3);
-        let x73 = 0.5 * x23 * m;
-        let x74 = 0.5 * x25 * m;
-        let x75 = 0.5 * x29 * x1;
-        let x76 = 0.5 * x48 + 0.5 * x46;
+        let x29 = x14 * x0;
+        let x30 = m * x29;
+        let x31 = x0 * x12;
+        let x32 = m * x31;
+        let x33 = -(x6 * m);
+        let x34 = m + mg;
+        let x35 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x36 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x37 = u2 * u4;
+        let x38 = u3 * u1;
+        let x39 = x9 * x38;
+        let x40 = x39 - 2.0 * x37;
+        let x41 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x42 = u2 * u1;
+        let x43 = x9 * x42;
+        let x44 = u3 * u4;
+        let x45 = x43 + 2.0 * x44;
+        let x46 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x47 = u2 * u2;
+        let x48 = x9 * x47;
+        let x49 = u3 * u3;
+        let x50 = x49 * x9;
+        let x51 = -x48 - x50;
+        let x52 = (x15 * x40 + x29 * x51) + x45 * x23;
+        let x53 = x17 * x40 + (x31 * x51 + x45 * x25);
+        let x54 = x6 * x51;
+        let x55 = x0 * (x3 * x40 + x45 * x1);
+        let x56 = -x38;
+        let x57 = u2 * u3;
+        let x58 = -x42;
+        let x59 = -x57;
+        let x60 = u1 * u1;
+        let x61 = x9 * x9;
+        let x62 = -(x9 * x15);
+        let x63 = -(x9 * x17);
+        let x64 = -(x9 * x19);
+        let x65 = x23 * x9;
+        let x66 = x9 * x25;
+        let x67 = x9 * x27;
+        let x68 = -x6;
+        let x69 = -(0.5 * x15 * m);
+        let x70 = -(0.5 * m * x17);
+        let x71 = -(0.5 * m * x19);
+        let x72 = 0.5 * x23 * m;
+        let x73 = 0.5 * x25 * m;
+        let x74 = 0.5 * x27 * m;
+        let x75 = 0.5 * x49 + 0.5 * x47;
         ParameterDerivatives {
             qdot: [x5, u2 * x3 - u3 * x1, x6 * x5 + u1, u4, u5, u6, u7],
             matrix: [
                 [Ixx, x7, x8, 0.0, 0.0, 0.0, 0.0],
                 [x7, Iyy - x9 * x10, x11, 0.0, x16, x18, x20],
                 [x8, x11, x9 * x21 + Izz, 0.0, x24, x26, x28],
-                [0.0, 0.0, 0.0, m, x30, x31, x32],
-                [0.0, x16, x24, x30, x33, 0.0, 0.0],
-                [0.0, x18, x26, x31, 0.0, x33, 0.0],
-                [0.0, x20, x28, x32, 0.0, 0.0, x33],
+                [0.0, 0.0, 0.0, m, x30, x32, x33],
+                [0.0, x16, x24, x30, x34, 0.0, 0.0],
+                [0.0, x18, x26, x32, 0.0, x34, 0.0],
+                [0.0, x20, x28, x33, 0.0, 0.0, x34],
             ],
             force: [
-                x35 * u3 - u2 * x34,
-                x34 * u1 - x39 * x10 - x40 * u3,
-                u2 * x40 - x44 * x21 - x35 * u1,
-                x45 - m * x50,
+                x36 * u3 - u2 * x35,
+                x35 * u1 - x40 * x10 - x41 * u3,
+                u2 * x41 - x45 * x21 - x36 * u1,
+                x46 - m * x51,
                 -(m * x52),
-                -(m * x54),
-                -((x56 - x55) * m),
+                -(m * x53),
+                -((x55 - x54) * m),
             ],
             checks: [x0],
             d_qdot: [
@@ -5454,43 +5452,43 @@ pub mod kane {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x62, 0.0, 0.0, x63, x64, x65],
-                    [0.0, 0.0, x62, 0.0, x66, x67, x68],
-                    [0.0, 0.0, 0.0, 1.0, x51, x53, x69],
-                    [0.0, x63, x66, x51, 1.0, 0.0, 0.0],
-                    [0.0, x64, x67, x53, 0.0, 1.0, 0.0],
-                    [0.0, x65, x68, x69, 0.0, 0.0, 1.0],
+                    [0.0, x61, 0.0, 0.0, x62, x63, x64],
+                    [0.0, 0.0, x61, 0.0, x65, x66, x67],
+                    [0.0, 0.0, 0.0, 1.0, x29, x31, x68],
+                    [0.0, x62, x65, x29, 1.0, 0.0, 0.0],
+                    [0.0, x63, x66, x31, 0.0, 1.0, 0.0],
+                    [0.0, x64, x67, x68, 0.0, 0.0, 1.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, -x10, 0.0, 0.0, x70, x71, x72],
-                    [0.0, 0.0, x21, 0.0, x73, x74, x75],
+                    [0.0, -x10, 0.0, 0.0, x69, x70, x71],
+                    [0.0, 0.0, x21, 0.0, x72, x73, x74],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x69, x72, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x70, x73, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x71, x74, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x72, x75, 0.0, 0.0, 0.0, 0.0],
                 ],
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x57, x41, 0.0, 0.0, 0.0, 0.0],
-                [x58, 0.0, x59, 0.0, 0.0, 0.0, 0.0],
-                [x60, x37, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x57, x58, x61 - x46, 0.0, 0.0, 0.0, 0.0],
-                [x41, x48 - x61, x60, 0.0, 0.0, 0.0, 0.0],
-                [x46 - x48, x59, x37, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x9 * x39, -(x44 * x9), x47 + x49, -x52, -x54, x55 - x56],
+                [0.0, x56, x42, 0.0, 0.0, 0.0, 0.0],
+                [x57, 0.0, x58, 0.0, 0.0, 0.0, 0.0],
+                [x59, x38, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x56, x57, x60 - x47, 0.0, 0.0, 0.0, 0.0],
+                [x42, x49 - x60, x59, 0.0, 0.0, 0.0, 0.0],
+                [x47 - x49, x58, x38, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x9 * x40, -(x45 * x9), x48 + x50, -x52, -x53, x54 - x55],
                 [
                     0.0,
-                    (x38 - x36) * m,
-                    (-x42 - x43) * m,
-                    x76 * m,
-                    -((u1 * (0.5 * (x15 * u3) + 0.5 * (x23 * u2)) - x76 * x51) * m),
-                    -(m * (u1 * (0.5 * (u3 * x17) + 0.5 * (u2 * x25)) - x76 * x53)),
-                    -(m * ((0.5 * x2 + 0.5 * x4) * x0 * u1 + x6 * x76)),
+                    (x39 - x37) * m,
+                    (-x43 - x44) * m,
+                    x75 * m,
+                    -((u1 * (0.5 * (x15 * u3) + 0.5 * (x23 * u2)) - x75 * x29) * m),
+                    -(m * (u1 * (0.5 * (u3 * x17) + 0.5 * (u2 * x25)) - x75 * x31)),
+                    -(m * ((0.5 * x2 + 0.5 * x4) * x0 * u1 + x6 * x75)),
                 ],
             ],
-            power: x45 * u4,
+            power: x46 * u4,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }
@@ -6122,86 +6120,85 @@ pub mod reduced_volterra {
         let x7 = x6 * x1;
         let x8 = x4 * x7;
         let x9 = f64::cos(psi);
-        let x10 = x6 * x2;
-        let x11 = x9 * x10;
+        let x10 = x0 * u4;
+        let x11 = x9 * x3;
         let x12 = f64::sin(psi);
-        let x13 = x3 * x12;
-        let x14 = x11 - x13;
+        let x13 = x2 * x12;
+        let x14 = x6 * x11 + x13;
         let x15 = rho + 0.5 * l;
-        let x16 = x15 * u3;
-        let x17 = x0 * u4;
-        let x18 = x6 * x3;
-        let x19 = x2 * x12 + x18 * x9;
-        let x20 = -(u2 * x15);
-        let x21 = x14 * x16 + x9 * x17 + x19 * x20;
-        let x22 = 1.0 / (m + mg);
-        let x23 = x9 * x2;
-        let x24 = x18 * x12;
-        let x25 = x24 - x23;
-        let x26 = x9 * x3 + x10 * x12;
-        let x27 = x26 * x16;
-        let x28 = x17 * x12;
-        let x29 = x20 * x3 + x2 * x16;
+        let x16 = -(u2 * x15);
+        let x17 = x9 * x2;
+        let x18 = x6 * x17;
+        let x19 = x3 * x12;
+        let x20 = x18 - x19;
+        let x21 = x15 * u3;
+        let x22 = x9 * x10 + x14 * x16 + x20 * x21;
+        let x23 = 1.0 / (m + mg);
+        let x24 = x6 * x19;
+        let x25 = x24 - x17;
+        let x26 = x6 * x13 + x11;
+        let x27 = x26 * x21;
+        let x28 = x10 * x12;
+        let x29 = x16 * x3 + x2 * x21;
         let x30 = x6 * u4 - x0 * x29;
         let x31 = -Ixy;
         let x32 = -Ixz;
-        let x33 = m * x22;
+        let x33 = m * x23;
         let x34 = 1.0 - x33;
-        let x35 = -(x15 * x34);
-        let x36 = -(x15 * m);
-        let x37 = -Iyz;
-        let x38 = x15 * m;
-        let x39 = u2 * Iyz;
-        let x40 = u1 * Ixz;
-        let x41 = u3 * Izz - x39 - x40;
-        let x42 = Iyz * u3;
-        let x43 = Ixy * u1;
-        let x44 = u2 * Iyy - x42 - x43;
-        let x45 = u1 * x16 - 2.0 * (u2 * u4);
-        let x46 = x33 - 1.0;
-        let x47 = m * x46;
-        let x48 = u3 * Ixz;
-        let x49 = u2 * Ixy;
-        let x50 = Ixx * u1 - x48 - x49;
-        let x51 = x15 * x47;
-        let x52 = 2.0 * (u3 * u4) - u1 * x20;
-        let x53 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x54 = x30 * x33;
-        let x55 = x0 * x33;
-        let x56 = 2.0 * x33 - 2.0;
-        let x57 = 2.0 - 2.0 * x33;
-        let x58 = u1 * x46;
-        let x59 = Ixy * u3;
-        let x60 = u2 * Ixz;
-        let x61 = x15 * x51;
-        let x62 = Izz - Ixx - x61;
-        let x63 = Ixx - Iyy;
-        let x64 = -(x15 * x33);
-        let x65 = Iyy - Izz;
-        let x66 = Iyz * u1;
-        let x67 = -((2.0 * rho + l) * x47);
-        let x68 = x15 * x33;
+        let x35 = m * x34;
+        let x36 = -Iyz;
+        let x37 = x15 * (x35 * x15);
+        let x38 = u2 * Iyz;
+        let x39 = u1 * Ixz;
+        let x40 = u3 * Izz - x38 - x39;
+        let x41 = Iyz * u3;
+        let x42 = Ixy * u1;
+        let x43 = u2 * Iyy - x41 - x42;
+        let x44 = u1 * x21 - 2.0 * (u2 * u4);
+        let x45 = x33 - 1.0;
+        let x46 = m * x45;
+        let x47 = u3 * Ixz;
+        let x48 = u2 * Ixy;
+        let x49 = Ixx * u1 - x47 - x48;
+        let x50 = x15 * x46;
+        let x51 = 2.0 * (u3 * u4) - u1 * x16;
+        let x52 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x53 = x30 * x33;
+        let x54 = x0 * x33;
+        let x55 = m * (2.0 * x33 - 2.0);
+        let x56 = m * (2.0 - 2.0 * x33);
+        let x57 = u1 * x45;
+        let x58 = Ixy * u3;
+        let x59 = u2 * Ixz;
+        let x60 = x15 * x50;
+        let x61 = Izz - Ixx - x60;
+        let x62 = Ixx - Iyy;
+        let x63 = -(x15 * x33);
+        let x64 = Iyy - Izz;
+        let x65 = Iyz * u1;
+        let x66 = -((2.0 * rho + l) * x46);
+        let x67 = x15 * x33;
         Derivatives {
             qdot: [
                 x1 * x4,
                 x5,
                 x8 + u1,
                 u4,
-                (G_X - x21 * m) * x22,
-                (G_Y - (x25 * x20 + x27 + x28) * m) * x22,
-                (G_Z + x30 * m) * x22,
+                (G_X - m * x22) * x23,
+                (G_Y - (x25 * x16 + x27 + x28) * m) * x23,
+                (G_Z + x30 * m) * x23,
             ],
             matrix: [
                 [Ixx, x31, x32, 0.0],
-                [x31, Iyy + x35 * x36, x37, 0.0],
-                [x32, x37, x15 * x38 * x34 + Izz, 0.0],
-                [0.0, 0.0, 0.0, m * x34],
+                [x31, Iyy + x35 * x15 * x15, x36, 0.0],
+                [x32, x36, x37 + Izz, 0.0],
+                [0.0, 0.0, 0.0, x35],
             ],
             force: [
-                x44 * u3 - u2 * x41,
-                x41 * u1 - x15 * x45 * x47 - x50 * u3,
-                u2 * x50 - x44 * u1 + x51 * x52,
-                x53 + (u2 * x20 - u3 * x16) * x47,
+                x43 * u3 - u2 * x40,
+                x40 * u1 - x15 * x44 * x46 - x49 * u3,
+                u2 * x49 - x43 * u1 + x50 * x51,
+                x52 + (u2 * x16 - u3 * x21) * x46,
             ],
             checks: [x0],
             d_qdot: [
@@ -6210,8 +6207,8 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    (x27 - (x23 - x24) * x20 + x28) * x33,
-                    -(x21 * x33),
+                    (x27 - (x17 - x24) * x16 + x28) * x33,
+                    -(x22 * x33),
                     0.0,
                 ],
                 [
@@ -6219,43 +6216,43 @@ pub mod reduced_volterra {
                     0.0,
                     x8 * x7 + x4,
                     0.0,
-                    x54 * x9,
-                    x54 * x12,
-                    (x6 * x29 + x17) * x33,
+                    x53 * x9,
+                    x53 * x12,
+                    (x6 * x29 + x10) * x33,
                 ],
                 [
                     x1 * x5,
                     -x4,
                     x5 * x7,
                     0.0,
-                    -((x20 * (x13 - x11) + x19 * x16) * x33),
-                    -(x33 * (x25 * x16 - x26 * x20)),
-                    (x2 * x20 - x16 * x3) * x55,
+                    -((x14 * x21 + x16 * (x19 - x18)) * x33),
+                    -(x33 * (x25 * x21 - x26 * x16)),
+                    (x2 * x16 - x21 * x3) * x54,
                 ],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    x33 * (u2 * x19 - x14 * u3),
+                    (u2 * x14 - u3 * x20) * x33,
                     (u2 * x25 - x26 * u3) * x33,
-                    x5 * x55,
+                    x5 * x54,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x2, x3, x2 * x7, 0.0, -(x19 * x64), -(x25 * x64), x15 * x3 * x55],
+                [x1 * x2, x3, x2 * x7, 0.0, -(x14 * x63), -(x25 * x63), x15 * x3 * x54],
                 [
                     x1 * x3,
                     -x2,
                     x7 * x3,
                     0.0,
-                    -(x14 * x68),
-                    -(x26 * x68),
-                    -(x15 * x2 * x55),
+                    -(x67 * x20),
+                    -(x26 * x67),
+                    -(x15 * x2 * x54),
                 ],
-                [0.0, 0.0, 0.0, 1.0, -(x9 * x55), -(x12 * x55), x6 * x33],
+                [0.0, 0.0, 0.0, 1.0, -(x9 * x54), -(x12 * x54), x6 * x33],
             ],
             d_matrix: [
                 [
@@ -6278,8 +6275,8 @@ pub mod reduced_volterra {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x56 * x36, 0.0, 0.0],
-                    [0.0, 0.0, x38 * x57, 0.0],
+                    [0.0, -(x15 * x55), 0.0, 0.0],
+                    [0.0, 0.0, x56 * x15, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
                 ],
                 [
@@ -6331,35 +6328,35 @@ pub mod reduced_volterra {
                 [0.0, 0.0, 0.0, 0.0],
                 [
                     0.0,
-                    (x34 * x45 - x15 * u3 * x58) * m,
-                    (x52 * x46 + u2 * x15 * x58) * m,
-                    -((u2 * u2 + u3 * u3) * x47),
+                    (x34 * x44 - x15 * u3 * x57) * m,
+                    (x51 * x45 + u2 * x15 * x57) * m,
+                    -((u2 * u2 + u3 * u3) * x46),
                 ],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [
-                    x60 - x59,
-                    u3 * x62 - x39 - 2.0 * x40,
-                    (x63 + x61) * u2 + x42 + 2.0 * x43,
+                    x59 - x58,
+                    u3 * x61 - x38 - 2.0 * x39,
+                    (x62 + x60) * u2 + x41 + 2.0 * x42,
                     0.0,
                 ],
                 [
-                    2.0 * x39 + x40 + u3 * x65,
-                    x59 + u4 * x57 * x36 - x66,
-                    (x63 + x35 * x38) * u1 - x48 - 2.0 * x49,
-                    u2 * x67,
+                    2.0 * x38 + x39 + u3 * x64,
+                    x58 - x56 * x15 * u4 - x65,
+                    (x62 - x37) * u1 - x47 - 2.0 * x48,
+                    u2 * x66,
                 ],
                 [
-                    u2 * x65 - 2.0 * x42 - x43,
-                    2.0 * x48 + x49 + x62 * u1,
-                    u4 * x38 * x56 - x60 + x66,
-                    x67 * u3,
+                    u2 * x64 - 2.0 * x41 - x42,
+                    2.0 * x47 + x48 + x61 * u1,
+                    x15 * x55 * u4 - x59 + x65,
+                    x66 * u3,
                 ],
-                [0.0, m * x20 * x57, m * x56 * x16, 0.0],
+                [0.0, x56 * x16, x55 * x21, 0.0],
             ],
-            power: x53 * u4,
-            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x53],
+            power: x52 * u4,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x52],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.

@@ -654,75 +654,75 @@ pub mod lagrange {
         let x96 = x46 * x72;
         let x97 = x46 * x13;
         let x98 = m2 + m0 + m1;
-        let x99 = theta_dot * x7;
-        let x100 = x5 * psi_dot + x99;
-        let x101 = x0 * psi_dot;
-        let x102 = phi_dot - x101;
-        let x103 = x1 * x100 + x2 * x102;
-        let x104 = x80 * x103;
-        let x105 = theta_dot * x4;
-        let x106 = psi_dot * x12 - x105;
-        let x107 = x106 + gamma1_dot;
-        let x108 = x3 * psi_dot * theta_dot;
-        let x109 = gamma1_dot * x100;
-        let x110 = phi_dot + x101;
-        let x111 = psi_dot * phi_dot;
-        let x112 = x111 * x12 - x110 * x105;
-        let x113 = x112 - gamma1_dot * x102;
-        let x114 = x1 * (x108 - x109) + x2 * x113;
-        let x115 = x104 * x107 + x114 * J2;
-        let x116 = gamma2_dot * x102;
-        let x117 = x111 * x5;
-        let x118 = x110 * x99;
-        let x119 = -x117 - x118;
-        let x120 = x106 * gamma2_dot + x108;
-        let x121 = x11 * (x116 + x119) - x120 * x10;
-        let x122 = J2 * x121;
-        let x123 = J2 - J1;
-        let x124 = gamma2_dot + x100;
-        let x125 = x11 * x102 - x106 * x10;
-        let x126 = x123 * x124 * x125;
-        let x127 = x122 + x126;
-        let x128 = J2 * x119;
-        let x129 = Ixx * x102 - x106 * Ixz - Ixy * x100;
-        let x130 = x129 * x100;
-        let x131 = x2 * x100 - x1 * x102;
-        let x132 = x123 * x131 * x103;
-        let x133 = Izz * x119;
-        let x134 = x108 * Ixz;
-        let x135 = Iyz * x112;
-        let x136 = Iyy * x100 - x106 * Iyz - Ixy * x102;
-        let x137 = x136 * x102;
-        let x138 = x10 * x102 + x106 * x11;
-        let x139 = x138 * x125;
-        let x140 = x106 * Izz - Iyz * x100 - Ixz * x102;
-        let x141 = J2 * x112;
-        let x142 = ((-Iyy * x112 - x106 * x129) - x80 * x139)
-            + ((x140 * x102 - Ixy * x108) + (Iyz * x119 - x141));
-        let x143 = x117 + x118;
-        let x144 = x10 * x100;
-        let x145 = x124 * d + x23 * x100;
-        let x146 = a_ * (x143 - x138 * x144) - x145 * x125 - d * x121;
-        let x147 = x138 * d + x106 * a_;
-        let x148 = x138 * x147 + x145 * x124
-            - a_ * (x112 * x10 + x11 * gamma2_dot * x100);
-        let x149 = a_ * (x11 * x112 + x144 * x100) + x112 * d - x125 * x147;
-        let x150 = x24 * x149 - x148 * x22;
-        let x151 = x140 * x100;
-        let x152 = Ixy * x112;
-        let x153 = x106 * x136;
-        let x154 = Ixz * x119;
-        let x155 = x108 * Ixx;
-        let x156 = d * x107 + x106 * x15;
-        let x157 = x106 * x1;
-        let x158 = x103 * x156 - x114 * d - a_ * (x112 + x131 * x157);
-        let x159 = a_ * x100 + x131 * d;
-        let x160 = d * x119 + a_ * (x2 * x119 + x106 * x157) + x159 * x103;
-        let x161 = x160 * x16;
-        let x162 = a_ * (x1 * x119 + x106 * x2 * gamma1_dot) - x107 * x156 - x159 * x131;
-        let x163 = x162 * x18;
-        let x164 = x10 * (x143 - x116) - x11 * x120;
-        let x165 = x113 * x1 + x2 * (x109 - x108);
+        let x99 = x0 * psi_dot;
+        let x100 = phi_dot - x99;
+        let x101 = gamma2_dot * x100;
+        let x102 = psi_dot * phi_dot;
+        let x103 = x102 * x5;
+        let x104 = phi_dot + x99;
+        let x105 = theta_dot * x7;
+        let x106 = x104 * x105;
+        let x107 = -x103 - x106;
+        let x108 = theta_dot * x4;
+        let x109 = psi_dot * x12 - x108;
+        let x110 = theta_dot * x3 * psi_dot;
+        let x111 = x109 * gamma2_dot + x110;
+        let x112 = x11 * (x101 + x107) - x111 * x10;
+        let x113 = J2 * x112;
+        let x114 = J2 - J1;
+        let x115 = x5 * psi_dot + x105;
+        let x116 = gamma2_dot + x115;
+        let x117 = x11 * x100 - x109 * x10;
+        let x118 = x114 * x116 * x117;
+        let x119 = x113 + x118;
+        let x120 = x102 * x12 - x104 * x108;
+        let x121 = x120 - gamma1_dot * x100;
+        let x122 = gamma1_dot * x115;
+        let x123 = x121 * x1 + x2 * (x122 - x110);
+        let x124 = x103 + x106;
+        let x125 = x10 * (x124 - x101) - x11 * x111;
+        let x126 = Ixx * x110;
+        let x127 = x109 * Izz - Iyz * x115 - Ixz * x100;
+        let x128 = x127 * x115;
+        let x129 = Ixy * x120;
+        let x130 = Iyy * x115 - x109 * Iyz - Ixy * x100;
+        let x131 = x109 * x130;
+        let x132 = Ixz * x107;
+        let x133 = x1 * x115 + x2 * x100;
+        let x134 = x80 * x133;
+        let x135 = x109 + gamma1_dot;
+        let x136 = x2 * x121 + (x110 - x122) * x1;
+        let x137 = x134 * x135 + J2 * x136;
+        let x138 = x10 * x100 + x109 * x11;
+        let x139 = x138 * d + x109 * a_;
+        let x140 = x116 * d + x23 * x115;
+        let x141 = x138 * x139 + x140 * x116
+            - a_ * (x120 * x10 + x11 * gamma2_dot * x115);
+        let x142 = x10 * x115;
+        let x143 = a_ * (x11 * x120 + x142 * x115) + x120 * d - x117 * x139;
+        let x144 = x24 * x143 - x141 * x22;
+        let x145 = a_ * (x124 - x138 * x142) - d * x112 - x140 * x117;
+        let x146 = d * x135 + x109 * x15;
+        let x147 = x2 * x115 - x1 * x100;
+        let x148 = x109 * x1;
+        let x149 = x133 * x146 - a_ * (x120 + x147 * x148) - d * x136;
+        let x150 = a_ * x115 + x147 * d;
+        let x151 = d * x107 + a_ * (x2 * x107 + x109 * x148) + x150 * x133;
+        let x152 = x151 * x16;
+        let x153 = a_ * (x1 * x107 + x109 * x2 * gamma1_dot) - x135 * x146 - x150 * x147;
+        let x154 = x153 * x18;
+        let x155 = Ixx * x100 - x109 * Ixz - Ixy * x115;
+        let x156 = x138 * x117;
+        let x157 = J2 * x120;
+        let x158 = ((-Iyy * x120 - x109 * x155) - x80 * x156)
+            + ((Iyz * x107 - x157) + (x127 * x100 - Ixy * x110));
+        let x159 = J2 * x107;
+        let x160 = x110 * Ixz;
+        let x161 = x155 * x115;
+        let x162 = x114 * x147 * x133;
+        let x163 = Izz * x107;
+        let x164 = Iyz * x120;
+        let x165 = x130 * x100;
         let x166 = a_ * x0 * theta_dot * theta_dot;
         let x167 = x11 * x4;
         let x168 = x10 * x7;
@@ -801,23 +801,26 @@ pub mod lagrange {
                 [0.0, x86, x91, x94, x97, 0.0, 0.0, x98],
             ],
             force: [
-                ((x130 - x128 - x132 - x133 - x134 + x135 - x137) * x7 + x142 * x4) * x3
-                    - x6 * x115 - x13 * x127 - m2 * (x5 * x150 - x146 * x26)
-                    + (x151 - x152 - x153 - x154 - x155) * x0
-                    - ((x161 + x163) * x12 - x21 * x158) * m1
-                    - (x30 * x165 - x164 * x28) * J1,
-                (x142 - x38 * x165 - x2 * x115) * x7
-                    - ((-x161 - x163) * x4 + x75 * x158) * m1
-                    + (x128 - x164 * x35 + x11 * x127 - x130 + x132 + x133 + x134 - x135
-                        + x137) * x4 - m2 * (x150 * x7 + x146 * x79),
-                (x146 * x46 - x122 - x126) * x10 + x1 * (x115 - x43 * x158) - x151 + x152
-                    - (x2 * x165 + x11 * x164) * J1 + x153 + x154 + x155,
-                x104 * x131 - x160 * x43 - x128,
-                x123 * x139 - x141 - x46 * x149,
-                -((x54 * x158 + x162 * x61 + x160 * x59) * m1
-                    + m2 * (x146 * x52 + x148 * x57 + x56 * x149)),
-                -(m1 * (x162 * x68 + x160 * x66 + x70 * x158)
-                    + m2 * (x146 * x65 + x148 * x71 + x149 * x72)),
+                x0 * (x128 - x126 - x129 - x131 - x132) - x119 * x13
+                    - (x30 * x123 - x125 * x28) * J1 - x137 * x6
+                    - m2 * (x5 * x144 - x26 * x145)
+                    - m1 * ((x152 + x154) * x12 - x149 * x21)
+                    + (x158 * x4 + (x161 - x159 - x160 - x162 - x163 + x164 - x165) * x7)
+                        * x3,
+                (x158 - x2 * x137 - x38 * x123) * x7
+                    - ((-x152 - x154) * x4 + x149 * x75) * m1
+                    - m2 * (x145 * x79 + x144 * x7)
+                    + (x11 * x119 - x125 * x35 + x159 + x160 - x161 + x162 + x163 - x164
+                        + x165) * x4,
+                x126 - x128 + x129 + x131 + x1 * (x137 - x149 * x43)
+                    + (x46 * x145 - x113 - x118) * x10 - (x11 * x125 + x2 * x123) * J1
+                    + x132,
+                x134 * x147 - x151 * x43 - x159,
+                x114 * x156 - x157 - x46 * x143,
+                -((x149 * x54 + x153 * x61 + x151 * x59) * m1
+                    + m2 * (x52 * x145 + x141 * x57 + x56 * x143)),
+                -(m2 * (x141 * x71 + x65 * x145 + x143 * x72)
+                    + (x153 * x68 + x151 * x66 + x149 * x70) * m1),
                 -(m2
                     * (d
                         * (x172 * x173
@@ -1282,879 +1285,876 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::sin(theta);
-        let x1 = f64::sin(gamma1);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(gamma1);
-        let x4 = f64::cos(theta);
-        let x5 = f64::sin(phi);
+        let x0 = f64::sin(gamma2);
+        let x1 = f64::cos(theta);
+        let x2 = f64::cos(phi);
+        let x3 = x1 * x2;
+        let x4 = f64::cos(gamma2);
+        let x5 = f64::sin(theta);
         let x6 = x4 * x5;
-        let x7 = x2 + x3 * x6;
-        let x8 = f64::cos(phi);
-        let x9 = x8 * x8;
-        let x10 = x5 * x5;
-        let x11 = f64::sin(gamma2);
-        let x12 = x0 * x11;
-        let x13 = f64::cos(gamma2);
-        let x14 = x4 * x8;
-        let x15 = x13 * x14;
-        let x16 = x15 - x12;
-        let x17 = a_ * x14;
-        let x18 = x16 * d;
-        let x19 = x17 + x18;
-        let x20 = x13 * a_;
-        let x21 = x20 + d;
-        let x22 = x21 * x21;
-        let x23 = a_ * x11;
-        let x24 = x23 * x23;
-        let x25 = x22 + x24;
-        let x26 = x3 * a_;
-        let x27 = x26 + d;
-        let x28 = x27 * x27;
-        let x29 = a_ * x1;
-        let x30 = x29 * x29;
-        let x31 = x28 + x30;
-        let x32 = x7 * d;
-        let x33 = a_ * x6;
-        let x34 = x32 + x33;
-        let x35 = x0 * Ixx;
-        let x36 = Ixy * x5 + Ixz * x8;
-        let x37 = x4 * x36;
-        let x38 = -x35 - x37;
-        let x39 = Iyz * x8;
-        let x40 = Iyy * x5;
-        let x41 = x40 - x39;
-        let x42 = x41 * x4 + x0 * Ixy;
-        let x43 = x42 * x5;
-        let x44 = Izz * x8;
-        let x45 = Iyz * x5;
-        let x46 = x44 - x45;
-        let x47 = x4 * x46;
-        let x48 = x0 * Ixz;
-        let x49 = x47 + x48;
-        let x50 = x49 * x8;
-        let x51 = x13 * x0;
-        let x52 = x11 * x14 + x51;
-        let x53 = x6 * x1;
-        let x54 = x3 * x0;
-        let x55 = x53 - x54;
-        let x56 = x3 * x7;
+        let x7 = x0 * x3 + x6;
+        let x8 = f64::sin(phi);
+        let x9 = x1 * x8;
+        let x10 = f64::sin(gamma1);
+        let x11 = x9 * x10;
+        let x12 = f64::cos(gamma1);
+        let x13 = x12 * x5;
+        let x14 = x11 - x13;
+        let x15 = x12 * a_;
+        let x16 = x15 + d;
+        let x17 = x16 * x16;
+        let x18 = a_ * x10;
+        let x19 = x18 * x18;
+        let x20 = x17 + x19;
+        let x21 = x5 * x10;
+        let x22 = x21 + x12 * x9;
+        let x23 = x22 * d;
+        let x24 = a_ * x9;
+        let x25 = x23 + x24;
+        let x26 = x5 * Ixx;
+        let x27 = Ixy * x8 + Ixz * x2;
+        let x28 = x1 * x27;
+        let x29 = -x26 - x28;
+        let x30 = a_ * x3;
+        let x31 = x5 * x0;
+        let x32 = x4 * x3;
+        let x33 = x32 - x31;
+        let x34 = x33 * d;
+        let x35 = x30 + x34;
+        let x36 = x4 * a_;
+        let x37 = x36 + d;
+        let x38 = x37 * x37;
+        let x39 = a_ * x0;
+        let x40 = x39 * x39;
+        let x41 = x38 + x40;
+        let x42 = x2 * x2;
+        let x43 = x8 * x8;
+        let x44 = Iyz * x2;
+        let x45 = Iyy * x8;
+        let x46 = x45 - x44;
+        let x47 = x46 * x1 + x5 * Ixy;
+        let x48 = x47 * x8;
+        let x49 = Izz * x2;
+        let x50 = Iyz * x8;
+        let x51 = x49 - x50;
+        let x52 = x1 * x51;
+        let x53 = x5 * Ixz;
+        let x54 = x52 + x53;
+        let x55 = x54 * x2;
+        let x56 = x12 * x22;
         let x57 = J2 * x56;
-        let x58 = x1 * J1;
-        let x59 = x58 * x55;
-        let x60 = x3 * d;
+        let x58 = x10 * J1;
+        let x59 = x58 * x14;
+        let x60 = x12 * d;
         let x61 = a_ + x60;
-        let x62 = x61 * x34;
-        let x63 = -x28 - x30;
-        let x64 = x5 * Izz;
-        let x65 = x64 + x39;
-        let x66 = x4 * x65;
-        let x67 = x5 * Ixz - Ixy * x8;
-        let x68 = x0 * x67;
-        let x69 = x11 * J1;
-        let x70 = x52 * x69;
-        let x71 = x13 * x16;
-        let x72 = J2 * x71;
-        let x73 = Iyy * x8;
-        let x74 = x73 + x45;
-        let x75 = x4 * x74;
-        let x76 = x13 * d;
+        let x62 = x61 * x25;
+        let x63 = -x17 - x19;
+        let x64 = x8 * Izz;
+        let x65 = x64 + x44;
+        let x66 = x1 * x65;
+        let x67 = x8 * Ixz - Ixy * x2;
+        let x68 = x5 * x67;
+        let x69 = x4 * x33;
+        let x70 = J2 * x69;
+        let x71 = Iyy * x2;
+        let x72 = x71 + x50;
+        let x73 = x1 * x72;
+        let x74 = x0 * J1;
+        let x75 = x74 * x7;
+        let x76 = x4 * d;
         let x77 = x76 + a_;
-        let x78 = -(x77 * x19);
-        let x79 = (x57 + x59 + m1 * (x62 + x63 * x6) - x66) * x8 - x68
-            + (x75 - x70 - x72 + m2 * (x78 + x25 * x14)) * x5;
-        let x80 = -(x52 * x13);
-        let x81 = x7 * x1;
-        let x82 = m2 * x11;
-        let x83 = x1 * m1;
-        let x84 = x38 + (x3 * x55 + x80) * J1 + (x16 * x11 - x81) * J2
-            + d * (x82 * x19 - x34 * x83);
+        let x78 = -(x77 * x35);
+        let x79 = (x57 + x59 + m1 * (x62 + x63 * x9) - x66) * x2 - x68
+            + (x73 - x70 - x75 + m2 * (x78 + x41 * x3)) * x8;
+        let x80 = -(x4 * x7);
+        let x81 = x22 * x10;
+        let x82 = x10 * m1;
+        let x83 = m2 * x0;
+        let x84 = x29 + J1 * (x12 * x14 + x80) + J2 * (x33 * x0 - x81)
+            + d * (x83 * x35 - x25 * x82);
         let x85 = d * m1;
-        let x86 = x85 * x27;
-        let x87 = x14 * (J2 + x86);
+        let x86 = x85 * x16;
+        let x87 = x3 * (J2 + x86);
         let x88 = m2 * d;
-        let x89 = x21 * x88;
+        let x89 = x37 * x88;
         let x90 = x89 + J2;
-        let x91 = x6 * x90;
+        let x91 = x9 * x90;
         let x92 = f64::cos(psi);
-        let x93 = x0 * x5;
-        let x94 = x92 * x93;
-        let x95 = f64::sin(psi);
-        let x96 = x8 * x95;
-        let x97 = x94 - x96;
-        let x98 = x92 * x4;
-        let x99 = x0 * x8;
-        let x100 = x5 * x95 + x99 * x92;
-        let x101 = x13 * x98 - x100 * x11;
-        let x102 = x101 * x23;
-        let x103 = x13 * x100 + x11 * x98;
-        let x104 = x21 * x103;
-        let x105 = x104 - x102;
-        let x106 = x3 * x98 + x97 * x1;
-        let x107 = x106 * x29;
-        let x108 = x3 * x97 - x1 * x98;
-        let x109 = x108 * x27;
-        let x110 = m2 * (x6 * x105 - x97 * x19)
-            + (x14 * (x107 + x109) - x100 * x34) * m1;
-        let x111 = x92 * x8 + x93 * x95;
-        let x112 = x3 * x111;
-        let x113 = x4 * x95;
-        let x114 = x1 * x113;
+        let x93 = x92 * x1;
+        let x94 = f64::sin(psi);
+        let x95 = x5 * x2;
+        let x96 = x8 * x94 + x95 * x92;
+        let x97 = x4 * x93 - x96 * x0;
+        let x98 = x97 * x39;
+        let x99 = x4 * x96 + x0 * x93;
+        let x100 = x37 * x99;
+        let x101 = x100 - x98;
+        let x102 = x5 * x8;
+        let x103 = x92 * x102;
+        let x104 = x2 * x94;
+        let x105 = x103 - x104;
+        let x106 = x12 * x93 + x105 * x10;
+        let x107 = x106 * x18;
+        let x108 = x12 * x105 - x10 * x93;
+        let x109 = x108 * x16;
+        let x110 = m2 * (x9 * x101 - x105 * x35) + (x3 * (x107 + x109) - x96 * x25) * m1;
+        let x111 = x92 * x2 + x102 * x94;
+        let x112 = x12 * x111;
+        let x113 = x1 * x94;
+        let x114 = x10 * x113;
         let x115 = x112 - x114;
-        let x116 = x27 * x115;
-        let x117 = x111 * x1;
-        let x118 = x3 * x113;
+        let x116 = x16 * x115;
+        let x117 = x111 * x10;
+        let x118 = x12 * x113;
         let x119 = x117 + x118;
-        let x120 = x119 * x29;
-        let x121 = x92 * x5;
-        let x122 = x99 * x95;
+        let x120 = x119 * x18;
+        let x121 = x92 * x8;
+        let x122 = x95 * x94;
         let x123 = x122 - x121;
-        let x124 = x13 * x113;
-        let x125 = x124 - x11 * x123;
-        let x126 = x125 * x23;
-        let x127 = x11 * x113;
-        let x128 = x127 + x13 * x123;
-        let x129 = x21 * x128;
-        let x130 = x129 - x126;
-        let x131 = x111 * x19;
-        let x132 = m1 * (x14 * (x116 + x120) - x34 * x123) + m2 * (x6 * x130 - x131);
-        let x133 = x77 * x5;
-        let x134 = x9 * x25;
-        let x135 = x11 * x5;
-        let x136 = x31 * x10;
-        let x137 = -(x61 * x8);
-        let x138 = x3 * x3;
-        let x139 = x13 * x13;
-        let x140 = x1 * x8;
+        let x124 = x111 * x35;
+        let x125 = x4 * x113;
+        let x126 = x125 - x0 * x123;
+        let x127 = x126 * x39;
+        let x128 = x0 * x113;
+        let x129 = x128 + x4 * x123;
+        let x130 = x37 * x129;
+        let x131 = x130 - x127;
+        let x132 = m1 * (x3 * (x116 + x120) - x25 * x123) + (x9 * x131 - x124) * m2;
+        let x133 = x77 * x8;
+        let x134 = x42 * x41;
+        let x135 = x0 * x8;
+        let x136 = x20 * x43;
+        let x137 = -(x61 * x2);
+        let x138 = x12 * x12;
+        let x139 = x4 * x4;
+        let x140 = x10 * x2;
         let x141 = J1 - J2;
-        let x142 = x13 * x141 - x88 * x77;
-        let x143 = x11 * x142 + Ixz;
+        let x142 = x4 * x141 - x88 * x77;
+        let x143 = x0 * x142 + Ixz;
         let x144 = x61 * x85;
-        let x145 = x3 * x141 - x144;
-        let x146 = x143 * x5 + (x1 * x145 - Ixy) * x8;
+        let x145 = x12 * x141 - x144;
+        let x146 = x143 * x8 + (x10 * x145 - Ixy) * x2;
         let x147 = -J2 - x86;
-        let x148 = x147 * x5;
-        let x149 = x90 * x8;
-        let x150 = x105 * x8;
+        let x148 = x147 * x8;
+        let x149 = x90 * x2;
+        let x150 = x101 * x2;
         let x151 = -x107 - x109;
-        let x152 = x151 * x5;
-        let x153 = m2 * (x97 * x133 + x150) + (x100 * x137 + x152) * m1;
-        let x154 = x130 * x8;
+        let x152 = x151 * x8;
+        let x153 = m2 * (x105 * x133 + x150) + (x96 * x137 + x152) * m1;
+        let x154 = x131 * x2;
         let x155 = x133 * x111;
         let x156 = -x116 - x120;
-        let x157 = x5 * x156;
+        let x157 = x8 * x156;
         let x158 = m2 * (x154 + x155) + (x157 + x137 * x123) * m1;
-        let x159 = x21 * x16;
-        let x160 = x52 * x23;
+        let x159 = x37 * x33;
+        let x160 = x39 * x7;
         let x161 = x159 + x160;
-        let x162 = x7 * x27;
-        let x163 = x55 * x29;
+        let x162 = x22 * x16;
+        let x163 = x14 * x18;
         let x164 = -x162 - x163;
-        let x165 = m2 * (x6 * x133 + x161 * x8) + m1 * (x137 * x14 + x5 * x164);
+        let x165 = m2 * (x9 * x133 + x161 * x2) + m1 * (x137 * x3 + x8 * x164);
         let x166 = x85 * d;
         let x167 = x166 + J2;
-        let x168 = x1 * x1;
-        let x169 = x11 * x11;
+        let x168 = x10 * x10;
+        let x169 = x0 * x0;
         let x170 = x88 * d;
         let x171 = J2 + x170;
-        let x172 = d * (x100 * x83 - x97 * x82);
-        let x173 = x82 * x111;
-        let x174 = d * (x83 * x123 - x173);
-        let x175 = x82 * x5;
-        let x176 = x83 * x8;
+        let x172 = d * (x96 * x82 - x105 * x83);
+        let x173 = x83 * x111;
+        let x174 = d * (x82 * x123 - x173);
+        let x175 = x83 * x8;
+        let x176 = x82 * x2;
         let x177 = d * (x176 - x175);
-        let x178 = x177 * x4;
+        let x178 = x177 * x1;
         let x179 = x108 * x85;
         let x180 = x85 * x115;
-        let x181 = x7 * x85;
-        let x182 = x88 * x103;
-        let x183 = x88 * x128;
-        let x184 = x88 * x16;
+        let x181 = x22 * x85;
+        let x182 = x88 * x99;
+        let x183 = x88 * x129;
+        let x184 = x88 * x33;
         let x185 = m2 + m0 + m1;
-        let x186 = psi_dot * x14;
-        let x187 = theta_dot * x5;
-        let x188 = x186 - x187;
-        let x189 = x4 * psi_dot;
-        let x190 = x189 * theta_dot;
-        let x191 = x188 * gamma2_dot + x190;
-        let x192 = x11 * x191;
-        let x193 = x0 * psi_dot;
-        let x194 = phi_dot + x193;
-        let x195 = -(x194 * x8);
-        let x196 = theta_dot * x195;
-        let x197 = psi_dot * phi_dot;
-        let x198 = x197 * x6;
-        let x199 = x196 - x198;
-        let x200 = phi_dot - x193;
-        let x201 = gamma2_dot * x200;
-        let x202 = x13 * (x199 + x201) - x192;
-        let x203 = J2 * x202;
-        let x204 = J2 - J1;
-        let x205 = x6 * psi_dot;
-        let x206 = theta_dot * x8;
+        let x186 = x5 * psi_dot;
+        let x187 = phi_dot + x186;
+        let x188 = -(x187 * x2);
+        let x189 = theta_dot * x188;
+        let x190 = psi_dot * phi_dot;
+        let x191 = x190 * x9;
+        let x192 = x189 - x191;
+        let x193 = x192 * Ixz;
+        let x194 = -(x8 * x187);
+        let x195 = theta_dot * x194;
+        let x196 = x190 * x3;
+        let x197 = x195 + x196;
+        let x198 = Ixy * x197;
+        let x199 = psi_dot * x3;
+        let x200 = theta_dot * x8;
+        let x201 = x199 - x200;
+        let x202 = x201 * Iyz;
+        let x203 = phi_dot - x186;
+        let x204 = Ixy * x203;
+        let x205 = x9 * psi_dot;
+        let x206 = theta_dot * x2;
         let x207 = x205 + x206;
-        let x208 = gamma2_dot + x207;
-        let x209 = x204 * x208;
-        let x210 = x188 * x11;
-        let x211 = x13 * x200 - x210;
-        let x212 = x209 * x211;
-        let x213 = x203 + x212;
-        let x214 = x199 * Ixz;
-        let x215 = -(x5 * x194);
-        let x216 = theta_dot * x215;
-        let x217 = x197 * x14;
-        let x218 = x216 + x217;
-        let x219 = Ixy * x218;
-        let x220 = x188 * Iyz;
-        let x221 = Ixy * x200;
-        let x222 = Iyy * x207 - x220 - x221;
-        let x223 = x188 * x222;
-        let x224 = x188 * Izz;
-        let x225 = Iyz * x207;
-        let x226 = Ixz * x200;
-        let x227 = x224 + (-x225 - x226);
-        let x228 = x227 * x207;
-        let x229 = x190 * Ixx;
-        let x230 = x228 - x214 - x219 - x223 - x229;
-        let x231 = x3 * x207 - x1 * x200;
-        let x232 = x188 * x1;
-        let x233 = gamma1_dot * x207;
-        let x234 = x190 - x233;
-        let x235 = gamma1_dot * x200;
-        let x236 = x218 - x235;
-        let x237 = x234 * x1 + x3 * x236;
-        let x238 = x1 * x207;
-        let x239 = x3 * x200;
-        let x240 = x238 + x239;
-        let x241 = x188 + gamma1_dot;
-        let x242 = d * x241;
-        let x243 = x188 * x26;
-        let x244 = x242 + x243;
-        let x245 = x240 * x244 - a_ * (x218 + x231 * x232) - d * x237;
-        let x246 = x199 * x1;
-        let x247 = x188 * x3;
-        let x248 = x246 + gamma1_dot * x247;
-        let x249 = a_ * x248 - x244 * x241;
-        let x250 = x231 * d;
-        let x251 = a_ * x207;
+        let x208 = Iyy * x207 - x202 - x204;
+        let x209 = x201 * x208;
+        let x210 = x201 * Izz;
+        let x211 = Iyz * x207;
+        let x212 = Ixz * x203;
+        let x213 = x210 + (-x211 - x212);
+        let x214 = x213 * x207;
+        let x215 = x1 * psi_dot;
+        let x216 = x215 * theta_dot;
+        let x217 = x216 * Ixx;
+        let x218 = x214 - x193 - x198 - x209 - x217;
+        let x219 = x0 * x203 + x201 * x4;
+        let x220 = d * x219;
+        let x221 = x201 * a_;
+        let x222 = x220 + x221;
+        let x223 = x4 * x203 - x201 * x0;
+        let x224 = x4 * x197;
+        let x225 = (x197 * d - x222 * x223) + a_ * (x224 + x0 * x207 * x207);
+        let x226 = x197 * x0;
+        let x227 = x4 * x207;
+        let x228 = gamma2_dot + x207;
+        let x229 = d * x228;
+        let x230 = x36 * x207;
+        let x231 = x229 + x230;
+        let x232 = x222 * x219;
+        let x233 = x231 * x228 - a_ * (x226 + gamma2_dot * x227) + x232;
+        let x234 = x233 * x39;
+        let x235 = x225 * x37 - x234;
+        let x236 = x0 * x219;
+        let x237 = x191 - x189;
+        let x238 = x201 * gamma2_dot + x216;
+        let x239 = x0 * x238;
+        let x240 = gamma2_dot * x203;
+        let x241 = x4 * (x192 + x240) - x239;
+        let x242 = a_ * (x237 - x236 * x207) - x231 * x223 - d * x241;
+        let x243 = x12 * x207 - x10 * x203;
+        let x244 = x201 * x10;
+        let x245 = gamma1_dot * x207;
+        let x246 = x216 - x245;
+        let x247 = gamma1_dot * x203;
+        let x248 = x197 - x247;
+        let x249 = x246 * x10 + x12 * x248;
+        let x250 = x10 * x207;
+        let x251 = x12 * x203;
         let x252 = x250 + x251;
-        let x253 = x231 * x252;
-        let x254 = x249 - x253;
-        let x255 = x254 * x29;
-        let x256 = x199 * d;
-        let x257 = x240 * x252;
-        let x258 = x256 + x257;
-        let x259 = x3 * x199;
-        let x260 = a_ * (x188 * x232 + x259);
-        let x261 = x258 + x260;
-        let x262 = x11 * x200 + x188 * x13;
-        let x263 = d * x262;
-        let x264 = x188 * a_;
-        let x265 = x263 + x264;
-        let x266 = x13 * x218;
-        let x267 = (x218 * d - x265 * x211) + a_ * (x266 + x11 * x207 * x207);
-        let x268 = x218 * x11;
-        let x269 = x13 * x207;
-        let x270 = d * x208;
-        let x271 = x20 * x207;
-        let x272 = x270 + x271;
-        let x273 = x265 * x262;
-        let x274 = x272 * x208 - a_ * (x268 + gamma2_dot * x269) + x273;
-        let x275 = x274 * x23;
-        let x276 = x21 * x267 - x275;
-        let x277 = x11 * x262;
-        let x278 = x198 - x196;
-        let x279 = a_ * (x278 - x277 * x207) - x272 * x211 - d * x202;
-        let x280 = Ixx * x200 - x188 * Ixz - Ixy * x207;
-        let x281 = x188 * x280;
-        let x282 = x199 * Iyz;
-        let x283 = x218 * J2;
-        let x284 = Ixy * x190;
-        let x285 = x227 * x200;
-        let x286 = Iyy * x218;
-        let x287 = x141 * x262;
-        let x288 = x287 * x211;
-        let x289 = (-x283 - x284) + ((x285 - x286) - x288);
-        let x290 = (x282 - x281) + x289;
-        let x291 = x199 * J2;
-        let x292 = x199 * Izz;
-        let x293 = x280 * x207;
-        let x294 = Iyz * x218;
-        let x295 = x190 * Ixz;
-        let x296 = x204 * x240;
-        let x297 = x231 * x296;
-        let x298 = x222 * x200;
-        let x299 = x1 * x236 + x3 * (x233 - x190);
-        let x300 = x278 - x201;
-        let x301 = x11 * x300 - x13 * x191;
-        let x302 = x240 * x141;
-        let x303 = x241 * x302 + J2 * x237;
-        let x304 = x276 * x8;
-        let x305 = x3 * x303;
-        let x306 = -x305 - x58 * x299;
-        let x307 = ((x295 + x297) + (x298 - x293)) + (x292 - x294);
-        let x308 = x13 * x213 + x307;
-        let x309 = x308 - x301 * x69;
-        let x310 = -(x27 * x261);
-        let x311 = x310 - x255;
-        let x312 = x311 * x5;
-        let x313 = x303 - x85 * x245;
-        let x314 = (x88 * x279 - x212) - x203;
-        let x315 = x204 * x262;
-        let x316 = -(m2 * (x101 * x274 + x103 * x267 + x97 * x279)
-            + (x100 * x245 + x108 * x261 + x106 * x254) * m1);
-        let x317 = x111 * x279;
-        let x318 = a_ * theta_dot;
-        let x319 = x318 * x0;
-        let x320 = theta_dot * x319;
-        let x321 = x11 * x8;
-        let x322 = x13 * x5;
-        let x323 = x321 + x322;
-        let x324 = x321 - x322;
-        let x325 = x324 * x4;
-        let x326 = x322 - x321;
-        let x327 = x4 * x326;
-        let x328 = -(0.5 * x323 * x4) + (0.25 * x327 - 0.25 * x325);
-        let x329 = x328 - x51;
-        let x330 = x323 * x4;
-        let x331 = 0.5 * x325 - x330 - 0.5 * x327;
-        let x332 = x13 * x8;
-        let x333 = x135 + x332;
-        let x334 = x0 * x333 + 0.5 * x325;
-        let x335 = x332 - x135;
-        let x336 = x0 * x335;
-        let x337 = x4 * x11;
-        let x338 = x334 + x336 + 2.0 * x337 + 0.5 * x327;
-        let x339 = phi_dot * x331 - theta_dot * x338;
-        let x340 = 0.5 * x327 - 0.5 * x330;
-        let x341 = x334 - x336 + 0.5 * x330 + x340;
-        let x342 = x341 * phi_dot;
-        let x343 = phi_dot * phi_dot;
-        let x344 = x99 + x6;
-        let x345 = x6 - x99;
-        let x346 = x1 * x345;
-        let x347 = x99 - x6;
-        let x348 = x1 * x347;
-        let x349 = -(0.5 * x344 * x1) + (0.25 * x348 - 0.25 * x346);
-        let x350 = x344 * x1;
-        let x351 = -0.5 * x350 - 0.5 * x348;
-        let x352 = x14 - x93;
-        let x353 = 0.5 * x350 + x3 * x352;
-        let x354 = x93 + x14;
-        let x355 = x3 * x354;
-        let x356 = x351 - 0.5 * x346 + x353 + x355;
+        let x253 = x201 + gamma1_dot;
+        let x254 = d * x253;
+        let x255 = x201 * x15;
+        let x256 = x254 + x255;
+        let x257 = x252 * x256 - a_ * (x197 + x243 * x244) - d * x249;
+        let x258 = x192 * x10;
+        let x259 = x201 * x12;
+        let x260 = x258 + gamma1_dot * x259;
+        let x261 = a_ * x260 - x256 * x253;
+        let x262 = x243 * d;
+        let x263 = a_ * x207;
+        let x264 = x262 + x263;
+        let x265 = x243 * x264;
+        let x266 = x261 - x265;
+        let x267 = x266 * x18;
+        let x268 = x192 * d;
+        let x269 = x252 * x264;
+        let x270 = x268 + x269;
+        let x271 = x12 * x192;
+        let x272 = a_ * (x201 * x244 + x271);
+        let x273 = x270 + x272;
+        let x274 = J2 * x241;
+        let x275 = J2 - J1;
+        let x276 = x275 * x228;
+        let x277 = x276 * x223;
+        let x278 = x274 + x277;
+        let x279 = x192 * J2;
+        let x280 = x192 * Izz;
+        let x281 = Ixx * x203 - x201 * Ixz - Ixy * x207;
+        let x282 = x281 * x207;
+        let x283 = Iyz * x197;
+        let x284 = x216 * Ixz;
+        let x285 = x275 * x252;
+        let x286 = x243 * x285;
+        let x287 = x208 * x203;
+        let x288 = x201 * x281;
+        let x289 = x192 * Iyz;
+        let x290 = x197 * J2;
+        let x291 = Ixy * x216;
+        let x292 = x213 * x203;
+        let x293 = Iyy * x197;
+        let x294 = x223 * x219;
+        let x295 = x141 * x294;
+        let x296 = (-x290 - x291) + ((x292 - x293) - x295);
+        let x297 = (x289 - x288) + x296;
+        let x298 = x237 - x240;
+        let x299 = x0 * x298 - x4 * x238;
+        let x300 = x10 * x248 + x12 * (x245 - x216);
+        let x301 = x252 * x141;
+        let x302 = x253 * x301 + J2 * x249;
+        let x303 = x12 * x302;
+        let x304 = -x303 - x58 * x300;
+        let x305 = ((x284 + x286) + (x287 - x282)) + (x280 - x283);
+        let x306 = x305 + x4 * x278;
+        let x307 = x306 - x299 * x74;
+        let x308 = -(x16 * x273);
+        let x309 = x308 - x267;
+        let x310 = x309 * x8;
+        let x311 = x235 * x2;
+        let x312 = x302 - x85 * x257;
+        let x313 = (x88 * x242 - x277) - x274;
+        let x314 = -(m2 * (x105 * x242 + x225 * x99 + x97 * x233)
+            + (x96 * x257 + x108 * x273 + x106 * x266) * m1);
+        let x315 = x242 * x111;
+        let x316 = a_ * theta_dot;
+        let x317 = x316 * theta_dot;
+        let x318 = x5 * x317;
+        let x319 = phi_dot * phi_dot;
+        let x320 = x95 + x9;
+        let x321 = x9 - x95;
+        let x322 = x10 * x321;
+        let x323 = x95 - x9;
+        let x324 = x10 * x323;
+        let x325 = -(0.5 * x320 * x10) + (0.25 * x324 - 0.25 * x322);
+        let x326 = x320 * x10;
+        let x327 = -0.5 * x326 - 0.5 * x324;
+        let x328 = x3 - x102;
+        let x329 = 0.5 * x326 + x12 * x328;
+        let x330 = x102 + x3;
+        let x331 = x12 * x330;
+        let x332 = x327 - 0.5 * x322 + x329 + x331;
+        let x333 = x332 * phi_dot;
+        let x334 = x13 + x325;
+        let x335 = x327 - 0.5 * x326 + 0.5 * x322;
+        let x336 = 0.5 * x324 - 0.5 * x326;
+        let x337 = x10 * x1;
+        let x338 = x336 + 0.5 * x322 + x329 - x331 + 2.0 * x337;
+        let x339 = phi_dot * x335 + x338 * gamma1_dot;
+        let x340 = x4 * x8;
+        let x341 = x0 * x2;
+        let x342 = x340 + x341;
+        let x343 = x341 - x340;
+        let x344 = x343 * x1;
+        let x345 = x340 - x341;
+        let x346 = x345 * x1;
+        let x347 = -(0.5 * x342 * x1) + (0.25 * x346 - 0.25 * x344);
+        let x348 = x347 - x6;
+        let x349 = x342 * x1;
+        let x350 = x4 * x2;
+        let x351 = x350 - x135;
+        let x352 = x5 * x351;
+        let x353 = 0.5 * x346 - 0.5 * x349;
+        let x354 = x135 + x350;
+        let x355 = x5 * x354 + 0.5 * x344;
+        let x356 = 0.5 * x349 - x352 + x353 + x355;
         let x357 = x356 * phi_dot;
-        let x358 = x54 + x349;
-        let x359 = x351 - 0.5 * x350 + 0.5 * x346;
-        let x360 = 0.5 * x348 - 0.5 * x350;
-        let x361 = x1 * x4;
-        let x362 = x360 + 0.5 * x346 + x353 - x355 + 2.0 * x361;
-        let x363 = phi_dot * x359 + x362 * gamma1_dot;
-        let x364 = x121 - x122;
-        let x365 = x13 * x364 - x127;
-        let x366 = x364 * x11 + x124;
-        let x367 = x365 * x21 + x366 * x23;
-        let x368 = -x117 - x118;
-        let x369 = x368 * x29;
-        let x370 = x114 - x112;
-        let x371 = x27 * x370;
-        let x372 = m2 * (x131 + x6 * x367) + ((x369 + x371) * x14 - x364 * x34) * m1;
-        let x373 = m2 * (x367 * x8 - x155) + ((-x369 - x371) * x5 + x364 * x137) * m1;
-        let x374 = (x364 * x83 + x173) * d;
-        let x375 = x85 * x370;
-        let x376 = x365 * x88;
-        let x377 = Ixy * x4 + x0 * (x39 - x40);
-        let x378 = x0 * (x45 - x44) + x4 * Ixz;
-        let x379 = -2.0 * x28 - 2.0 * x30;
-        let x380 = x361 - x3 * x93;
-        let x381 = a_ * x93 - d * x380;
-        let x382 = Ixx * x4;
-        let x383 = x0 * x36;
-        let x384 = x337 + x13 * x99;
-        let x385 = x3 * x4;
-        let x386 = x1 * x93 + x385;
-        let x387 = x13 * x4;
-        let x388 = x99 * x11 - x387;
-        let x389 = d * x384 + a_ * x99;
-        let x390 = -2.0 * x22 - 2.0 * x24;
-        let x391 = -x22 - x24;
-        let x392 = x8
-            * ((x31 * x93 - x61 * x381) * m1 - x58 * x386 + x0 * x65 + x3 * J2 * x380)
-            - x67 * x4
-            + x5
-                * (x388 * x69 - x0 * x74 + m2 * (x77 * x389 + x99 * x391)
-                    + x13 * J2 * x384);
-        let x393 = x383 - x382;
-        let x394 = x393 + (-x1 * x380 - x11 * x384) * J2 + (x381 * x83 - x82 * x389) * d
-            + (x13 * x388 - x3 * x386) * J1;
-        let x395 = x147 * x99;
-        let x396 = -x89 - J2;
-        let x397 = x396 * x93;
-        let x398 = x102 - x104;
-        let x399 = x161 - x17 - x18;
-        let x400 = x162 - x32 + x163 - x33;
-        let x401 = m2 * ((x0 * x398 + x399 * x98) * x5 + x97 * x389)
-            + ((x400 * x98 + x0 * x151) * x8 + x381 * x100) * m1;
-        let x402 = x126 - x129;
-        let x403 = ((x0 * x402 + x399 * x113) * x5 + x111 * x389) * m2
-            + (x381 * x123 + (x0 * x156 + x400 * x113) * x8) * m1;
-        let x404 = x92 * x165;
-        let x405 = x165 * x95;
-        let x406 = m2 * ((-x388 * x23 - x21 * x384) * x8 - x133 * x93)
-            + ((x386 * x29 - x380 * x27) * x5 - x99 * x137) * m1;
-        let x407 = x177 * x98;
-        let x408 = x177 * x113;
-        let x409 = x0 * (x175 - x176) * d;
-        let x410 = x92 * x181;
-        let x411 = x181 * x95;
-        let x412 = x85 * x380;
-        let x413 = x92 * x184;
-        let x414 = x184 * x95;
-        let x415 = -(x88 * x384);
-        let x416 = x93 * phi_dot;
-        let x417 = theta_dot * x14;
-        let x418 = x416 - x417;
-        let x419 = Ixz * x418;
-        let x420 = x378 * x207;
-        let x421 = x99 * phi_dot;
-        let x422 = theta_dot * x6;
-        let x423 = x421 + x422;
-        let x424 = Ixy * x423;
-        let x425 = x222 * x8;
-        let x426 = theta_dot * Ixx;
-        let x427 = x5 * x227;
-        let x428 = x425 + x426 - x427;
-        let x429 = x188 * x377;
-        let x430 = x93 * x211;
-        let x431 = x388 * x208;
-        let x432 = gamma2_dot * x4;
-        let x433 = gamma2_dot * x8 + theta_dot;
-        let x434 = x13 * (x418 - x432) + x12 * x433;
-        let x435 = J2 * (x431 - x430 + x434);
-        let x436 = (x430 - x431) * J1;
-        let x437 = x435 + x436;
-        let x438 = x262 * x388 - x384 * x211;
-        let x439 = J2 * (x438 + x423);
-        let x440 = x438 * J1;
-        let x441 = x280 * x8;
-        let x442 = x441 + Ixy * theta_dot;
-        let x443 = ((x439 - x440) + (x0 * x442 - x4 * x227))
-            + ((Iyy * x423 - x188 * x393) + (x378 * x200 + Iyz * x418));
-        let x444 = x4 * x222;
-        let x445 = x200 * x377;
-        let x446 = x418 * Izz;
-        let x447 = Iyz * x423;
-        let x448 = x240 * x380;
-        let x449 = x231 * x386;
-        let x450 = x448 - x449;
-        let x451 = x450 * J1;
-        let x452 = J2 * (x450 + x418);
-        let x453 = x5 * x280;
-        let x454 = theta_dot * Ixz;
-        let x455 = x0 * (x453 - x454);
-        let x456 = x393 * x207;
-        let x457 = x240 * x99;
-        let x458 = x241 * x386;
-        let x459 = x4 * gamma1_dot - x421 - x422;
-        let x460 = gamma1_dot * x5;
+        let x358 = x1 * x0;
+        let x359 = x352 + 2.0 * x358 + x355 + 0.5 * x346;
+        let x360 = 0.5 * x344 - x349 - 0.5 * x346;
+        let x361 = x360 * phi_dot - theta_dot * x359;
+        let x362 = x121 - x122;
+        let x363 = x4 * x362 - x128;
+        let x364 = x362 * x0 + x125;
+        let x365 = x363 * x37 + x364 * x39;
+        let x366 = -x117 - x118;
+        let x367 = x366 * x18;
+        let x368 = x114 - x112;
+        let x369 = x16 * x368;
+        let x370 = m2 * (x124 + x9 * x365) + ((x367 + x369) * x3 - x362 * x25) * m1;
+        let x371 = m2 * (x365 * x2 - x155) + ((-x367 - x369) * x8 + x362 * x137) * m1;
+        let x372 = (x362 * x82 + x173) * d;
+        let x373 = x85 * x368;
+        let x374 = x363 * x88;
+        let x375 = x4 * x1;
+        let x376 = x95 * x0 - x375;
+        let x377 = x12 * x1;
+        let x378 = x10 * x102 + x377;
+        let x379 = Ixy * x1 + x5 * (x44 - x45);
+        let x380 = x5 * (x50 - x49) + x1 * Ixz;
+        let x381 = x358 + x4 * x95;
+        let x382 = a_ * x95 + x381 * d;
+        let x383 = -2.0 * x38 - 2.0 * x40;
+        let x384 = -2.0 * x17 - 2.0 * x19;
+        let x385 = x337 - x12 * x102;
+        let x386 = a_ * x102 - d * x385;
+        let x387 = Ixx * x1;
+        let x388 = x5 * x27;
+        let x389 = -x38 - x40;
+        let x390 = x2
+            * ((x20 * x102 - x61 * x386) * m1 - x58 * x378 + x5 * x65 + x12 * J2 * x385)
+            - x67 * x1
+            + (m2 * (x77 * x382 + x95 * x389) + x4 * x381 * J2 - x5 * x72 + x376 * x74)
+                * x8;
+        let x391 = x388 - x387;
+        let x392 = (x4 * x376 - x12 * x378) * J1 + d * (x386 * x82 - x83 * x382) + x391
+            + J2 * (-x10 * x385 - x381 * x0);
+        let x393 = x147 * x95;
+        let x394 = -x89 - J2;
+        let x395 = x394 * x102;
+        let x396 = x162 - x23 + x163 - x24;
+        let x397 = x98 - x100;
+        let x398 = x161 - x30 - x34;
+        let x399 = ((x396 * x93 + x5 * x151) * x2 + x386 * x96) * m1
+            + (x105 * x382 + x8 * (x5 * x397 + x398 * x93)) * m2;
+        let x400 = x127 - x130;
+        let x401 = ((x5 * x400 + x398 * x113) * x8 + x111 * x382) * m2
+            + (x386 * x123 + (x5 * x156 + x396 * x113) * x2) * m1;
+        let x402 = x92 * x165;
+        let x403 = x165 * x94;
+        let x404 = m2 * ((-x37 * x381 - x376 * x39) * x2 - x133 * x102)
+            + ((x378 * x18 - x385 * x16) * x8 - x95 * x137) * m1;
+        let x405 = x177 * x93;
+        let x406 = x177 * x113;
+        let x407 = x5 * (x175 - x176) * d;
+        let x408 = x92 * x181;
+        let x409 = x181 * x94;
+        let x410 = x85 * x385;
+        let x411 = x184 * x92;
+        let x412 = x184 * x94;
+        let x413 = -(x381 * x88);
+        let x414 = ((x293 - x292) + x295) + (x290 + x291);
+        let x415 = x102 * phi_dot;
+        let x416 = theta_dot * x3;
+        let x417 = x415 - x416;
+        let x418 = Ixz * x417;
+        let x419 = x380 * x207;
+        let x420 = x95 * phi_dot;
+        let x421 = theta_dot * x9;
+        let x422 = x420 + x421;
+        let x423 = Ixy * x422;
+        let x424 = x208 * x2;
+        let x425 = theta_dot * Ixx;
+        let x426 = x8 * x213;
+        let x427 = x424 + x425 - x426;
+        let x428 = x201 * x379;
+        let x429 = x1 * x208;
+        let x430 = x203 * x379;
+        let x431 = x417 * Izz;
+        let x432 = Iyz * x422;
+        let x433 = x252 * x385;
+        let x434 = x243 * x378;
+        let x435 = x433 - x434;
+        let x436 = x435 * J1;
+        let x437 = J2 * (x435 + x417);
+        let x438 = x8 * x281;
+        let x439 = theta_dot * Ixz;
+        let x440 = x5 * (x438 - x439);
+        let x441 = x391 * x207;
+        let x442 = x376 * x219 - x381 * x223;
+        let x443 = x442 * J1;
+        let x444 = (x442 + x422) * J2;
+        let x445 = x281 * x2;
+        let x446 = x445 + Ixy * theta_dot;
+        let x447 = ((x444 - x443) + (x5 * x446 - x1 * x213))
+            + ((Iyy * x422 - x201 * x391) + (x380 * x203 + Iyz * x417));
+        let x448 = x376 * x228;
+        let x449 = x223 * x102;
+        let x450 = (x449 - x448) * J1;
+        let x451 = gamma2_dot * x1;
+        let x452 = gamma2_dot * x2 + theta_dot;
+        let x453 = x5 * x452;
+        let x454 = x4 * (x417 - x451) + x0 * x453;
+        let x455 = J2 * (x454 + x448 - x449);
+        let x456 = x450 + x455;
+        let x457 = x252 * x95;
+        let x458 = x253 * x378;
+        let x459 = x1 * gamma1_dot - x420 - x421;
+        let x460 = gamma1_dot * x8;
         let x461 = x460 - theta_dot;
-        let x462 = x3 * x459 + x2 * x461;
+        let x462 = x12 * x459 + x21 * x461;
         let x463 = J2 * (x457 + x458 + x462) + (-x457 - x458) * J1;
-        let x464 = x417 - x416;
-        let x465 = x11 * (x464 + x432) + x51 * x433;
-        let x466 = theta_dot - x460;
-        let x467 = x466 * x54 + x459 * x1;
-        let x468 = (x288 + (x286 - x285)) + (x283 + x284);
-        let x469 = a_ * (x11 * (x384 * x207 + x262 * x93) + x464) - x272 * x388
-            - d * x434 + x21 * x430;
-        let x470 = gamma2_dot * x20;
-        let x471 = x21 * x208;
-        let x472 = x93 * (x470 - x270 - x271 - x471) - x262 * x389 + x423 * x23
-            - x265 * x384;
-        let x473 = 2.0 * x205 + 2.0 * x206;
-        let x474 = a_ * (-x13 * x423 - x11 * x93 * x473) - x265 * x388 + x389 * x211
-            - d * x423;
-        let x475 = x21 * x474;
-        let x476 = -(x21 * x267);
-        let x477 = x26 * gamma1_dot;
-        let x478 = x241 * x27;
-        let x479 = x244 - x477 + x478;
-        let x480 = x29 * x418 - x252 * x380 + x381 * x231 + x99 * x479;
-        let x481 = 2.0 * x187 - 2.0 * x186;
-        let x482 = d * x418 + (x3 * x418 + x99 * x1 * x481) * a_ - x252 * x386
-            - x381 * x240;
-        let x483 = a_ * (x423 + x1 * (x231 * x99 - x188 * x380)) - x244 * x386
-            - x457 * x27 - d * x462;
-        let x484 = x427 - x425 - x426;
-        let x485 = x7 * x261 + x254 * x55 + x245 * x14;
-        let x486 = x16 * x267 + x6 * x279 - x52 * x274;
-        let x487 = x318 * theta_dot * x4;
-        let x488 = x3 * x345;
-        let x489 = x354 * x1;
-        let x490 = 0.25 * x488 + 0.5 * x489;
-        let x491 = x3 * x344;
-        let x492 = x3 * x347;
-        let x493 = 0.25 * x492 - 0.25 * x491;
-        let x494 = x352 * x1;
-        let x495 = (x490 + x493) + (0.25 * x491 - 0.5 * x494);
-        let x496 = 0.5 * x488 + x489;
-        let x497 = phi_dot * (x496 + x494 + 0.5 * x492);
-        let x498 = x385 + x495;
-        let x499 = 0.5 * x492 - 0.5 * x491;
-        let x500 = x499 + (-0.5 * x488 - 0.5 * x491);
-        let x501 = 0.5 * x488 - x491 - 0.5 * x492;
-        let x502 = x501 * phi_dot;
-        let x503 = x0 * x323;
-        let x504 = x0 * x326;
-        let x505 = x324 * x0;
-        let x506 = 0.25 * x503 + 0.25 * x505;
-        let x507 = (0.25 * x503 - 0.25 * x504) + x506;
-        let x508 = x507 - x387;
-        let x509 = 0.5 * x503 - 0.5 * x505;
-        let x510 = x4 * x333;
-        let x511 = x335 * x4;
-        let x512 = -x511 - 0.5 * x503;
-        let x513 = (x509 - 0.5 * x504 + x510 + x512) * phi_dot;
-        let x514 = x509 + 0.5 * x503 + 0.5 * x504;
-        let x515 = x514 * phi_dot;
-        let x516 = 0.5 * x503 + 0.5 * x505;
-        let x517 = (x516 + x512) + (0.5 * x504 - x510);
-        let x518 = x11 * x69;
-        let x519 = (x64 - x40) + 2.0 * x39;
-        let x520 = x1 * x5;
-        let x521 = x61 * x61;
-        let x522 = x77 * x77;
-        let x523 = (((x138 * J2 + x58 * x1) * x8 + x73 - x44 + 2.0 * x45) * x8
-            + x5 * ((J2 * x139 + x518) * x5 + x519)) * x4
-            + (-x55 * x520 - x52 * x321) * J1 - J2 * (x56 * x5 + x71 * x8)
-            + m1 * (x4 * (x136 + (x63 + x521) * x9) - x61 * x34 * x5)
-            + m2 * ((x10 * (x391 + x522) + x134) * x4 + x78 * x8) - x383;
-        let x524 = x4 * x146;
-        let x525 = x147 * x6;
-        let x526 = x90 * x14;
-        let x527 = x13 * x21;
-        let x528 = x11 * x23;
-        let x529 = x527 + x528;
-        let x530 = x96 - x94;
-        let x531 = x97 * x77 + x529 * x530;
-        let x532 = x3 * x27;
-        let x533 = x1 * x29;
-        let x534 = x8 * (x532 - a_ + x533 - x60);
-        let x535 = m2 * (x4 * (x5 * x531 + x150) - x100 * x19)
-            + m1 * (x4 * (x152 + x100 * x534) - x34 * x530);
-        let x536 = x77 * x111 - x529 * x111;
-        let x537 = (x4 * (x5 * x536 + x154) - x123 * x19) * m2
-            + m1 * (x4 * (x123 * x534 + x157) + x111 * x34);
-        let x538 = x143 * x8 + (Ixy + x1 * (x144 + x3 * x204)) * x5;
-        let x539 = x147 * x8;
-        let x540 = x396 * x5;
-        let x541 = -x532 - x533;
-        let x542 = (x61 + x541) * x5;
-        let x543 = (x100 * x542 + (x151 - x61 * x530) * x8) * m1
-            + m2 * (x531 * x8 + (x398 + x77 * x100) * x5);
-        let x544 = (x123 * x542 + (x156 + x61 * x111) * x8) * m1
-            + m2 * ((x402 + x77 * x123) * x5 + x8 * x536);
-        let x545 = m1 * (x6 * (2.0 * a_ + x541 + 2.0 * x60) + x164) * x8
-            + m2 * ((2.0 * x76 + 2.0 * a_ - x527 - x528) * x14 - x159 - x160) * x5;
-        let x546 = d * (x83 * x530 - x82 * x100);
-        let x547 = d * (-x82 * x123 - x111 * x83);
-        let x548 = -(x4 * d * (x83 * x5 + x82 * x8));
-        let x549 = x3 * x85;
-        let x550 = x549 * x100;
-        let x551 = x549 * x123;
-        let x552 = x549 * x14;
-        let x553 = x13 * x88;
-        let x554 = x553 * x530;
-        let x555 = -(x553 * x111);
-        let x556 = -(x553 * x6);
-        let x557 = x188 * Ixy - Ixz * x207;
-        let x558 = x557 * x207;
-        let x559 = x231 * x1;
-        let x560 = x188 * (x3 * x296 + x559 * x204);
-        let x561 = x188 * Iyy;
-        let x562 = x561 + x225;
-        let x563 = x562 * x200;
-        let x564 = x187 * x194;
-        let x565 = x564 - x217;
-        let x566 = x565 * J2;
-        let x567 = x565 * Izz;
-        let x568 = x13 * x211;
-        let x569 = Izz * x207;
-        let x570 = -x569 - x220;
-        let x571 = (((x204 * x277 + x141 * x568) * x207 + x565 * Iyz)
-            + (x293 - x199 * Iyy)) + (x570 * x200 + x188 * x557);
-        let x572 = x565 * x11 - x13 * gamma2_dot * x207;
-        let x573 = x77 * x211;
-        let x574 = x265 * x11;
-        let x575 = x256 - (x574 - x573) * x207 + a_ * (x210 * x473 + x13 * x199);
-        let x576 = x13 * x265;
-        let x577 = x77 * x262;
-        let x578 = x272 - x470 + x471;
-        let x579 = (-x576 - x577) * x207 - x199 * x23 + x188 * x578;
-        let x580 = x21 * x575 + x77 * x279 - x579 * x23;
-        let x581 = x21 * x211;
-        let x582 = -(x11 * x207);
-        let x583 = x13 * x565 - gamma2_dot * x582;
-        let x584 = x269 * x207;
-        let x585 = x272 * x582 - x188 * x581 - d * x583
-            + a_ * (x217 - x564 - x11 * (x188 * x262 - x584));
-        let x586 = x188 * x247;
-        let x587 = x240 * x27;
-        let x588 = x259 - gamma1_dot * x232;
-        let x589 = (a_ * (x278 - (x586 - x231 * x207) * x1) + x244 * x232)
-            + (-x587 * x207 - d * x588);
-        let x590 = x477 - x242 - x478 - x243;
-        let x591 = -x61 * x231 - x3 * x252;
-        let x592 = x565 * x29 - x590 * x207 + x188 * x591;
-        let x593 = x29 * x592;
-        let x594 = x1 * (2.0 * x186 - 2.0 * x187);
-        let x595 = x61 * x240;
-        let x596 = x1 * x252;
-        let x597 = a_ * (x3 * x565 - x594 * x207) + x565 * d - x188 * (-x595 - x596);
-        let x598 = x27 * x597;
-        let x599 = x61 * x245;
-        let x600 = x582 * x208;
-        let x601 = x188 * x211;
-        let x602 = (x583 - x600 + x601) * J2;
-        let x603 = (x600 - x601) * J1;
-        let x604 = x602 + x603;
-        let x605 = x240 * x207;
-        let x606 = x241 * x232;
-        let x607 = (x606 - x605) * J1 + J2 * (x588 + x605 - x606);
-        let x608 = x565 * Ixz;
-        let x609 = x570 * x207;
-        let x610 = x199 * Ixy;
-        let x611 = x222 * x207;
-        let x612 = x13 * x267 - x274 * x11;
-        let x613 = x589 + x3 * x261 + x254 * x1;
-        let x614 = (x496 + x499) + (0.5 * x491 - x494);
-        let x615 = 0.5 * x494 + 0.25 * x492 + x490;
-        let x616 = -0.5 * x511 - 0.25 * x503;
-        let x617 = x616 + 0.25 * x503 - 0.25 * x504 + 0.5 * x510 - 0.25 * x505;
-        let x618 = (0.5 * x503 - 0.5 * x504) + x516;
-        let x619 = x29 * x14;
-        let x620 = x54 - x53;
+        let x464 = theta_dot - x460;
+        let x465 = x464 * x13 + x459 * x10;
+        let x466 = x416 - x415;
+        let x467 = x0 * (x466 + x451) + x4 * x453;
+        let x468 = x10 * (2.0 * x200 - 2.0 * x199);
+        let x469 = d * x417 + a_ * (x12 * x417 + x95 * x468) - x264 * x378 - x386 * x252;
+        let x470 = x15 * gamma1_dot;
+        let x471 = x253 * x16;
+        let x472 = x256 - x470 + x471;
+        let x473 = x18 * x417 - x264 * x385 + x386 * x243 + x95 * x472;
+        let x474 = a_ * (x422 + x10 * (x243 * x95 - x201 * x385)) - x256 * x378
+            - x457 * x16 - d * x462;
+        let x475 = 2.0 * x205 + 2.0 * x206;
+        let x476 = x223 * x382 + a_ * (-x4 * x422 - x0 * x102 * x475) - x222 * x376
+            - d * x422;
+        let x477 = x37 * x476;
+        let x478 = gamma2_dot * x36;
+        let x479 = x37 * x228;
+        let x480 = x102 * (x478 - x229 - x230 - x479) - x381 * x222 + x422 * x39
+            - x219 * x382;
+        let x481 = -(x225 * x37);
+        let x482 = a_ * (x466 + x0 * (x381 * x207 + x219 * x102)) - x454 * d
+            - x231 * x376 + x37 * x449;
+        let x483 = x426 - x424 - x425;
+        let x484 = x9 * x242 + x225 * x33 - x233 * x7;
+        let x485 = x22 * x273 + x266 * x14 + x257 * x3;
+        let x486 = x12 * x321;
+        let x487 = x330 * x10;
+        let x488 = 0.25 * x486 + 0.5 * x487;
+        let x489 = x12 * x320;
+        let x490 = x12 * x323;
+        let x491 = 0.25 * x490 - 0.25 * x489;
+        let x492 = x328 * x10;
+        let x493 = (x488 + x491) + (0.25 * x489 - 0.5 * x492);
+        let x494 = 0.5 * x486 + x487;
+        let x495 = phi_dot * (x494 + x492 + 0.5 * x490);
+        let x496 = x377 + x493;
+        let x497 = 0.5 * x490 - 0.5 * x489;
+        let x498 = x497 + (-0.5 * x486 - 0.5 * x489);
+        let x499 = 0.5 * x486 - x489 - 0.5 * x490;
+        let x500 = x499 * phi_dot;
+        let x501 = x1 * x317;
+        let x502 = x342 * x5;
+        let x503 = x343 * x5;
+        let x504 = 0.5 * x502 - 0.5 * x503;
+        let x505 = x5 * x345;
+        let x506 = x504 + 0.5 * x502 + 0.5 * x505;
+        let x507 = phi_dot * x506;
+        let x508 = x351 * x1;
+        let x509 = -0.5 * x502 - x508;
+        let x510 = 0.5 * x502 + 0.5 * x503;
+        let x511 = x1 * x354;
+        let x512 = (x509 + x510) + (0.5 * x505 - x511);
+        let x513 = 0.25 * x502 + 0.25 * x503;
+        let x514 = x513 + (0.25 * x502 - 0.25 * x505);
+        let x515 = x514 - x375;
+        let x516 = (x504 + x509 - 0.5 * x505 + x511) * phi_dot;
+        let x517 = x0 * x74;
+        let x518 = (x64 - x45) + 2.0 * x44;
+        let x519 = x77 * x77;
+        let x520 = x61 * x61;
+        let x521 = -(x0 * x7);
+        let x522 = (((x138 * J2 + x58 * x10) * x2 + x71 - x49 + 2.0 * x50) * x2
+            + x8 * ((J2 * x139 + x517) * x8 + x518)) * x1
+            + m2 * ((x43 * (x389 + x519) + x134) * x1 + x78 * x2)
+            + m1 * (x1 * (x136 + (x63 + x520) * x42) - x61 * x25 * x8) - x388
+            - J2 * (x69 * x2 + x56 * x8) + J1 * (x521 * x2 - x10 * x14 * x8);
+        let x523 = x1 * x146;
+        let x524 = x147 * x9;
+        let x525 = x90 * x3;
+        let x526 = x4 * x37;
+        let x527 = x0 * x39;
+        let x528 = x526 + x527;
+        let x529 = x104 - x103;
+        let x530 = x105 * x77 + x528 * x529;
+        let x531 = x12 * x16;
+        let x532 = x10 * x18;
+        let x533 = x2 * (x531 - a_ + x532 - x60);
+        let x534 = (x1 * (x8 * x530 + x150) - x96 * x35) * m2
+            + m1 * (x1 * (x152 + x96 * x533) - x25 * x529);
+        let x535 = x77 * x111 - x528 * x111;
+        let x536 = m1 * (x1 * (x123 * x533 + x157) + x111 * x25)
+            + m2 * (x1 * (x8 * x535 + x154) - x123 * x35);
+        let x537 = x143 * x2 + (Ixy + x10 * (x144 + x12 * x275)) * x8;
+        let x538 = x147 * x2;
+        let x539 = x394 * x8;
+        let x540 = -x531 - x532;
+        let x541 = (x61 + x540) * x8;
+        let x542 = (x96 * x541 + (x151 - x61 * x529) * x2) * m1
+            + m2 * (x530 * x2 + (x397 + x77 * x96) * x8);
+        let x543 = (x123 * x541 + (x156 + x61 * x111) * x2) * m1
+            + m2 * ((x400 + x77 * x123) * x8 + x2 * x535);
+        let x544 = m1 * (x9 * (2.0 * a_ + x540 + 2.0 * x60) + x164) * x2
+            + m2 * ((2.0 * x76 + 2.0 * a_ - x526 - x527) * x3 - x159 - x160) * x8;
+        let x545 = d * (x82 * x529 - x83 * x96);
+        let x546 = d * (-x83 * x123 - x111 * x82);
+        let x547 = -(x1 * d * (x82 * x8 + x83 * x2));
+        let x548 = x12 * x85;
+        let x549 = x548 * x96;
+        let x550 = x548 * x123;
+        let x551 = x548 * x3;
+        let x552 = x4 * x88;
+        let x553 = x552 * x529;
+        let x554 = -(x552 * x111);
+        let x555 = -(x552 * x9);
+        let x556 = -(x0 * x207);
+        let x557 = x200 * x187;
+        let x558 = x557 - x196;
+        let x559 = x4 * x558 - gamma2_dot * x556;
+        let x560 = x227 * x207;
+        let x561 = x37 * x223;
+        let x562 = x231 * x556 - d * x559
+            + a_ * (x196 - x557 - x0 * (x201 * x219 - x560)) - x201 * x561;
+        let x563 = x222 * x0;
+        let x564 = x77 * x223;
+        let x565 = x0 * x475;
+        let x566 = x268 - (x563 - x564) * x207 + a_ * (x201 * x565 + x4 * x192);
+        let x567 = x4 * x222;
+        let x568 = x77 * x219;
+        let x569 = x231 - x478 + x479;
+        let x570 = (-x567 - x568) * x207 - x192 * x39 + x201 * x569;
+        let x571 = x37 * x566 - x570 * x39 + x77 * x242;
+        let x572 = x556 * x228;
+        let x573 = x201 * x223;
+        let x574 = (x572 - x573) * J1;
+        let x575 = (x559 - x572 + x573) * J2;
+        let x576 = x574 + x575;
+        let x577 = x201 * x259;
+        let x578 = x252 * x16;
+        let x579 = x271 - gamma1_dot * x244;
+        let x580 = (a_ * (x237 - (x577 - x243 * x207) * x10) + x256 * x244)
+            + (-x578 * x207 - d * x579);
+        let x581 = x470 - x254 - x471 - x255;
+        let x582 = -x61 * x243 - x12 * x264;
+        let x583 = x558 * x18 - x581 * x207 + x201 * x582;
+        let x584 = x18 * x583;
+        let x585 = x10 * (2.0 * x199 - 2.0 * x200);
+        let x586 = x61 * x252;
+        let x587 = x10 * x264;
+        let x588 = a_ * (x12 * x558 - x585 * x207) + x558 * d - x201 * (-x586 - x587);
+        let x589 = x16 * x588;
+        let x590 = x61 * x257;
+        let x591 = x252 * x207;
+        let x592 = x253 * x244;
+        let x593 = (x592 - x591) * J1 + J2 * (x579 + x591 - x592);
+        let x594 = x558 * x0 - x4 * gamma2_dot * x207;
+        let x595 = Izz * x207;
+        let x596 = -x595 - x202;
+        let x597 = x201 * Ixy - Ixz * x207;
+        let x598 = x4 * x223;
+        let x599 = (x596 * x203 + x201 * x597)
+            + ((x282 - x192 * Iyy) + ((x275 * x236 + x141 * x598) * x207 + x558 * Iyz));
+        let x600 = x597 * x207;
+        let x601 = x243 * x10;
+        let x602 = x201 * (x12 * x285 + x601 * x275);
+        let x603 = x201 * Iyy;
+        let x604 = x603 + x211;
+        let x605 = x604 * x203;
+        let x606 = x558 * J2;
+        let x607 = x558 * Izz;
+        let x608 = x558 * Ixz;
+        let x609 = x596 * x207;
+        let x610 = x192 * Ixy;
+        let x611 = x208 * x207;
+        let x612 = x4 * x225 - x233 * x0;
+        let x613 = x580 + x12 * x273 + x266 * x10;
+        let x614 = (x494 + x497) + (0.5 * x489 - x492);
+        let x615 = 0.5 * x492 + 0.25 * x490 + x488;
+        let x616 = -0.25 * x502 - 0.5 * x508;
+        let x617 = 0.25 * x502 - 0.25 * x503 + x616 - 0.25 * x505 + 0.5 * x511;
+        let x618 = (0.5 * x502 - 0.5 * x505) + x510;
+        let x619 = x18 * x3;
+        let x620 = x13 - x11;
         let x621 = d * x620;
         let x622 = J2 * x620;
-        let x623 = x55 * J1;
+        let x623 = x14 * J1;
         let x624 = a_ * d;
-        let x625 = ((x61 * x621 + (2.0 * (x6 * x624) - x34 * d) * x1) * m1
-            + x3 * (x622 + x623) + x141 * x81) * x8;
-        let x626 = x3 * (x7 * x141 - x85 * x34) + x1 * (-x167 * x620 - x623);
+        let x625 = ((x61 * x621 + (2.0 * (x9 * x624) - x25 * d) * x10) * m1
+            + x12 * (x622 + x623) + x141 * x81) * x2;
+        let x626 = x12 * (x22 * x141 - x85 * x25) + x10 * (-x167 * x620 - x623);
         let x627 = -(x85 * x619);
-        let x628 = x106 * x27;
-        let x629 = x106 * x26;
-        let x630 = ((x629 - x628) * x14 - x100 * x621) * m1;
-        let x631 = x26 * x119;
-        let x632 = x119 * x27;
-        let x633 = ((x631 - x632) * x14 - x123 * x621) * m1;
+        let x628 = x106 * x16;
+        let x629 = x106 * x15;
+        let x630 = ((x629 - x628) * x3 - x96 * x621) * m1;
+        let x631 = x15 * x119;
+        let x632 = x119 * x16;
+        let x633 = ((x631 - x632) * x3 - x123 * x621) * m1;
         let x634 = 2.0 * J1 - 2.0 * J2;
-        let x635 = (x3 * x145 + x168 * (x167 - J1)) * x8;
-        let x636 = x5 * x29;
+        let x635 = (x12 * x145 + x168 * (x167 - J1)) * x2;
+        let x636 = x8 * x18;
         let x637 = x85 * x636;
         let x638 = d * x140;
-        let x639 = m1 * (x100 * x638 + (x628 - x629) * x5);
-        let x640 = m1 * (x123 * x638 + (x632 - x631) * x5);
-        let x641 = (x638 * x14 + (-x26 * x55 - x27 * x620) * x5) * m1;
+        let x639 = m1 * (x96 * x638 + (x628 - x629) * x8);
+        let x640 = m1 * (x123 * x638 + (x632 - x631) * x8);
+        let x641 = (x638 * x3 + (-x15 * x14 - x16 * x620) * x8) * m1;
         let x642 = 2.0 * J2 - 2.0 * J1;
         let x643 = -(x106 * x85);
         let x644 = -(x119 * x85);
         let x645 = x85 * x620;
-        let x646 = (x235 - x216 - x217) * x1 + x3 * x234;
-        let x647 = x231 * x244 - d * x646 - x231 * x243;
-        let x648 = a_ * (x586 - x246) - x240 * x240 * d;
-        let x649 = x648 + x253;
-        let x650 = x27 * x649;
-        let x651 = 2.0 * x250 + x251;
-        let x652 = x240 * x651;
-        let x653 = x3 * x254;
-        let x654 = x141 * x241;
-        let x655 = (J2 * x646 + x299 * J1) + x654 * x231;
-        let x656 = x231 * x231;
-        let x657 = x656 * x204 - x240 * x296;
-        let x658 = x237 * J1;
-        let x659 = x648 + x249;
-        let x660 = x652 + x260;
-        let x661 = (-0.25 * x488 - 0.25 * x491) + x493;
-        let x662 = x661 - x2;
-        let x663 = J2 * x16;
-        let x664 = x12 - x15;
-        let x665 = x664 * J1;
-        let x666 = x6 * x23;
-        let x667 = -(x52 * d);
-        let x668 = x663 + x665;
-        let x669 = x5
-            * (x11 * x668 + x141 * x80
-                + m2 * (-x11 * (2.0 * (x624 * x14) - d * x19) - x77 * x667));
-        let x670 = x171 - J1;
-        let x671 = -(x52 * x11);
-        let x672 = x13 * (x88 * x19 + x668) + x670 * x671;
-        let x673 = -(x666 * x88);
-        let x674 = x101 * x21 - x101 * x20;
-        let x675 = (x674 * x6 - x97 * x667) * m2;
-        let x676 = x21 * x125 - x20 * x125;
-        let x677 = m2 * (x6 * x676 - x111 * x667);
-        let x678 = (x13 * x142 + x169 * x670) * x5;
-        let x679 = x8 * x23;
-        let x680 = -(x679 * x88);
-        let x681 = d * x135;
-        let x682 = m2 * (x674 * x8 - x97 * x681);
-        let x683 = (x676 * x8 - x111 * x681) * m2;
-        let x684 = m2 * ((x52 * x20 - x52 * x21) * x8 - x6 * x681);
-        let x685 = -(x97 * x553);
-        let x686 = x101 * x88;
-        let x687 = x88 * x125;
-        let x688 = -(x52 * x88);
-        let x689 = x301 * J2;
-        let x690 = x209 * x262;
-        let x691 = x689 - x690;
-        let x692 = x211 * x211;
-        let x693 = x692 * x141 - x287 * x262;
-        let x694 = (x13 * x300 + x192) * J1;
-        let x695 = x213 + x694;
-        let x696 = (x584 - x268) * a_ - x692 * d + x273;
-        let x697 = ((2.0 * x263 + x264) * x211 + a_ * (x582 * x207 - x266)) + x267;
-        let x698 = x21 * x696 + a_ * (-x697 * x11 - x13 * x274);
-        let x699 = x301 * d - x272 * x262 + x271 * x262;
-        let x700 = x301 * J1;
-        let x701 = (0.25 * x504 - 0.5 * x510) + (x616 + x506);
-        let x702 = x12 + x701;
-        let x703 = x240 * x14;
-        let x704 = x55 * x241;
-        let x705 = theta_dot * x93;
-        let x706 = phi_dot * x14;
-        let x707 = x706 - x705;
-        let x708 = x707 + x0 * gamma1_dot;
-        let x709 = x466 * x361 + x3 * x708;
-        let x710 = (x703 + x704) * J1 + J2 * (x709 - x703 - x704);
-        let x711 = x99 * theta_dot;
-        let x712 = x6 * phi_dot;
-        let x713 = x711 + x712;
-        let x714 = gamma2_dot * x0 + x713;
-        let x715 = -x714 * x13 - x337 * x433;
-        let x716 = x6 * x211 - x52 * x208;
-        let x717 = J2 * (x715 + x716);
-        let x718 = x716 * J1;
-        let x719 = x717 - x718;
-        let x720 = x240 * x7;
-        let x721 = x231 * x55;
-        let x722 = x720 + x721;
-        let x723 = (x722 - x711 - x712) * J2;
-        let x724 = x0 * x222;
-        let x725 = Iyz * x707;
-        let x726 = (x454 - x453) * x4;
-        let x727 = x42 * x200;
-        let x728 = x713 * Izz;
-        let x729 = x722 * J1;
-        let x730 = x38 * x207;
-        let x731 = x16 * x211;
-        let x732 = x52 * x262;
-        let x733 = x731 - x732;
-        let x734 = x733 * J1;
-        let x735 = ((-x0 * x227 - x442 * x4) + (-Iyy * x707 - x38 * x188))
-            + ((-x734 - Iyz * x713) + (x49 * x200 - (x732 - x731 + x707) * J2));
-        let x736 = x385 * x461 + x708 * x1;
-        let x737 = x714 * x11 - x387 * x433;
-        let x738 = x6 * x578 + x265 * x16 + x262 * x19 - x707 * x23;
-        let x739 = x211 * x19;
-        let x740 = d * x707 + a_ * (x6 * x11 * x473 + x13 * x707) - x739 + x52 * x265;
-        let x741 = x21 * x740 - x738 * x23;
-        let x742 = x52 * x272 - x715 * d - x6 * x581
-            + a_ * (x713 - (x6 * x262 + x16 * x207) * x11);
-        let x743 = x188 * x42;
-        let x744 = x713 * Ixz;
-        let x745 = Ixy * x707;
-        let x746 = x49 * x207;
-        let x747 = x705 - x706;
-        let x748 = x587 * x14 - d * x709 + a_ * (x747 - (x188 * x7 + x231 * x14) * x1)
-            + x55 * x244;
-        let x749 = x240 * x34 + x252 * x55 + a_ * (x594 * x14 - x3 * x713) - d * x713;
-        let x750 = x27 * x749;
-        let x751 = x590 * x14 - x7 * x252 - x231 * x34 - x713 * x29;
-        let x752 = x751 * x29;
-        let x753 = (x194 * x23 - x576 - x577) * x5 + x578 * x8;
-        let x754 = d * x194;
-        let x755 = (x573 - x574 - x754) * x5 + a_ * (x13 * x215 + x321 * x473);
-        let x756 = x21 * x755 - x753 * x23;
-        let x757 = gamma2_dot * x5 - x189;
-        let x758 = x13 * x195 + x11 * x757;
-        let x759 = a_ * (x11 * (x269 * x5 - x262 * x8) - x195) - x758 * d - x272 * x135
-            - x581 * x8;
-        let x760 = x211 * x8 + x208 * x135;
-        let x761 = x760 * J1;
-        let x762 = J2 * (x758 + x760);
-        let x763 = x762 - x761;
-        let x764 = (x591 - x29 * x194) * x8 + x479 * x5;
-        let x765 = x764 * x29;
-        let x766 = a_ * (x3 * x195 + x520 * x481) + (x595 - x754 + x596) * x8;
-        let x767 = x766 * x27;
-        let x768 = gamma1_dot * x8;
-        let x769 = x3 * x215 + x1 * (x189 - x768);
-        let x770 = x240 * x5;
-        let x771 = a_ * (x1 * (x231 * x5 - x8 * x247) - x215) - x769 * d - x770 * x27
-            + x244 * x140;
-        let x772 = x74 * x200;
-        let x773 = x67 * x207;
-        let x774 = x3 * x240;
-        let x775 = x559 + x774;
-        let x776 = -phi_dot - x193;
-        let x777 = x775 * J1;
-        let x778 = J2 * (x775 + x776) - x777;
-        let x779 = x189 * Ixz;
-        let x780 = x194 * x46;
-        let x781 = ((x453 - x189 * Ixy) + x41 * x194) + (-x200 * x65 - x188 * x67);
-        let x782 = x568 - x277;
-        let x783 = J2 * (x782 + x776);
-        let x784 = x277 - x568;
-        let x785 = x784 * J1;
-        let x786 = x3 * (x768 - x189) + x1 * x215;
-        let x787 = x13 * x757 - x195 * x11;
-        let x788 = x194 * x36;
-        let x789 = x188 * x74;
-        let x790 = x227 * x8;
-        let x791 = x189 * Ixx;
-        let x792 = x65 * x207;
-        let x793 = x5 * x222;
-        let x794 = x241 * x140;
-        let x795 = J2 * (x769 - x794 + x770) + (x794 - x770) * J1;
-        let x796 = (-0.5 * x330 - 0.5 * x325) + x340;
-        let x797 = x796 - 2.0 * x51;
-        let x798 = x360 + (-0.5 * x350 - 0.5 * x346);
-        let x799 = x798 + 2.0 * x54;
-        let x800 = x188 - gamma1_dot;
-        let x801 = x654 + J2 * x800;
-        let x802 = -x205 - x206;
-        let x803 = x802 + gamma2_dot;
-        let x804 = J2 * x803 + x209;
-        let x805 = x11 * x211;
-        let x806 = x188 - x805;
-        let x807 = d * x806 - x76 * x262;
-        let x808 = x277 * d;
-        let x809 = x807 * x21 - 2.0 * (x23 * x808);
-        let x810 = a_ * (x207 - x169 * x207) - x13 * (x272 + x803 * d);
-        let x811 = x1 * x800;
-        let x812 = x207 - gamma2_dot;
-        let x813 = x3 * x231;
-        let x814 = x240 * x1;
-        let x815 = x814 - x813;
+        let x646 = (x247 - x195 - x196) * x10 + x12 * x246;
+        let x647 = x243 * x256 - d * x646 - x243 * x255;
+        let x648 = a_ * (x577 - x258) - x252 * x252 * d;
+        let x649 = x648 + x265;
+        let x650 = x16 * x649;
+        let x651 = 2.0 * x262 + x263;
+        let x652 = x252 * x651;
+        let x653 = x12 * x266;
+        let x654 = x141 * x253;
+        let x655 = (J2 * x646 + x300 * J1) + x654 * x243;
+        let x656 = x243 * x243;
+        let x657 = x656 * x275 - x252 * x285;
+        let x658 = x249 * J1;
+        let x659 = x648 + x261;
+        let x660 = x652 + x272;
+        let x661 = (-0.25 * x486 - 0.25 * x489) + x491;
+        let x662 = x661 - x21;
+        let x663 = J2 * x33;
+        let x664 = (x31 - x32) * J1;
+        let x665 = -(d * x7);
+        let x666 = x9 * x39;
+        let x667 = x663 + x664;
+        let x668 = (x667 * x0 + (-x0 * (2.0 * (x624 * x3) - d * x35) - x77 * x665) * m2
+            + x141 * x80) * x8;
+        let x669 = x171 - J1;
+        let x670 = x669 * x521 + x4 * (x667 + x88 * x35);
+        let x671 = -(x666 * x88);
+        let x672 = x97 * x37 - x97 * x36;
+        let x673 = m2 * (x672 * x9 - x105 * x665);
+        let x674 = x37 * x126 - x36 * x126;
+        let x675 = m2 * (x9 * x674 - x111 * x665);
+        let x676 = (x4 * x142 + x169 * x669) * x8;
+        let x677 = x2 * x39;
+        let x678 = -(x677 * x88);
+        let x679 = d * x135;
+        let x680 = m2 * (x672 * x2 - x105 * x679);
+        let x681 = (x674 * x2 - x111 * x679) * m2;
+        let x682 = m2 * ((x36 * x7 - x37 * x7) * x2 - x9 * x679);
+        let x683 = -(x105 * x552);
+        let x684 = x97 * x88;
+        let x685 = x88 * x126;
+        let x686 = -(x88 * x7);
+        let x687 = x225 + (x223 * (2.0 * x220 + x221) + a_ * (x556 * x207 - x224));
+        let x688 = x223 * x223;
+        let x689 = (x560 - x226) * a_ - x688 * d + x232;
+        let x690 = a_ * (-x0 * x687 - x4 * x233) + x37 * x689;
+        let x691 = x299 * d - x231 * x219 + x230 * x219;
+        let x692 = x299 * J2;
+        let x693 = x276 * x219;
+        let x694 = x692 - x693;
+        let x695 = -(x219 * x219);
+        let x696 = x688 * x141 + x695 * x141;
+        let x697 = (x4 * x298 + x239) * J1;
+        let x698 = x278 + x697;
+        let x699 = x299 * J1;
+        let x700 = (0.25 * x505 - 0.5 * x511) + (x513 + x616);
+        let x701 = x700 + x31;
+        let x702 = theta_dot * x102;
+        let x703 = phi_dot * x3;
+        let x704 = x703 - x702;
+        let x705 = x704 + x5 * gamma1_dot;
+        let x706 = x377 * x461 + x705 * x10;
+        let x707 = x95 * theta_dot;
+        let x708 = x9 * phi_dot;
+        let x709 = x707 + x708;
+        let x710 = gamma2_dot * x5 + x709;
+        let x711 = -(x1 * x452);
+        let x712 = x710 * x0 + x4 * x711;
+        let x713 = x252 * x3;
+        let x714 = x14 * x253;
+        let x715 = x464 * x337 + x12 * x705;
+        let x716 = (x713 + x714) * J1 + J2 * (x715 - x713 - x714);
+        let x717 = x201 * x47;
+        let x718 = x709 * Ixz;
+        let x719 = Ixy * x704;
+        let x720 = x54 * x207;
+        let x721 = x219 * x7;
+        let x722 = x33 * x223;
+        let x723 = x722 - x721;
+        let x724 = x723 * J1;
+        let x725 = ((-x724 - Iyz * x709) + (x54 * x203 - J2 * (x721 + x704 - x722)))
+            + ((-x5 * x213 - x446 * x1) + (-Iyy * x704 - x29 * x201));
+        let x726 = x252 * x22;
+        let x727 = x243 * x14;
+        let x728 = x726 + x727;
+        let x729 = (x728 - x707 - x708) * J2;
+        let x730 = x5 * x208;
+        let x731 = Iyz * x704;
+        let x732 = (x439 - x438) * x1;
+        let x733 = x47 * x203;
+        let x734 = x709 * Izz;
+        let x735 = x728 * J1;
+        let x736 = x29 * x207;
+        let x737 = x0 * x711 - x710 * x4;
+        let x738 = x231 * x7 - x9 * x561 - d * x737
+            + a_ * (x709 - (x9 * x219 + x33 * x207) * x0);
+        let x739 = x9 * x569 + x222 * x33 + x219 * x35 - x704 * x39;
+        let x740 = x223 * x35;
+        let x741 = d * x704 + x222 * x7 + a_ * (x4 * x704 + x565 * x9) - x740;
+        let x742 = x741 * x37 - x739 * x39;
+        let x743 = x9 * x223 - x228 * x7;
+        let x744 = x743 * J1;
+        let x745 = J2 * (x743 + x737);
+        let x746 = x745 - x744;
+        let x747 = x702 - x703;
+        let x748 = x578 * x3 - d * x715 + a_ * (x747 - (x201 * x22 + x243 * x3) * x10)
+            + x14 * x256;
+        let x749 = x252 * x25 + x264 * x14 + a_ * (x585 * x3 - x12 * x709) - d * x709;
+        let x750 = x16 * x749;
+        let x751 = x581 * x3 - x22 * x264 - x243 * x25 - x709 * x18;
+        let x752 = x751 * x18;
+        let x753 = d * x187;
+        let x754 = a_ * (x8 * x468 + x12 * x188) + (x586 - x753 + x587) * x2;
+        let x755 = x16 * x754;
+        let x756 = (x582 - x18 * x187) * x2 + x472 * x8;
+        let x757 = x756 * x18;
+        let x758 = gamma1_dot * x2;
+        let x759 = x12 * x194 + x10 * (x215 - x758);
+        let x760 = x252 * x8;
+        let x761 = a_ * (x10 * (x243 * x8 - x2 * x259) - x194) - x759 * d - x760 * x16
+            + x256 * x140;
+        let x762 = x187 * x27;
+        let x763 = x201 * x72;
+        let x764 = x213 * x2;
+        let x765 = x215 * Ixx;
+        let x766 = x65 * x207;
+        let x767 = x8 * x208;
+        let x768 = x12 * (x758 - x215) + x10 * x194;
+        let x769 = gamma2_dot * x8 - x215;
+        let x770 = x4 * x769 - x188 * x0;
+        let x771 = x72 * x203;
+        let x772 = x67 * x207;
+        let x773 = x12 * x252;
+        let x774 = x601 + x773;
+        let x775 = -phi_dot - x186;
+        let x776 = x774 * J1;
+        let x777 = J2 * (x774 + x775) - x776;
+        let x778 = x215 * Ixz;
+        let x779 = x187 * x51;
+        let x780 = x598 - x236;
+        let x781 = J2 * (x780 + x775);
+        let x782 = x236 - x598;
+        let x783 = x782 * J1;
+        let x784 = ((x438 - x215 * Ixy) + x46 * x187) + (-x203 * x65 - x201 * x67);
+        let x785 = x4 * x188 + x0 * x769;
+        let x786 = x223 * x2 + x228 * x135;
+        let x787 = J2 * (x785 + x786);
+        let x788 = x786 * J1;
+        let x789 = x787 - x788;
+        let x790 = a_ * (x0 * (x227 * x8 - x219 * x2) - x188) - x785 * d - x561 * x2
+            - x231 * x135;
+        let x791 = (x187 * x39 - x567 - x568) * x8 + x569 * x2;
+        let x792 = x8 * (x564 - x563 - x753) + a_ * (x4 * x194 + x565 * x2);
+        let x793 = x37 * x792 - x791 * x39;
+        let x794 = x253 * x140;
+        let x795 = J2 * (x759 - x794 + x760) + (x794 - x760) * J1;
+        let x796 = (-0.5 * x349 - 0.5 * x344) + x353;
+        let x797 = x796 - 2.0 * x6;
+        let x798 = x316 * x5;
+        let x799 = x336 + (-0.5 * x326 - 0.5 * x322);
+        let x800 = x799 + 2.0 * x13;
+        let x801 = x201 - gamma1_dot;
+        let x802 = x654 + J2 * x801;
+        let x803 = -x205 - x206;
+        let x804 = x803 + gamma2_dot;
+        let x805 = J2 * x804 + x276;
+        let x806 = a_ * (x207 - x169 * x207) - x4 * (x231 + x804 * d);
+        let x807 = x0 * x223;
+        let x808 = x201 - x807;
+        let x809 = x808 * d - x76 * x219;
+        let x810 = x236 * d;
+        let x811 = x809 * x37 - 2.0 * (x39 * x810);
+        let x812 = x10 * x801;
+        let x813 = x207 - gamma2_dot;
+        let x814 = x4 * x219;
+        let x815 = x814 + x807;
         let x816 = x815 * J1;
-        let x817 = x813 - x814;
-        let x818 = J2 * (x802 + x817);
-        let x819 = (Iyy - Ixx) * x207;
-        let x820 = x13 * x262;
-        let x821 = x820 + x805;
-        let x822 = x821 * J1;
-        let x823 = (Iyz * x473 + x188 * (Iyy + Ixx - Izz))
-            + (x822 + (J2 * (x806 - x820) + 2.0 * x226));
-        let x824 = x3 * (x244 - x800 * d) + (x168 - 1.0) * x264;
-        let x825 = x1 * (x651 - x251);
-        let x826 = x29 * x825;
-        let x827 = x3 * (x252 - x251) - (x814 + x207) * d;
-        let x828 = x827 * x27;
-        let x829 = 2.0 * x238 + 2.0 * x239;
-        let x830 = x240 * J1 - J2 * x829;
-        let x831 = -(x262 * J1);
-        let x832 = 2.0 * J2 - J1;
+        let x817 = ((2.0 * x212 + J2 * (x808 - x814)) + x816)
+            + (Iyz * x475 + x201 * (Iyy + Ixx - Izz));
+        let x818 = x12 * x243;
+        let x819 = x252 * x10;
+        let x820 = x819 - x818;
+        let x821 = x820 * J1;
+        let x822 = x818 - x819;
+        let x823 = J2 * (x803 + x822);
+        let x824 = (Iyy - Ixx) * x207;
+        let x825 = x12 * (x256 - x801 * d) + (x168 - 1.0) * x221;
+        let x826 = x10 * (x651 - x263);
+        let x827 = x18 * x826;
+        let x828 = x12 * (x264 - x263) - (x819 + x207) * d;
+        let x829 = x828 * x16;
+        let x830 = 2.0 * x250 + 2.0 * x251;
+        let x831 = x252 * J1 - J2 * x830;
+        let x832 = -(x219 * J1);
+        let x833 = 2.0 * J2 - J1;
         Derivatives {
             qdot: [
                 psi_dot,
@@ -2168,10 +2168,10 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    J2 * (x7 * x7 + x4 * x4 * (x9 + x10) + x16 * x16)
-                        + m2 * (x19 * x19 + x6 * x6 * x25)
-                        + (x31 * x14 * x14 + x34 * x34) * m1 - x38 * x0
-                        + x4 * (x43 + x50) + (x52 * x52 + x55 * x55) * J1,
+                    (x7 * x7 + x14 * x14) * J1 + (x20 * x3 * x3 + x25 * x25) * m1
+                        - x29 * x5 + m2 * (x35 * x35 + x9 * x9 * x41)
+                        + (x22 * x22 + x1 * x1 * (x42 + x43) + x33 * x33) * J2
+                        + x1 * (x48 + x55),
                     x79,
                     x84,
                     x87,
@@ -2182,10 +2182,10 @@ pub mod lagrange {
                 ],
                 [
                     x79,
-                    m2 * (x133 * x133 + x134) + x5 * (x135 * x69 + x65)
+                    m2 * (x133 * x133 + x134) + x8 * (x135 * x74 + x65)
                         + (x136 + x137 * x137) * m1
-                        + J2 * (x9 * (x138 + 1.0) + (x139 + 1.0) * x10)
-                        + (x74 + x58 * x140) * x8,
+                        + J2 * (x42 * (x138 + 1.0) + (x139 + 1.0) * x43)
+                        + (x72 + x58 * x140) * x2,
                     x146,
                     x148,
                     x149,
@@ -2210,26 +2210,29 @@ pub mod lagrange {
                 [0.0, x165, x178, x181, x184, 0.0, 0.0, x185],
             ],
             force: [
-                x0 * x230 - x16 * x213 - (x14 * (x255 + x27 * x261) - x34 * x245) * m1
-                    - m2 * (x6 * x276 - x279 * x19)
-                    + (x290 * x5 + (x293 - x291 - x292 + x294 - x295 - x297 - x298) * x8)
-                        * x4 - (x55 * x299 - x52 * x301) * J1 - x303 * x7,
-                (x306 + x290) * x8 - m2 * (x133 * x279 + x304) + x5 * (x309 + x291)
-                    - (x312 + x137 * x245) * m1,
-                x214 - (x13 * x301 + x3 * x299) * J1 + x313 * x1 + x219 + x223 - x228
-                    + x11 * x314 + x229,
-                x231 * x302 - x291 - x85 * x261,
-                x315 * x211 - x88 * x267 - x283,
-                x316,
-                -((x123 * x245 + x254 * x119 + x261 * x115) * m1
-                    + m2 * (x128 * x267 + x317 + x274 * x125)),
-                -(((gamma2_dot * (gamma2_dot * x329 + x339)
-                    + theta_dot * (x342 + theta_dot * x329) + x343 * x328) * d - x320)
-                    * m2
-                    + (x320
+                x5 * x218 - m2 * (x9 * x235 - x242 * x35)
+                    - (x3 * (x267 + x16 * x273) - x25 * x257) * m1 - x278 * x33
+                    + x1
+                        * ((x282 - x279 - x280 + x283 - x284 - x286 - x287) * x2
+                            + x297 * x8) - (x14 * x300 - x299 * x7) * J1 - x302 * x22,
+                (x297 + x304) * x2 + x8 * (x307 + x279) - (x310 + x137 * x257) * m1
+                    - m2 * (x311 + x133 * x242),
+                x193 - (x4 * x299 + x12 * x300) * J1 + x312 * x10 + x198 + x209 - x214
+                    + x313 * x0 + x217,
+                x243 * x301 - x279 - x85 * x273,
+                x275 * x294 - x290 - x225 * x88,
+                x314,
+                -(m2 * (x225 * x129 + x315 + x233 * x126)
+                    + (x123 * x257 + x266 * x119 + x273 * x115) * m1),
+                -(m1
+                    * (x318
                         + d
-                            * (x343 * x349 + (x357 + gamma1_dot * x358) * gamma1_dot
-                                + theta_dot * (x363 + theta_dot * x358))) * m1),
+                            * (x319 * x325 + (x333 + gamma1_dot * x334) * gamma1_dot
+                                + theta_dot * (x339 + theta_dot * x334)))
+                    + m2
+                        * (d
+                            * (x347 * x319 + theta_dot * (theta_dot * x348 + x357)
+                                + gamma2_dot * (x361 + gamma2_dot * x348)) - x318)),
             ],
             checks: [],
             d_qdot: [
@@ -2252,80 +2255,82 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x372, x110, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x373, x153, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x374, x172, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x375, x179, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x376, x182, 0.0],
-                    [x372, x373, x374, x375, x376, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x370, x110, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x371, x153, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x372, x172, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x373, x179, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x374, x182, 0.0],
+                    [x370, x371, x372, x373, x374, 0.0, 0.0, 0.0],
                     [x110, x153, x172, x179, x182, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        (x35 + x37 + x5 * x377 + x378 * x8) * x4
-                            + m1 * (x379 * x99 * x14 - 2.0 * (x381 * x34))
-                            + x0
-                                * (x382 - x43 - (2.0 * x9 + 2.0 * x10) * J2 * x4 - x50
-                                    - x383) + J2 * (2.0 * (x7 * x380) - 2.0 * (x16 * x384))
-                            + (-2.0 * (x55 * x386) - 2.0 * (x52 * x388)) * J1
-                            + m2 * (x6 * x390 * x93 - 2.0 * (x389 * x19)),
+                        (-2.0 * (x376 * x7) - 2.0 * (x14 * x378)) * J1
+                            + (x26 + x28 + x8 * x379 + x380 * x2) * x1
+                            + (x9 * x383 * x102 - 2.0 * (x35 * x382)) * m2
+                            + m1 * (x384 * x95 * x3 - 2.0 * (x386 * x25))
+                            + (2.0 * (x22 * x385) - 2.0 * (x381 * x33)) * J2
+                            + x5
+                                * (x387 - x48 - (2.0 * x42 + 2.0 * x43) * J2 * x1 - x55
+                                    - x388),
+                        x390,
                         x392,
-                        x394,
+                        x393,
                         x395,
-                        x397,
+                        x399,
                         x401,
-                        x403,
                         0.0,
                     ],
-                    [x392, 0.0, 0.0, 0.0, 0.0, x404, x405, x406],
-                    [x394, 0.0, 0.0, 0.0, 0.0, x407, x408, x409],
-                    [x395, 0.0, 0.0, 0.0, 0.0, x410, x411, x412],
-                    [x397, 0.0, 0.0, 0.0, 0.0, x413, x414, x415],
-                    [x401, x404, x407, x410, x413, 0.0, 0.0, 0.0],
-                    [x403, x405, x408, x411, x414, 0.0, 0.0, 0.0],
-                    [0.0, x406, x409, x412, x415, 0.0, 0.0, 0.0],
+                    [x390, 0.0, 0.0, 0.0, 0.0, x402, x403, x404],
+                    [x392, 0.0, 0.0, 0.0, 0.0, x405, x406, x407],
+                    [x393, 0.0, 0.0, 0.0, 0.0, x408, x409, x410],
+                    [x395, 0.0, 0.0, 0.0, 0.0, x411, x412, x413],
+                    [x399, x402, x405, x408, x411, 0.0, 0.0, 0.0],
+                    [x401, x403, x406, x409, x412, 0.0, 0.0, 0.0],
+                    [0.0, x404, x407, x410, x413, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        ((x42 + 2.0 * x57 + 2.0 * x59 + (2.0 * x62 + x379 * x6) * m1
-                            - x66) * x8
-                            + (x75 - 2.0 * x70 - 2.0 * x72 - x47
-                                + m2 * ((2.0 * x22 + 2.0 * x24) * x14 + 2.0 * x78) - x48)
-                                * x5 - x68) * x4,
+                        x1
+                            * ((x47 + 2.0 * x57 + 2.0 * x59
+                                + (2.0 * x62 + x384 * x9) * m1 - x66) * x2 - x68
+                                + x8
+                                    * (((2.0 * x38 + 2.0 * x40) * x3 + 2.0 * x78) * m2 - x52
+                                        - 2.0 * x70 + x73 - x53 - 2.0 * x75)),
+                        x522,
                         x523,
                         x524,
                         x525,
-                        x526,
-                        x535,
-                        x537,
+                        x534,
+                        x536,
                         0.0,
                     ],
                     [
-                        x523,
-                        x5
-                            * (((2.0 * x28 - 2.0 * x521 + 2.0 * x30) * m1
+                        x522,
+                        x8
+                            * (((2.0 * x17 - 2.0 * x520 + 2.0 * x19) * m1
                                 + (2.0 * x169 - 2.0 * x168) * J1
-                                + J2 * (2.0 * x139 - 2.0 * x138) + m2 * (x390 + 2.0 * x522))
-                                * x8 - x73 + x44 - 2.0 * x45) + x8 * x519,
+                                + J2 * (2.0 * x139 - 2.0 * x138) + m2 * (x383 + 2.0 * x519))
+                                * x2 - x71 + x49 - 2.0 * x50) + x2 * x518,
+                        x537,
                         x538,
                         x539,
-                        x540,
+                        x542,
                         x543,
                         x544,
-                        x545,
                     ],
-                    [x524, x538, 0.0, 0.0, 0.0, x546, x547, x548],
-                    [x525, x539, 0.0, 0.0, 0.0, x550, x551, x552],
-                    [x526, x540, 0.0, 0.0, 0.0, x554, x555, x556],
-                    [x535, x543, x546, x550, x554, 0.0, 0.0, 0.0],
-                    [x537, x544, x547, x551, x555, 0.0, 0.0, 0.0],
-                    [0.0, x545, x548, x552, x556, 0.0, 0.0, 0.0],
+                    [x523, x537, 0.0, 0.0, 0.0, x545, x546, x547],
+                    [x524, x538, 0.0, 0.0, 0.0, x549, x550, x551],
+                    [x525, x539, 0.0, 0.0, 0.0, x553, x554, x555],
+                    [x534, x542, x545, x549, x553, 0.0, 0.0, 0.0],
+                    [x536, x543, x546, x550, x554, 0.0, 0.0, 0.0],
+                    [0.0, x544, x547, x551, x555, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        (2.0 * x622 + 2.0 * x623) * x7
-                            - (2.0 * (d * x14 * x619) - 2.0 * (x34 * x621)) * m1,
+                        (2.0 * x622 + 2.0 * x623) * x22
+                            - (2.0 * (d * x3 * x619) - 2.0 * (x25 * x621)) * m1,
                         x625,
                         x626,
                         x627,
@@ -2336,8 +2341,8 @@ pub mod lagrange {
                     ],
                     [
                         x625,
-                        (x9 * x3 * x634
-                            + (2.0 * (d * x137 * x8) - 2.0 * (x624 * x10)) * m1) * x1,
+                        (x42 * x12 * x634
+                            + (2.0 * (d * x137 * x2) - 2.0 * (x624 * x43)) * m1) * x10,
                         x635,
                         x637,
                         0.0,
@@ -2348,57 +2353,57 @@ pub mod lagrange {
                     [
                         x626,
                         x635,
-                        x3 * (2.0 * x166 + x642) * x1,
+                        x12 * (2.0 * x166 + x642) * x10,
                         0.0,
                         0.0,
+                        x549,
                         x550,
                         x551,
-                        x552,
                     ],
                     [x627, x637, 0.0, 0.0, 0.0, x643, x644, x645],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x630, x639, x550, x643, 0.0, 0.0, 0.0, 0.0],
-                    [x633, x640, x551, x644, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x641, x552, x645, 0.0, 0.0, 0.0, 0.0],
+                    [x630, x639, x549, x643, 0.0, 0.0, 0.0, 0.0],
+                    [x633, x640, x550, x644, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x641, x551, x645, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        -x52 * (2.0 * x663 + 2.0 * x665)
-                            - (2.0 * (x666 * x6 * d) - 2.0 * (x667 * x19)) * m2,
-                        x669,
-                        x672,
+                        -(2.0 * x663 + 2.0 * x664) * x7
+                            - m2 * (2.0 * (x666 * x9 * d) - 2.0 * (x665 * x35)),
+                        x668,
+                        x670,
                         0.0,
+                        x671,
                         x673,
                         x675,
-                        x677,
                         0.0,
                     ],
                     [
-                        x669,
-                        (x13 * x634 * x10
-                            - m2 * (2.0 * (x9 * x624) + 2.0 * (x133 * d * x5))) * x11,
-                        x678,
+                        x668,
+                        (x4 * x634 * x43
+                            - m2 * (2.0 * (x42 * x624) + 2.0 * (x133 * d * x8))) * x0,
+                        x676,
                         0.0,
+                        x678,
                         x680,
+                        x681,
                         x682,
-                        x683,
-                        x684,
                     ],
                     [
-                        x672,
-                        x678,
-                        x13 * (2.0 * x170 + x642) * x11,
+                        x670,
+                        x676,
+                        x4 * (2.0 * x170 + x642) * x0,
                         0.0,
                         0.0,
-                        x685,
+                        x683,
+                        x554,
                         x555,
-                        x556,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x673, x680, 0.0, 0.0, 0.0, x686, x687, x688],
-                    [x675, x682, x685, 0.0, x686, 0.0, 0.0, 0.0],
-                    [x677, x683, x555, 0.0, x687, 0.0, 0.0, 0.0],
-                    [0.0, x684, x556, 0.0, x688, 0.0, 0.0, 0.0],
+                    [x671, x678, 0.0, 0.0, 0.0, x684, x685, x686],
+                    [x673, x680, x683, 0.0, x684, 0.0, 0.0, 0.0],
+                    [x675, x681, x554, 0.0, x685, 0.0, 0.0, 0.0],
+                    [0.0, x682, x555, 0.0, x686, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2518,230 +2523,234 @@ pub mod lagrange {
                     0.0,
                     0.0,
                     0.0,
-                    -(m2 * (x365 * x267 - x317 - x366 * x274)
-                        + m1 * (x364 * x245 + x261 * x370 + x254 * x368)),
-                    x316,
+                    -(m2 * (x225 * x363 - x315 - x364 * x233)
+                        + m1 * (x362 * x257 + x273 * x368 + x266 * x366)),
+                    x314,
                     0.0,
                 ],
                 [
-                    x4 * x230 - x303 * x380 - (x301 * x388 - x386 * x299) * J1
-                        + ((x420 - x419 + x424 + x0 * x428 - x429) * x0 - x16 * x437
-                            + (x5 * x443
-                                + (x444 - x445 - x446 - x447 + x451 - x452 - x455 + x456)
-                                    * x8) * x4 - x463 * x7 - (x55 * x467 - x52 * x465) * J1)
-                            * psi_dot
-                        + x0 * (x5 * (x281 - x282 + x468) + (x307 + x291) * x8)
-                        + x384 * x213
+                    x1 * x218 - x302 * x385
+                        + (x8 * (x414 + x288 - x289) + (x305 + x279) * x2) * x5
+                        + psi_dot
+                            * ((x419 - x418 + x423 + x5 * x427 - x428) * x5
+                                + ((x429 - x430 - x431 - x432 + x436 - x437 - x440 + x441)
+                                    * x2 + x8 * x447) * x1 - x33 * x456 - x463 * x22
+                                - (x14 * x465 - x467 * x7) * J1) + x381 * x278
+                        - (x299 * x376 - x378 * x300) * J1
+                        - ((x469 * x215 * x16 + (x215 * x473 - x5 * x266) * x18
+                            + x5 * x308) * x2 + x386 * x257 - x25 * x474 * psi_dot) * m1
                         - m2
-                            * (x5
-                                * ((x0 * x274 - x472 * x189) * x23 + x189 * x475
-                                    + x0 * x476) - psi_dot * x469 * x19 + x389 * x279)
-                        - (((x189 * x480 - x0 * x254) * x29 + x0 * x310
-                            + x189 * x27 * x482) * x8 + x381 * x245
-                            - x34 * x483 * psi_dot) * m1,
-                    psi_dot
-                        * ((x443 - x58 * x467 - x3 * x463) * x8
-                            - m2 * ((x475 - x472 * x23) * x8 + x133 * x469)
-                            - ((-x480 * x29 - x27 * x482) * x5 + x483 * x137) * m1
-                            + (x445 - x444 + x446 + x447 - x465 * x69 - x451 + x13 * x437
-                                + x452 + x455 - x456) * x5),
-                    (x419 - (x13 * x465 + x3 * x467) * J1 - x420
-                        + (x88 * x469 - x435 - x436) * x11 - x424 + x429 + x0 * x484
-                        + x1 * (x463 - x85 * x483)) * psi_dot,
-                    psi_dot * (x451 - x85 * x482 + J2 * (x464 - x448 + x449)),
-                    (x439 - x88 * x474 - x440) * psi_dot,
-                    -((x92 * x485 + (x108 * x482 + x106 * x480 + x100 * x483) * psi_dot)
+                            * (x242 * x382
+                                + x8
+                                    * (x215 * x477 + (x5 * x233 - x215 * x480) * x39
+                                        + x5 * x481) - psi_dot * x482 * x35),
+                    ((x447 - x58 * x465 - x12 * x463) * x2
+                        - ((-x469 * x16 - x473 * x18) * x8 + x474 * x137) * m1
+                        - m2 * (x133 * x482 + (x477 - x480 * x39) * x2)
+                        + (x430 - x429 + x431 + x432 - x436 - x467 * x74 + x4 * x456
+                            + x437 + x440 - x441) * x8) * psi_dot,
+                    (x418 - x419 - x423 - (x4 * x467 + x12 * x465) * J1
+                        + (x88 * x482 - x450 - x455) * x0 + x428 + x5 * x483
+                        + x10 * (x463 - x85 * x474)) * psi_dot,
+                    psi_dot * (x436 - x469 * x85 + J2 * (x466 - x433 + x434)),
+                    (x444 - x88 * x476 - x443) * psi_dot,
+                    -(m2
+                        * (x484 * x92
+                            + psi_dot * (x105 * x482 + x97 * x480 + x99 * x476))
+                        + (x92 * x485
+                            + (x106 * x473 + x96 * x474 + x469 * x108) * psi_dot) * m1),
+                    -((x485 * x94 + psi_dot * (x474 * x123 + x469 * x115 + x119 * x473))
                         * m1
                         + m2
-                            * (x92 * x486
-                                + (x472 * x101 + x474 * x103 + x97 * x469) * psi_dot)),
-                    -((psi_dot * (x115 * x482 + x483 * x123 + x119 * x480) + x485 * x95)
-                        * m1
-                        + m2
-                            * (x486 * x95
-                                + psi_dot * (x111 * x469 + x474 * x128 + x472 * x125))),
-                    -((x487
-                        + d
-                            * (x495 * x343
-                                + (x498 * theta_dot - x497 + gamma1_dot * (x500 - 2.0 * x2))
-                                    * theta_dot + gamma1_dot * (x502 + x498 * gamma1_dot))) * m1
-                        + m2
-                            * (d
-                                * (theta_dot * (theta_dot * x508 + x513)
-                                    + gamma2_dot
-                                        * (gamma2_dot * x508 + x515
-                                            + (2.0 * x12 + x517) * theta_dot) + x507 * x343) - x487)),
+                            * (x484 * x94
+                                + psi_dot * (x480 * x126 + x111 * x482 + x129 * x476))),
+                    -((d
+                        * (x493 * x319
+                            + (x496 * theta_dot - x495 + gamma1_dot * (x498 - 2.0 * x21))
+                                * theta_dot + gamma1_dot * (x500 + x496 * gamma1_dot))
+                        + x501) * m1
+                        + ((gamma2_dot
+                            * (x507 + (2.0 * x31 + x512) * theta_dot + gamma2_dot * x515)
+                            + x514 * x319 + theta_dot * (x516 + theta_dot * x515)) * d
+                            - x501) * m2),
                 ],
                 [
-                    x4
-                        * ((x289 - x558 + x306 - x560 - x563 - x566 - x567 + 2.0 * x282)
-                            * x8 + (x309 + x571) * x5) - (x248 * x55 + x52 * x572) * J1
-                        - m2 * (x4 * (x580 * x5 + x304) - x585 * x19)
-                        - (((x593 + x598 - x599) * x8 + x312) * x4 - x589 * x34) * m1
-                        - x604 * x16 - x7 * x607
-                        + x0 * (x188 * (x227 - x561 - x225) - x608 + x609 - x610 + x611),
-                    (x571 + x308 - (x301 * x11 + x248 * x1) * J1 - x3 * x607) * x8
-                        + x5
-                            * (x305 + (x572 * x11 + x1 * x299) * J1 + x558 + x13 * x604
-                                + x560 + x563 + x566 + x567 - 2.0 * x282 + x468)
-                        - ((x599 - x593 - x598) * x5 + (x311 - x61 * x589) * x8) * m1
-                        - m2 * (x580 * x8 + (x77 * x585 + x476 + x275) * x5),
-                    x11 * (x88 * x585 - x602 - x603) - (x3 * x248 - x13 * x572) * J1
-                        + x608 - x609 + (x607 - x589 * x85) * x1 + x610 - x611
-                        + x188 * (x225 + x562 - x224 + x226),
-                    x188 * (x559 * x141 + x3 * x302) - x566 - x85 * x597,
-                    -(x204 * x568 + x277 * x141) * x207 - x291 - x88 * x575,
+                    x1
+                        * ((x599 + x307) * x8
+                            + (x304 - x600 - x602 - x605 - x606 - x607 + 2.0 * x289
+                                + x296) * x2) - m2 * ((x311 + x571 * x8) * x1 - x562 * x35)
+                        - x576 * x33
+                        - (((x584 + x589 - x590) * x2 + x310) * x1 - x580 * x25) * m1
+                        - x22 * x593 - (x260 * x14 + x594 * x7) * J1
+                        + x5 * (x201 * (x213 - x603 - x211) - x608 + x609 - x610 + x611),
+                    (x599 + x306 - (x299 * x0 + x260 * x10) * J1 - x12 * x593) * x2
+                        - m2 * (x571 * x2 + x8 * (x481 + x77 * x562 + x234))
+                        + x8
+                            * (x303 + (x594 * x0 + x10 * x300) * J1 + x4 * x576 + x414
+                                + x600 + x602 + x605 + x606 + x607 - 2.0 * x289)
+                        - ((x590 - x584 - x589) * x8 + (x309 - x61 * x580) * x2) * m1,
+                    x608 - (x12 * x260 - x4 * x594) * J1 - x609
+                        + (x593 - x580 * x85) * x10 + x610 - x611
+                        + (x88 * x562 - x574 - x575) * x0
+                        + x201 * (x211 + x604 - x210 + x212),
+                    x201 * (x601 * x141 + x12 * x301) - x606 - x85 * x588,
+                    -x279 - x88 * x566 - x207 * (x275 * x598 + x236 * x141),
                     -(m2
-                        * (x100 * x279 + x97 * x585 + x101 * x579 + x612 * x530
-                            + x103 * x575)
-                        + (x108 * x597 + x245 * x530 + x613 * x100 + x106 * x592) * m1),
+                        * (x242 * x96 + x97 * x570 + x105 * x562 + x99 * x566
+                            + x612 * x529)
+                        + (x108 * x588 + x257 * x529 + x613 * x96 + x106 * x583) * m1),
                     -(m2
-                        * (x579 * x125 + x111 * x585 - x111 * x612 + x128 * x575
-                            + x123 * x279)
-                        + (x119 * x592 - x111 * x245 + x613 * x123 + x597 * x115) * m1),
+                        * (x570 * x126 + x129 * x566 + x242 * x123 - x612 * x111
+                            + x111 * x562)
+                        + (x119 * x583 - x111 * x257 + x613 * x123 + x588 * x115) * m1),
                     -((m1
-                        * ((x614 * phi_dot + x501 * gamma1_dot - x615 * theta_dot)
+                        * ((x614 * phi_dot + x499 * gamma1_dot - x615 * theta_dot)
                             * theta_dot
-                            + gamma1_dot * (x500 * phi_dot - x615 * gamma1_dot)
-                            - x615 * x343)
+                            + gamma1_dot * (x498 * phi_dot - x615 * gamma1_dot)
+                            - x615 * x319)
                         + m2
-                            * (theta_dot * (theta_dot * x617 + phi_dot * x618)
-                                + x617 * x343
-                                + gamma2_dot
-                                    * (x517 * phi_dot + theta_dot * x514 + gamma2_dot * x617)))
-                        * d),
+                            * (gamma2_dot
+                                * (x512 * phi_dot + theta_dot * x506 + gamma2_dot * x617)
+                                + theta_dot * (theta_dot * x617 + x618 * phi_dot)
+                                + x319 * x617)) * d),
                 ],
                 [
-                    -x303 * x620
-                        - ((x650 + a_ * ((x652 - x256 - x257) * x1 + x653)) * x14
-                            - x647 * x34 - x245 * x621) * m1 - x655 * x7 - x657 * x14
-                        - x237 * x623,
-                    x5 * x657 + (x1 * (x303 - x658) - x3 * x655) * x8
-                        - (x5 * (a_ * ((x258 - x652) * x1 - x653) - x650)
-                            + (x1 * d * x245 - x647 * x61) * x8) * m1,
-                    x3 * (x313 - x658) + (x655 - x647 * x85) * x1,
-                    x656 * x141 - x240 * x302 - x85 * x649,
+                    -x302 * x620
+                        - ((x650 + a_ * ((x652 - x268 - x269) * x10 + x653)) * x3
+                            - x647 * x25 - x257 * x621) * m1 - x655 * x22 - x657 * x3
+                        - x249 * x623,
+                    x8 * x657 + (x10 * (x302 - x658) - x12 * x655) * x2
+                        - (x8 * (a_ * ((x270 - x652) * x10 - x653) - x650)
+                            + (x10 * d * x257 - x647 * x61) * x2) * m1,
+                    x12 * (x312 - x658) + (x655 - x647 * x85) * x10,
+                    x656 * x141 - x252 * x301 - x85 * x649,
                     0.0,
-                    -(m1 * (x647 * x100 + x108 * x659 + x660 * x106 - x106 * x261)),
-                    -(m1 * (x659 * x115 + x660 * x119 + x647 * x123 - x119 * x261)),
+                    -(m1 * (x647 * x96 + x108 * x659 + x660 * x106 - x106 * x273)),
+                    -(m1 * (x659 * x115 + x660 * x119 + x647 * x123 - x119 * x273)),
                     -(x85
                         * (theta_dot
-                            * (x502 + (2.0 * x385 + x614) * gamma1_dot
-                                + x662 * theta_dot) + x343 * x661
-                            + gamma1_dot * (x662 * gamma1_dot - x497))),
+                            * (x500 + (2.0 * x377 + x614) * gamma1_dot
+                                + x662 * theta_dot) + x319 * x661
+                            + gamma1_dot * (x662 * gamma1_dot - x495))),
                 ],
                 [
-                    x52 * x695 - x691 * x16 - x6 * x693
-                        - m2 * (x6 * x698 + x699 * x19 - x667 * x279) - x664 * x700,
-                    x5 * (x13 * (x691 - x700) - x11 * x695) - x693 * x8
-                        - m2 * (x698 * x8 + (-x77 * x699 - d * x11 * x279) * x5),
-                    x13 * (x314 - x694) + x11 * (x700 - x88 * x699 - x689 + x690),
+                    x698 * x7 - m2 * (x9 * x690 - x242 * x665 + x691 * x35) - x694 * x33
+                        - x696 * x9 - x299 * x664,
+                    x8 * (x4 * (x694 - x699) - x0 * x698)
+                        - m2 * (x690 * x2 + (-x77 * x691 - x242 * d * x0) * x8)
+                        - x696 * x2,
+                    x4 * (x313 - x697) + x0 * (x699 - x88 * x691 - x692 + x693),
                     0.0,
-                    x692 * x204 - x88 * x696 - x315 * x262,
-                    -(m2 * (x103 * x696 - x97 * x699 - x103 * x274 + x697 * x101)),
-                    -(m2 * (x697 * x125 - x111 * x699 - x128 * x274 + x128 * x696)),
+                    x275 * x688 + x275 * x695 - x88 * x689,
+                    -(m2 * (x97 * x687 - x105 * x691 - x99 * x233 + x99 * x689)),
+                    -(m2 * (x687 * x126 - x111 * x691 - x129 * x233 + x129 * x689)),
                     -(x88
-                        * ((x515 + theta_dot * x702) * theta_dot + x701 * x343
-                            + gamma2_dot
-                                * (gamma2_dot * x702 + x513
-                                    + theta_dot * (x618 - 2.0 * x387)))),
+                        * (gamma2_dot
+                            * (x516 + gamma2_dot * x701
+                                + theta_dot * (x618 - 2.0 * x375)) + x700 * x319
+                            + (x507 + x701 * theta_dot) * theta_dot)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x8 * (x724 - x723 + x725 - x726 - x727 + x728 + x729 + x730)
-                        + x735 * x5) * x4 - x7 * x710 - x16 * x719
-                        - (x55 * x736 - x52 * x737) * J1 - m2 * (x6 * x741 - x742 * x19)
-                        + x0 * (x744 - x743 - x745 + x746 + x4 * x484)
-                        - m1 * ((x750 + x752) * x14 - x748 * x34),
-                    (x723 - x724 - x725 + x726 + x727 - x728 - x729 - x730 + x13 * x719
-                        - x737 * x69) * x5 - m1 * (x748 * x137 + (-x750 - x752) * x5)
-                        - m2 * (x133 * x742 + x8 * x741)
-                        + (x735 - x3 * x710 - x58 * x736) * x8,
-                    x743 - J1 * (x13 * x737 + x3 * x736) + x428 * x4 - x744
-                        + x11 * (x88 * x742 - x717 + x718) + x745 - x746
-                        + x1 * (x710 - x748 * x85),
-                    J2 * (x713 - x720 - x721) - x85 * x749 + x729,
-                    (x747 + x733) * J2 - x88 * x740 - x734,
-                    -(m2 * (x97 * x742 + x101 * x738 + x103 * x740)
-                        + (x108 * x749 + x748 * x100 + x106 * x751) * m1),
-                    -(m2 * (x738 * x125 + x111 * x742 + x128 * x740)
+                    x5 * (x718 - x717 - x719 + x720 + x1 * x483)
+                        - (x14 * x706 - x712 * x7) * J1 - x22 * x716
+                        + (x8 * x725
+                            + x2
+                                * (x730 - x729 + x731 - x732 - x733 + x734 + x735 + x736))
+                            * x1 - m2 * (x9 * x742 - x738 * x35) - x33 * x746
+                        - m1 * ((x750 + x752) * x3 - x748 * x25),
+                    (x729 - x730 - x712 * x74 - x731 + x732 + x733 - x734 - x735 - x736
+                        + x4 * x746) * x8 - m1 * (x748 * x137 + (-x750 - x752) * x8)
+                        - m2 * (x133 * x738 + x742 * x2)
+                        + (x725 - x12 * x716 - x58 * x706) * x2,
+                    x717 - (x12 * x706 + x4 * x712) * J1 + x427 * x1 - x718
+                        + (x744 + x88 * x738 - x745) * x0 + x719 - x720
+                        + x10 * (x716 - x748 * x85),
+                    J2 * (x709 - x726 - x727) - x85 * x749 + x735,
+                    J2 * (x747 + x723) - x741 * x88 - x724,
+                    -((x108 * x749 + x748 * x96 + x106 * x751) * m1
+                        + m2 * (x105 * x738 + x97 * x739 + x741 * x99)),
+                    -(m2 * (x111 * x738 + x741 * x129 + x739 * x126)
                         + m1 * (x748 * x123 + x115 * x749 + x751 * x119)),
                     0.0,
                 ],
                 [
-                    ((x441 - x772 + x773 - x778 * x8 - x779 + x780) * x8
-                        + x5 * (x781 - (x783 + x785) * x5)) * x4
-                        - m2 * (x6 * x756 - x759 * x19) - x16 * x763
-                        - ((x765 + x767) * x14 - x34 * x771) * m1
-                        - (x55 * x786 - x52 * x787) * J1
-                        + x0 * (x788 - x789 + x790 - x791 - x792 + x793) - x7 * x795,
-                    (x772 - x441 + x13 * x763 - x773 + (x778 - x783 - x785) * x8
-                        - x787 * x69 + x779 - x780) * x5
-                        - (x137 * x771 + (-x765 - x767) * x5) * m1
-                        - (x133 * x759 + x756 * x8) * m2
-                        + (x781 - x58 * x786 - x3 * x795) * x8,
-                    x11 * (x761 - x762 + x88 * x759) - (x13 * x787 + x3 * x786) * J1
-                        - x788 + x1 * (x795 - x85 * x771) + x789 - x790 + x791 + x792
-                        - x793,
-                    (x777 + J2 * (x194 - x559 - x774)) * x8 - x766 * x85,
-                    (x782 * J1 + J2 * (x194 + x784)) * x5 - x755 * x88,
-                    -(m1 * (x108 * x766 + x764 * x106 + x100 * x771)
-                        + m2 * (x755 * x103 + x101 * x753 + x97 * x759)),
-                    -(m2 * (x111 * x759 + x753 * x125 + x755 * x128)
-                        + m1 * (x766 * x115 + x764 * x119 + x123 * x771)),
+                    x5 * (x762 - x763 + x764 - x765 - x766 + x767)
+                        - ((x755 + x757) * x3 - x25 * x761) * m1
+                        - (x14 * x768 - x770 * x7) * J1
+                        + x1
+                            * ((x445 - x771 + x772 - x777 * x2 - x778 + x779) * x2
+                                + x8 * (x784 - x8 * (x781 + x783))) - x789 * x33
+                        - m2 * (x793 * x9 - x790 * x35) - x22 * x795,
+                    (x784 - x58 * x768 - x12 * x795) * x2
+                        - m1 * (x137 * x761 + x8 * (-x755 - x757))
+                        + x8
+                            * (x771 - x445 - x772 + x789 * x4 + (x777 - x781 - x783) * x2
+                                - x770 * x74 + x778 - x779)
+                        - m2 * (x793 * x2 + x133 * x790),
+                    x10 * (x795 - x85 * x761) - (x4 * x770 + x12 * x768) * J1 - x762
+                        + x763 - x764 + x765 + (x88 * x790 - x787 + x788) * x0 + x766
+                        - x767,
+                    (x776 + J2 * (x187 - x601 - x773)) * x2 - x85 * x754,
+                    (J2 * (x782 + x187) + x780 * J1) * x8 - x88 * x792,
+                    -(m2 * (x99 * x792 + x105 * x790 + x97 * x791)
+                        + (x756 * x106 + x96 * x761 + x108 * x754) * m1),
+                    -((x754 * x115 + x756 * x119 + x123 * x761) * m1
+                        + m2 * (x791 * x126 + x111 * x790 + x129 * x792)),
                     -(m2
-                        * (d * (x342 + x797 * theta_dot - gamma2_dot * x338)
-                            - 2.0 * x319)
-                        + m1 * (2.0 * x319 + (theta_dot * x799 + x363) * d)),
+                        * (d * (theta_dot * x797 + x357 - gamma2_dot * x359)
+                            - 2.0 * x798)
+                        + (2.0 * x798 + (theta_dot * x800 + x339) * d) * m1),
                 ],
                 [
-                    ((x569 - x816 - x818 + 2.0 * x220 + 2.0 * x221 - x819) * x8
-                        - x5 * x823) * x4 - x801 * x56 - x804 * x71
-                        - m2 * (x809 * x6 - x810 * x19) - (x55 * x811 + x671 * x812) * J1
-                        - m1 * ((x826 + x828) * x14 - x34 * x824),
-                    x5
-                        * (x816 - x569 + x818 - 2.0 * x220 - 2.0 * x221 + x139 * x804
-                            - x812 * x518 + x819) - m2 * (x809 * x8 + x133 * x810)
-                        - (x138 * x801 + x823 + x58 * x811) * x8
-                        - (x824 * x137 + (-x826 - x828) * x5) * m1,
-                    x11 * (x88 * x810 - x13 * (x812 * J1 + x804))
-                        + (x3 * (x801 - x800 * J1) - x85 * x824) * x1,
-                    x817 * J1 - x85 * x827 + J2 * (x815 + x207),
-                    (x187 - x186 + x821) * J2 - x807 * x88 - x822,
-                    -(m2 * (x97 * x810 + 2.0 * (x101 * x808) + x807 * x103)
-                        + m1 * (x100 * x824 + x106 * x825 + x108 * x827)),
-                    -(m1 * (x119 * x825 + x827 * x115 + x824 * x123)
-                        + m2 * (x111 * x810 + x807 * x128 + 2.0 * (x125 * x808))),
-                    -(d
-                        * ((phi_dot * x796 + gamma2_dot * x331 + theta_dot * x341) * m2
-                            + (x356 * gamma1_dot + x798 * phi_dot + theta_dot * x359)
-                                * m1)),
+                    x1
+                        * ((x595 - x821 - x823 + 2.0 * x202 + 2.0 * x204 - x824) * x2
+                            - x817 * x8) - x802 * x56 - x69 * x805
+                        - m2 * (x9 * x811 - x35 * x806) - (x14 * x812 + x813 * x521) * J1
+                        - m1 * ((x827 + x829) * x3 - x25 * x825),
+                    x8
+                        * (x821 - x595 + x823 - 2.0 * x202 - 2.0 * x204 + x139 * x805
+                            - x813 * x517 + x824)
+                        - (x138 * x802 + x817 + x58 * x812) * x2
+                        - (x825 * x137 + (-x827 - x829) * x8) * m1
+                        - m2 * (x133 * x806 + x811 * x2),
+                    x0 * (x88 * x806 - x4 * (x813 * J1 + x805))
+                        + (x12 * (x802 - x801 * J1) - x85 * x825) * x10,
+                    x822 * J1 - x85 * x828 + J2 * (x820 + x207),
+                    J2 * (x815 - x199 + x200) - x809 * x88 - x816,
+                    -(m2 * (x105 * x806 + x809 * x99 + 2.0 * (x97 * x810))
+                        + m1 * (x96 * x825 + x106 * x826 + x108 * x828)),
+                    -(m1 * (x119 * x826 + x828 * x115 + x825 * x123)
+                        + m2 * (x809 * x129 + x111 * x806 + 2.0 * (x126 * x810))),
+                    -(((x332 * gamma1_dot + x799 * phi_dot + theta_dot * x335) * m1
+                        + m2 * (theta_dot * x356 + gamma2_dot * x360 + phi_dot * x796))
+                        * d),
                 ],
                 [
-                    -(x85 * (-2.0 * (x241 * x619) - x829 * x34) + x231 * x623
-                        + x7 * x830),
-                    -(2.0 * (x241 * x636) + x829 * x137) * x85
-                        - x8 * (x3 * x830 + x58 * x231),
-                    (x830 - x166 * x829) * x1 - x813 * J1,
+                    -(x85 * (-2.0 * (x253 * x619) - x830 * x25) + x243 * x623
+                        + x22 * x831),
+                    -(2.0 * (x253 * x636) + x830 * x137) * x85
+                        - x2 * (x12 * x831 + x58 * x243),
+                    (x831 - x166 * x830) * x10 - x818 * J1,
                     0.0,
                     0.0,
-                    -((x829 * x100 - 2.0 * (x106 * x241)) * x85),
-                    -(x85 * (x829 * x123 - 2.0 * (x119 * x241))),
-                    -(x85 * (gamma1_dot * x799 + x357 + theta_dot * x362)),
+                    -((x830 * x96 - 2.0 * (x106 * x253)) * x85),
+                    -(x85 * (x830 * x123 - 2.0 * (x119 * x253))),
+                    -(x85 * (gamma1_dot * x800 + x333 + theta_dot * x338)),
                 ],
                 [
-                    -(x731 * x832 - x52 * x831
-                        - (2.0 * (x666 * x208) - 2.0 * x739) * x88),
-                    x88 * (2.0 * (x133 * x211) + 2.0 * (x679 * x208))
-                        + x5 * (x568 * x832 + x262 * x69),
-                    (J1 - 2.0 * J2 - 2.0 * x170) * x805 - x13 * x831,
+                    -(x722 * x833 - x832 * x7
+                        - x88 * (2.0 * (x666 * x228) - 2.0 * x740)),
+                    x88 * (2.0 * (x677 * x228) + 2.0 * (x133 * x223))
+                        + x8 * (x219 * x74 + x598 * x833),
+                    x807 * (J1 - 2.0 * J2 - 2.0 * x170) - x4 * x832,
                     0.0,
                     0.0,
-                    -(x88 * (2.0 * (x101 * x208) - 2.0 * (x97 * x211))),
-                    -((2.0 * (x125 * x208) - 2.0 * (x111 * x211)) * x88),
-                    -((x339 + x797 * gamma2_dot) * x88),
+                    -(x88 * (2.0 * (x97 * x228) - 2.0 * (x105 * x223))),
+                    -(x88 * (2.0 * (x126 * x228) - 2.0 * (x111 * x223))),
+                    -((x361 + gamma2_dot * x797) * x88),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3811,239 +3820,239 @@ pub mod maggi {
         let x12 = x11 * d;
         let x13 = J2 + x12;
         let x14 = (Ixx + x2 * x4) + ((x6 + x8) * J1 + x10 * x13);
-        let x15 = f64::cos(phi);
-        let x16 = f64::sin(phi);
-        let x17 = J1 - J2;
-        let x18 = x7 * x17;
-        let x19 = x7 * d;
-        let x20 = x19 + a_;
-        let x21 = x18 - x11 * x20;
-        let x22 = x21 * x9 + Ixz;
-        let x23 = x5 * d;
-        let x24 = a_ + x23;
-        let x25 = x24 * x0;
-        let x26 = x5 * x17 - x25;
-        let x27 = x16 * x22 + (x3 * x26 - Ixy) * x15;
-        let x28 = x15 * x27;
-        let x29 = f64::cos(theta);
-        let x30 = 1.0 / x29;
-        let x31 = x30 * x16;
-        let x32 = x29 * x16;
-        let x33 = x32 * x3;
-        let x34 = f64::sin(theta);
-        let x35 = x5 * x34;
-        let x36 = x33 - x35;
-        let x37 = x29 * x15;
-        let x38 = x7 * x34;
-        let x39 = x9 * x37 + x38;
-        let x40 = (x5 * x36 - x39 * x7) * J1;
-        let x41 = x34 * x3;
-        let x42 = x41 + x5 * x32;
+        let x15 = J1 - J2;
+        let x16 = x7 * d;
+        let x17 = x16 + a_;
+        let x18 = x7 * x15 - x11 * x17;
+        let x19 = x9 * x18 + Ixz;
+        let x20 = f64::sin(phi);
+        let x21 = x5 * d;
+        let x22 = a_ + x21;
+        let x23 = x22 * x0;
+        let x24 = x5 * x15 - x23;
+        let x25 = f64::cos(phi);
+        let x26 = x19 * x20 + (x3 * x24 - Ixy) * x25;
+        let x27 = x26 * x25;
+        let x28 = f64::cos(theta);
+        let x29 = 1.0 / x28;
+        let x30 = x29 * x20;
+        let x31 = x28 * x20;
+        let x32 = x31 * x3;
+        let x33 = f64::sin(theta);
+        let x34 = x5 * x33;
+        let x35 = x32 - x34;
+        let x36 = x28 * x25;
+        let x37 = x7 * x33;
+        let x38 = x9 * x36 + x37;
+        let x39 = -(x38 * x7);
+        let x40 = (x5 * x35 + x39) * J1;
+        let x41 = x33 * x3;
+        let x42 = x41 + x5 * x31;
         let x43 = x42 * x3;
-        let x44 = x34 * x9;
-        let x45 = x7 * x37;
+        let x44 = x33 * x9;
+        let x45 = x7 * x36;
         let x46 = x45 - x44;
         let x47 = (x46 * x9 - x43) * J2;
-        let x48 = x34 * Ixx;
-        let x49 = Ixy * x16 + Ixz * x15;
-        let x50 = x29 * x49;
+        let x48 = x33 * Ixx;
+        let x49 = Ixy * x20 + Ixz * x25;
+        let x50 = x28 * x49;
         let x51 = -x48 - x50;
         let x52 = m2 * x9;
-        let x53 = a_ * x37;
+        let x53 = a_ * x36;
         let x54 = x46 * d;
         let x55 = x53 + x54;
         let x56 = x42 * d;
-        let x57 = a_ * x32;
+        let x57 = a_ * x31;
         let x58 = x56 + x57;
         let x59 = x3 * m1;
         let x60 = d * (x52 * x55 - x58 * x59);
         let x61 = (x40 + x47) + (x51 + x60);
-        let x62 = x34 * x14;
+        let x62 = x33 * x14;
         let x63 = x61 + x62;
-        let x64 = x28 + x31 * x63;
-        let x65 = x30 * x15;
+        let x64 = x27 + x30 * x63;
+        let x65 = x29 * x25;
         let x66 = x63 * x65;
-        let x67 = x16 * x27;
+        let x67 = x20 * x26;
         let x68 = x66 - x67;
         let x69 = f64::cos(psi);
-        let x70 = x34 * x16;
+        let x70 = x33 * x20;
         let x71 = x69 * x70;
         let x72 = f64::sin(psi);
-        let x73 = x15 * x72;
+        let x73 = x25 * x72;
         let x74 = x71 - x73;
-        let x75 = x34 * x15;
-        let x76 = x16 * x72 + x75 * x69;
+        let x75 = x33 * x25;
+        let x76 = x20 * x72 + x75 * x69;
         let x77 = x76 * x59 - x74 * x52;
         let x78 = d * x77;
-        let x79 = x69 * x15 + x70 * x72;
+        let x79 = x69 * x25 + x70 * x72;
         let x80 = x52 * x79;
-        let x81 = x69 * x16;
+        let x81 = x69 * x20;
         let x82 = x75 * x72;
         let x83 = x82 - x81;
         let x84 = x59 * x83 - x80;
         let x85 = d * x84;
-        let x86 = x52 * x16;
-        let x87 = x59 * x15;
+        let x86 = x52 * x20;
+        let x87 = x59 * x25;
         let x88 = x87 - x86;
         let x89 = d * x88;
-        let x90 = x89 * x29;
-        let x91 = x34 * x27;
-        let x92 = x16 * Ixz - Ixy * x15;
-        let x93 = x34 * x92;
-        let x94 = x9 * J1;
-        let x95 = x39 * x94;
-        let x96 = x7 * x46;
-        let x97 = J2 * x96;
-        let x98 = Iyy * x15;
-        let x99 = Iyz * x16;
-        let x100 = x98 + x99;
-        let x101 = x29 * x100;
-        let x102 = -(x20 * x55);
-        let x103 = x7 * a_;
-        let x104 = x103 + d;
-        let x105 = x104 * x104;
-        let x106 = a_ * x9;
-        let x107 = x106 * x106;
-        let x108 = x105 + x107;
-        let x109 = (x101 - x95 - x97 + m2 * (x102 + x108 * x37)) * x16;
-        let x110 = x5 * x42;
-        let x111 = J2 * x110;
-        let x112 = x3 * J1;
-        let x113 = x112 * x36;
-        let x114 = x16 * Izz;
-        let x115 = Iyz * x15;
-        let x116 = x114 + x115;
-        let x117 = x29 * x116;
-        let x118 = x24 * x58;
-        let x119 = x5 * a_;
-        let x120 = x119 + d;
-        let x121 = x120 * x120;
-        let x122 = a_ * x3;
-        let x123 = x122 * x122;
-        let x124 = -x121 - x123;
-        let x125 = (x111 + x113 - x117 + (x118 + x124 * x32) * m1) * x15;
-        let x126 = (x109 - x93) + x125;
-        let x127 = x91 + x126;
-        let x128 = x20 * x20;
-        let x129 = x16 * x16;
-        let x130 = x15 * x15;
-        let x131 = x130 * x108;
-        let x132 = x121 + x123;
-        let x133 = x132 * x129;
-        let x134 = x24 * x24;
-        let x135 = x134;
-        let x136 = x9 * x16;
-        let x137 = x3 * x15;
-        let x138 = m2 * (x128 * x129 + x131) + (x133 + x130 * x135) * m1
-            + x16 * (x136 * x94 + x116) + J2 * (x130 * (x6 + 1.0) + (x8 + 1.0) * x129)
-            + (x100 + x112 * x137) * x15;
-        let x139 = x138 * x15;
-        let x140 = x31 * x127 + x139;
-        let x141 = x140 * x15;
-        let x142 = x61 * x34;
-        let x143 = x51 * x34;
-        let x144 = Iyy * x16;
-        let x145 = x144 - x115;
-        let x146 = x145 * x29 + x34 * Ixy;
-        let x147 = x146 * x16;
-        let x148 = Izz * x15;
-        let x149 = x148 - x99;
-        let x150 = x29 * x149;
-        let x151 = x34 * Ixz;
-        let x152 = x150 + x151;
-        let x153 = x152 * x15;
-        let x154 = x29 * (x147 + x153);
-        let x155 = x130 + x129;
-        let x156 = (x42 * x42 + x29 * x29 * x155 + x46 * x46) * J2;
-        let x157 = (x39 * x39 + x36 * x36) * J1;
-        let x158 = x32 * x32;
-        let x159 = m2 * (x55 * x55 + x108 * x158);
-        let x160 = x37 * x37;
-        let x161 = m1 * (x58 * x58 + x132 * x160);
-        let x162 = (x154 - x143) + ((x156 + x157) + (x159 + x161));
-        let x163 = x142 + x162;
-        let x164 = x126 * x15;
-        let x165 = x31 * x163 + x164;
-        let x166 = x165 + x34 * x64;
-        let x167 = x140 * x16;
-        let x168 = x166 * x65 - x167;
-        let x169 = x16 * x15;
+        let x90 = x89 * x28;
+        let x91 = x51 * x33;
+        let x92 = Iyz * x25;
+        let x93 = Iyy * x20;
+        let x94 = x93 - x92;
+        let x95 = x94 * x28 + x33 * Ixy;
+        let x96 = x95 * x20;
+        let x97 = Izz * x25;
+        let x98 = Iyz * x20;
+        let x99 = x97 - x98;
+        let x100 = x28 * x99;
+        let x101 = x33 * Ixz;
+        let x102 = x100 + x101;
+        let x103 = x102 * x25;
+        let x104 = x28 * (x96 + x103);
+        let x105 = x25 * x25;
+        let x106 = x20 * x20;
+        let x107 = x105 + x106;
+        let x108 = (x42 * x42 + x28 * x28 * x107 + x46 * x46) * J2;
+        let x109 = (x38 * x38 + x35 * x35) * J1;
+        let x110 = x7 * a_;
+        let x111 = x110 + d;
+        let x112 = x111 * x111;
+        let x113 = a_ * x9;
+        let x114 = x113 * x113;
+        let x115 = x112 + x114;
+        let x116 = x31 * x31;
+        let x117 = m2 * (x55 * x55 + x115 * x116);
+        let x118 = x5 * a_;
+        let x119 = x118 + d;
+        let x120 = x119 * x119;
+        let x121 = a_ * x3;
+        let x122 = x121 * x121;
+        let x123 = x120 + x122;
+        let x124 = x36 * x36;
+        let x125 = m1 * (x58 * x58 + x123 * x124);
+        let x126 = (x104 - x91) + ((x108 + x109) + (x117 + x125));
+        let x127 = x61 * x33;
+        let x128 = x126 + x127;
+        let x129 = x20 * Ixz - Ixy * x25;
+        let x130 = x33 * x129;
+        let x131 = x9 * J1;
+        let x132 = x38 * x131;
+        let x133 = x7 * x46;
+        let x134 = J2 * x133;
+        let x135 = Iyy * x25;
+        let x136 = x135 + x98;
+        let x137 = x28 * x136;
+        let x138 = -(x17 * x55);
+        let x139 = (x137 - x132 - x134 + m2 * (x138 + x115 * x36)) * x20;
+        let x140 = x5 * x42;
+        let x141 = J2 * x140;
+        let x142 = x3 * J1;
+        let x143 = x142 * x35;
+        let x144 = x20 * Izz;
+        let x145 = x144 + x92;
+        let x146 = x28 * x145;
+        let x147 = x22 * x58;
+        let x148 = -x120 - x122;
+        let x149 = (x141 + x143 - x146 + (x147 + x148 * x31) * m1) * x25;
+        let x150 = (x139 - x130) + x149;
+        let x151 = x150 * x25;
+        let x152 = x30 * x128 + x151;
+        let x153 = x33 * x64 + x152;
+        let x154 = x33 * x26;
+        let x155 = x154 + x150;
+        let x156 = x17 * x17;
+        let x157 = x105 * x115;
+        let x158 = x123 * x106;
+        let x159 = x22 * x22;
+        let x160 = x159;
+        let x161 = x9 * x20;
+        let x162 = x3 * x25;
+        let x163 = m2 * (x156 * x106 + x157) + (x158 + x105 * x160) * m1
+            + x20 * (x161 * x131 + x145) + J2 * (x105 * (x6 + 1.0) + (x8 + 1.0) * x106)
+            + (x136 + x142 * x162) * x25;
+        let x164 = x163 * x25;
+        let x165 = x30 * x155 + x164;
+        let x166 = x165 * x25;
+        let x167 = x165 * x20;
+        let x168 = x153 * x65 - x167;
+        let x169 = x20 * x25;
         let x170 = 0.0;
         let x171 = x169 * x170;
-        let x172 = x104 * x11;
+        let x172 = x111 * x11;
         let x173 = x172 + J2;
-        let x174 = x155 * x173;
-        let x175 = x34 * d;
-        let x176 = x69 * x29;
+        let x174 = x107 * x173;
+        let x175 = x33 * d;
+        let x176 = x69 * x28;
         let x177 = x7 * x176 - x76 * x9;
-        let x178 = x177 * x106;
+        let x178 = x177 * x113;
         let x179 = x7 * x76 + x9 * x176;
-        let x180 = x104 * x179;
+        let x180 = x111 * x179;
         let x181 = x180 - x178;
         let x182 = x5 * x176 + x74 * x3;
-        let x183 = x182 * x122;
+        let x183 = x182 * x121;
         let x184 = x5 * x74 - x3 * x176;
-        let x185 = x184 * x120;
-        let x186 = m2 * (x32 * x181 - x74 * x55)
-            + (x37 * (x183 + x185) - x76 * x58) * m1;
+        let x185 = x184 * x119;
+        let x186 = m2 * (x31 * x181 - x74 * x55)
+            + (x36 * (x183 + x185) - x76 * x58) * m1;
         let x187 = x175 * x77 + x186;
-        let x188 = x20 * x16;
-        let x189 = x181 * x15;
+        let x188 = x17 * x20;
+        let x189 = x181 * x25;
         let x190 = -x183 - x185;
-        let x191 = x190 * x16;
-        let x192 = -(x24 * x15);
+        let x191 = x190 * x20;
+        let x192 = -(x22 * x25);
         let x193 = m2 * (x74 * x188 + x189) + (x191 + x76 * x192) * m1;
-        let x194 = x193 * x15;
-        let x195 = x187 * x31 + x194;
-        let x196 = x29 * x72;
+        let x194 = x193 * x25;
+        let x195 = x187 * x30 + x194;
+        let x196 = x28 * x72;
         let x197 = x7 * x196;
         let x198 = x197 - x9 * x83;
-        let x199 = x198 * x106;
+        let x199 = x198 * x113;
         let x200 = x9 * x196;
         let x201 = x200 + x7 * x83;
-        let x202 = x104 * x201;
+        let x202 = x111 * x201;
         let x203 = x202 - x199;
-        let x204 = x203 * x15;
+        let x204 = x203 * x25;
         let x205 = x188 * x79;
         let x206 = x5 * x79;
         let x207 = x3 * x196;
         let x208 = x206 - x207;
-        let x209 = x120 * x208;
+        let x209 = x119 * x208;
         let x210 = x79 * x3;
         let x211 = x5 * x196;
         let x212 = x210 + x211;
-        let x213 = x212 * x122;
+        let x213 = x212 * x121;
         let x214 = -x209 - x213;
-        let x215 = x16 * x214;
+        let x215 = x20 * x214;
         let x216 = m2 * (x204 + x205) + (x215 + x83 * x192) * m1;
-        let x217 = x216 * x15;
+        let x217 = x216 * x25;
         let x218 = x79 * x55;
-        let x219 = m1 * (x37 * (x209 + x213) - x58 * x83) + m2 * (x32 * x203 - x218);
+        let x219 = m1 * (x36 * (x209 + x213) - x58 * x83) + m2 * (x31 * x203 - x218);
         let x220 = x219 + x175 * x84;
-        let x221 = x217 + x31 * x220;
-        let x222 = x104 * x46;
-        let x223 = x39 * x106;
+        let x221 = x217 + x30 * x220;
+        let x222 = x111 * x46;
+        let x223 = x38 * x113;
         let x224 = x222 + x223;
-        let x225 = x42 * x120;
-        let x226 = x36 * x122;
+        let x225 = x42 * x119;
+        let x226 = x35 * x121;
         let x227 = -x225 - x226;
-        let x228 = m2 * (x32 * x188 + x224 * x15) + (x192 * x37 + x16 * x227) * m1;
-        let x229 = x228 * x15;
+        let x228 = m2 * (x31 * x188 + x224 * x25) + (x192 * x36 + x20 * x227) * m1;
+        let x229 = x228 * x25;
         let x230 = x89 * x70 + x229;
-        let x231 = x16 * x138;
-        let x232 = x127 * x65 - x231;
-        let x233 = x126 * x16;
-        let x234 = x163 * x65;
-        let x235 = x234 - x233 + x34 * x68;
-        let x236 = x0 * x120;
+        let x231 = x20 * x163;
+        let x232 = x155 * x65 - x231;
+        let x233 = x150 * x20;
+        let x234 = x128 * x65;
+        let x235 = x234 - x233 + x33 * x68;
+        let x236 = x0 * x119;
         let x237 = J2 + x236;
         let x238 = -J2 - x236;
-        let x239 = x130 * x237 - x238 * x129;
-        let x240 = x16 * x193;
+        let x239 = x105 * x237 - x238 * x106;
+        let x240 = x20 * x193;
         let x241 = x187 * x65 - x240;
-        let x242 = x216 * x16;
+        let x242 = x216 * x20;
         let x243 = x220 * x65 - x242;
-        let x244 = x228 * x16;
+        let x244 = x228 * x20;
         let x245 = x75 * x89 - x244;
         let x246 = x184 * x0;
         let x247 = x0 * x208;
@@ -4052,997 +4061,994 @@ pub mod maggi {
         let x250 = x11 * x201;
         let x251 = x11 * x46;
         let x252 = m2 + m0 + m1;
-        let x253 = x29 * psi_dot;
-        let x254 = x253 * x16;
-        let x255 = theta_dot * x15;
-        let x256 = x254 + x255;
-        let x257 = x34 * psi_dot;
-        let x258 = phi_dot - x257;
-        let x259 = Ixz * x258;
-        let x260 = Iyz * x256;
-        let x261 = x253 * x15;
-        let x262 = theta_dot * x16;
-        let x263 = x261 - x262;
-        let x264 = x263 * Izz;
-        let x265 = (-x259 - x260) + x264;
-        let x266 = x256 * x265;
-        let x267 = x253 * phi_dot;
-        let x268 = x16 * x267;
-        let x269 = phi_dot + x257;
-        let x270 = x269 * x255;
-        let x271 = -x268 - x270;
-        let x272 = x271 * Ixz;
-        let x273 = 3.0 * theta;
-        let x274 = x30 * f64::cos(x273);
-        let x275 = 0.25 - 0.25 * x274;
-        let x276 = x34 * phi_dot;
-        let x277 = x253 + (x275 * psi_dot + x276) * x30;
-        let x278 = 2.0 * theta;
-        let x279 = f64::sin(x278);
-        let x280 = x30 * psi_dot * x279;
-        let x281 = 0.5 * x280 + phi_dot;
-        let x282 = x281 * x30;
-        let x283 = x253 * Ixx;
-        let x284 = (x283 - x282 * x61) - x14 * x277;
-        let x285 = x253 * theta_dot;
-        let x286 = x285 + gamma2_dot * x263;
-        let x287 = x268 + x270;
-        let x288 = gamma2_dot * x258;
-        let x289 = x287 - x288;
-        let x290 = x289 * x9 - x7 * x286;
-        let x291 = x262 * x269;
-        let x292 = x267 * x15;
-        let x293 = x292 - x291;
-        let x294 = gamma1_dot * x258;
-        let x295 = x293 - x294;
-        let x296 = x256 * gamma1_dot;
-        let x297 = x295 * x3 + x5 * (x296 - x285);
-        let x298 = x256 * x3;
-        let x299 = x5 * x258;
-        let x300 = x298 + x299;
-        let x301 = x17 * x300;
-        let x302 = x263 + gamma1_dot;
-        let x303 = x285 - x296;
-        let x304 = x5 * x295 + x303 * x3;
-        let x305 = x301 * x302 + J2 * x304;
-        let x306 = x263 * x3;
-        let x307 = x5 * x256 - x3 * x258;
-        let x308 = x119 * x263;
-        let x309 = d * x302;
-        let x310 = x308 + x309;
-        let x311 = x310 * x300 - a_ * (x306 * x307 + x293) - d * x304;
-        let x312 = x305 - x0 * x311;
-        let x313 = Ixy * x258;
-        let x314 = Iyz * x263;
-        let x315 = Iyy * x256 - x313 - x314;
-        let x316 = x263 * x315;
-        let x317 = Ixy * x293;
-        let x318 = x263 * x9;
-        let x319 = x7 * x258 - x318;
-        let x320 = gamma2_dot + x256;
-        let x321 = d * x320;
-        let x322 = x256 * x103;
-        let x323 = x321 + x322;
-        let x324 = x9 * x286;
-        let x325 = x7 * (x288 + x271) - x324;
-        let x326 = x7 * x263 + x9 * x258;
-        let x327 = x9 * x326;
-        let x328 = a_ * (x287 - x256 * x327) - x319 * x323 - x325 * d;
-        let x329 = J2 - J1;
-        let x330 = x329 * x319;
-        let x331 = x320 * x330;
-        let x332 = J2 * x325;
-        let x333 = (x11 * x328 - x331) - x332;
-        let x334 = (((x272 - x266) + theta_dot * x284)
-            + (x312 * x3 - (x7 * x290 + x5 * x297) * J1))
-            + ((x316 + x317) + (x9 * x333 + x267 * x27));
-        let x335 = x282 * x162;
-        let x336 = x61 * x277;
-        let x337 = x331 + x332;
-        let x338 = a_ * x263;
-        let x339 = d * x326;
-        let x340 = x338 + x339;
-        let x341 = x340 * x326;
-        let x342 = x9 * x293;
-        let x343 = x7 * x256;
-        let x344 = x323 * x320 + x341 - a_ * (x342 + gamma2_dot * x343);
-        let x345 = x344 * x106;
-        let x346 = x7 * x293;
-        let x347 = a_ * (x256 * x256 * x9 + x346) + (d * x293 - x340 * x319);
-        let x348 = x347 * x104 - x345;
-        let x349 = psi_dot * phi_dot;
-        let x350 = x17 * x319;
-        let x351 = x326 * x350;
-        let x352 = x265 * x258;
-        let x353 = Iyy * x293;
-        let x354 = J2 * x293;
-        let x355 = Ixy * x285;
-        let x356 = ((x352 - x353) - x351) + (-x354 - x355);
-        let x357 = Ixx * x258 - x263 * Ixz - Ixy * x256;
-        let x358 = x357 * x263;
-        let x359 = Iyz * x271;
-        let x360 = x356 + (x359 - x358);
-        let x361 = x271 * Izz;
-        let x362 = J2 * x271;
-        let x363 = x285 * Ixz;
-        let x364 = x315 * x258;
-        let x365 = x329 * x300;
-        let x366 = x365 * x307;
-        let x367 = Iyz * x293;
-        let x368 = x357 * x256;
-        let x369 = x3 * x271;
-        let x370 = x5 * x263;
-        let x371 = x369 + gamma1_dot * x370;
-        let x372 = a_ * x371 - x310 * x302;
-        let x373 = d * x307;
-        let x374 = a_ * x256;
-        let x375 = x373 + x374;
-        let x376 = x375 * x307;
-        let x377 = x372 - x376;
-        let x378 = x377 * x122;
-        let x379 = x5 * x271;
-        let x380 = a_ * (x263 * x306 + x379);
-        let x381 = x375 * x300;
-        let x382 = d * x271;
-        let x383 = x381 + x382;
-        let x384 = x380 + x383;
-        let x385 = x266 - x316 - x272 - x317 - x285 * Ixx;
-        let x386 = ((-(x335 + x336) * theta_dot - x46 * x337)
-            + ((x349 * x126 + x360 * x16
-                + (x367 - x361 - x362 - x363 - x364 - x366 + x368) * x15) * x29
-                - m2 * (x348 * x32 - x328 * x55)))
-            + ((-x42 * x305 - (x36 * x297 - x39 * x290) * J1)
-                + (x34 * x385 - m1 * ((x378 + x120 * x384) * x37 - x58 * x311)));
-        let x387 = x34 * x334 + x386;
-        let x388 = x5 * x305;
-        let x389 = -x112 * x297 - x388;
-        let x390 = -(x120 * x384);
-        let x391 = x390 - x378;
-        let x392 = x391 * x16;
-        let x393 = x282 * x126;
-        let x394 = x277 * x27;
-        let x395 = x348 * x15;
-        let x396 = (x361 - x367) + ((x364 - x368) + (x363 + x366));
-        let x397 = x7 * x337 + x396;
-        let x398 = x397 - x290 * x94;
-        let x399 = (x360 + x389) * x15 + x267 * x138 - (x192 * x311 + x392) * m1
-            - theta_dot * (x393 + x394) - m2 * (x188 * x328 + x395)
-            + (x362 + x398) * x16;
-        let x400 = x399 * x15;
-        let x401 = x16 * x399;
-        let x402 = x281 * x255;
-        let x403 = x281 * x262;
-        let x404 = x292 - x403;
-        let x405 = d * x277;
-        let x406 = x282 * x186 + x405 * x77;
-        let x407 = x267 * x193 - (x177 * x344 + x74 * x328 + x347 * x179) * m2
-            - theta_dot * x406 - m1 * (x76 * x311 + x184 * x384 + x377 * x182);
-        let x408 = x282 * x219 + x405 * x84;
-        let x409 = x79 * x328;
-        let x410 = a_ * theta_dot;
-        let x411 = x34 * theta_dot;
-        let x412 = x410 * x411;
-        let x413 = phi_dot * phi_dot;
-        let x414 = x75 + x32;
-        let x415 = x32 - x75;
-        let x416 = x3 * x415;
-        let x417 = x75 - x32;
-        let x418 = x3 * x417;
-        let x419 = -(0.5 * x414 * x3) + (0.25 * x418 - 0.25 * x416);
-        let x420 = x414 * x3;
-        let x421 = -0.5 * x420 - 0.5 * x418;
-        let x422 = x37 - x70;
-        let x423 = 0.5 * x420 + x5 * x422;
-        let x424 = x70 + x37;
-        let x425 = x5 * x424;
-        let x426 = x421 - 0.5 * x416 + x423 + x425;
-        let x427 = x426 * phi_dot;
-        let x428 = x35 + x419;
-        let x429 = x421 - 0.5 * x420 + 0.5 * x416;
-        let x430 = 0.5 * x418 - 0.5 * x420;
-        let x431 = x3 * x29;
-        let x432 = x430 + 0.5 * x416 + x423 - x425 + 2.0 * x431;
-        let x433 = phi_dot * x429 + x432 * gamma1_dot;
-        let x434 = x9 * x15;
-        let x435 = x7 * x16;
-        let x436 = x435 - x434;
-        let x437 = x29 * x436;
-        let x438 = x434 - x435;
-        let x439 = x29 * x438;
-        let x440 = x434 + x435;
-        let x441 = (0.25 * x437 - 0.25 * x439) + -(0.5 * x440 * x29);
-        let x442 = x441 - x38;
-        let x443 = x7 * x15;
-        let x444 = x443 - x136;
-        let x445 = x34 * x444;
-        let x446 = x440 * x29;
-        let x447 = 0.5 * x437 - 0.5 * x446;
-        let x448 = x443 + x136;
-        let x449 = 0.5 * x439 + x34 * x448;
-        let x450 = 0.5 * x446 - x445 + x447 + x449;
-        let x451 = x450 * phi_dot;
-        let x452 = 0.5 * x439 - 0.5 * x437 - x446;
-        let x453 = x29 * x9;
-        let x454 = 0.5 * x437 + x445 + 2.0 * x453 + x449;
-        let x455 = phi_dot * x452 - theta_dot * x454;
-        let x456 = x405 * theta_dot;
-        let x457 = -x16;
-        let x458 = x34 * x31;
-        let x459 = x34 * x65;
-        let x460 = x282 * theta_dot;
-        let x461 = theta_dot * x277;
-        let x462 = x81 - x82;
-        let x463 = x462 * x59 + x80;
-        let x464 = x463 * d;
-        let x465 = x7 * x462 - x200;
-        let x466 = x462 * x9 + x197;
-        let x467 = x465 * x104 + x466 * x106;
-        let x468 = -x210 - x211;
-        let x469 = x468 * x122;
-        let x470 = x207 - x206;
-        let x471 = x120 * x470;
-        let x472 = m2 * (x467 * x15 - x205) + ((-x469 - x471) * x16 + x462 * x192) * m1;
-        let x473 = m2 * (x218 + x32 * x467) + ((x469 + x471) * x37 - x462 * x58) * m1;
-        let x474 = x463 * x175 + x473;
-        let x475 = x472 * x15 + x31 * x474;
-        let x476 = x474 * x65 - x472 * x16;
-        let x477 = x0 * x470;
-        let x478 = x465 * x11;
-        let x479 = x34 * x30;
-        let x480 = x431 - x5 * x70;
-        let x481 = a_ * x70 - d * x480;
-        let x482 = x453 + x7 * x75;
-        let x483 = d * x482 + a_ * x75;
-        let x484 = x7 * x29;
-        let x485 = x75 * x9 - x484;
-        let x486 = x5 * x29;
-        let x487 = x3 * x70 + x486;
-        let x488 = Ixx * x29;
-        let x489 = x34 * x49;
-        let x490 = x489 - x488;
-        let x491 = ((x481 * x59 - x52 * x483) * d + (x7 * x485 - x5 * x487) * J1)
-            + (x490 + (-x3 * x480 - x9 * x482) * J2);
-        let x492 = x14 + (x63 * x479 + x491) * x30;
-        let x493 = x492 * x16;
-        let x494 = x492 * x15;
-        let x495 = x89 * x176;
-        let x496 = x89 * x196;
-        let x497 = x86 - x87;
-        let x498 = x497 * x175;
-        let x499 = -x105 - x107;
-        let x500 = (x16
-            * (x485 * x94 - x34 * x100 + m2 * (x20 * x483 + x75 * x499) + x7 * J2 * x482)
-            - x92 * x29)
-            + (x34 * x116 - x112 * x487 + x5 * J2 * x480
-                + m1 * (x132 * x70 - x481 * x24)) * x15;
-        let x501 = x30 * x163;
+        let x253 = x28 * psi_dot;
+        let x254 = x253 * phi_dot;
+        let x255 = x33 * psi_dot;
+        let x256 = phi_dot - x255;
+        let x257 = x253 * x25;
+        let x258 = theta_dot * x20;
+        let x259 = x257 - x258;
+        let x260 = x259 * x9;
+        let x261 = x7 * x256 - x260;
+        let x262 = x253 * x20;
+        let x263 = theta_dot * x25;
+        let x264 = x262 + x263;
+        let x265 = gamma2_dot + x264;
+        let x266 = d * x265;
+        let x267 = x264 * x110;
+        let x268 = x266 + x267;
+        let x269 = x253 * theta_dot;
+        let x270 = x269 + gamma2_dot * x259;
+        let x271 = x9 * x270;
+        let x272 = gamma2_dot * x256;
+        let x273 = x20 * x254;
+        let x274 = phi_dot + x255;
+        let x275 = x274 * x263;
+        let x276 = -x273 - x275;
+        let x277 = x7 * (x272 + x276) - x271;
+        let x278 = x273 + x275;
+        let x279 = x7 * x259 + x9 * x256;
+        let x280 = x9 * x279;
+        let x281 = a_ * (x278 - x264 * x280) - x261 * x268 - x277 * d;
+        let x282 = J2 - J1;
+        let x283 = x282 * x265;
+        let x284 = x283 * x261;
+        let x285 = J2 * x277;
+        let x286 = (x11 * x281 - x284) - x285;
+        let x287 = Ixy * x256;
+        let x288 = Iyz * x259;
+        let x289 = Iyy * x264 - x287 - x288;
+        let x290 = x259 * x289;
+        let x291 = -(x20 * x274);
+        let x292 = theta_dot * x291;
+        let x293 = x254 * x25;
+        let x294 = x292 + x293;
+        let x295 = Ixy * x294;
+        let x296 = gamma1_dot * x256;
+        let x297 = x294 - x296;
+        let x298 = x264 * gamma1_dot;
+        let x299 = x269 - x298;
+        let x300 = x5 * x297 + x299 * x3;
+        let x301 = x264 * x3;
+        let x302 = x5 * x256;
+        let x303 = x301 + x302;
+        let x304 = x15 * x303;
+        let x305 = x259 + gamma1_dot;
+        let x306 = J2 * x300 + x304 * x305;
+        let x307 = x259 * x3;
+        let x308 = x5 * x264 - x3 * x256;
+        let x309 = x118 * x259;
+        let x310 = d * x305;
+        let x311 = x309 + x310;
+        let x312 = x311 * x303 - d * x300 - a_ * (x307 * x308 + x294);
+        let x313 = x306 - x312 * x0;
+        let x314 = x278 - x272;
+        let x315 = x314 * x9 - x7 * x270;
+        let x316 = x3 * x297 + x5 * (x298 - x269);
+        let x317 = 2.0 * theta;
+        let x318 = f64::sin(x317);
+        let x319 = x29 * psi_dot * x318;
+        let x320 = 0.5 * x319 + phi_dot;
+        let x321 = x320 * x29;
+        let x322 = x253 * Ixx;
+        let x323 = 3.0 * theta;
+        let x324 = x29 * f64::cos(x323);
+        let x325 = 0.25 - 0.25 * x324;
+        let x326 = x33 * phi_dot;
+        let x327 = x253 + (x325 * psi_dot + x326) * x29;
+        let x328 = (x322 - x61 * x321) - x14 * x327;
+        let x329 = Ixz * x256;
+        let x330 = Iyz * x264;
+        let x331 = x259 * Izz;
+        let x332 = (-x329 - x330) + x331;
+        let x333 = x264 * x332;
+        let x334 = x276 * Ixz;
+        let x335 = ((x254 * x26 + x9 * x286) + (x290 + x295))
+            + ((x3 * x313 - (x7 * x315 + x5 * x316) * J1)
+                + (theta_dot * x328 + (x334 - x333)));
+        let x336 = x3 * x276;
+        let x337 = x5 * x259;
+        let x338 = x336 + gamma1_dot * x337;
+        let x339 = a_ * x338 - x311 * x305;
+        let x340 = d * x308;
+        let x341 = a_ * x264;
+        let x342 = x340 + x341;
+        let x343 = x342 * x308;
+        let x344 = x339 - x343;
+        let x345 = x344 * x121;
+        let x346 = x5 * x276;
+        let x347 = a_ * (x259 * x307 + x346);
+        let x348 = x342 * x303;
+        let x349 = d * x276;
+        let x350 = x348 + x349;
+        let x351 = x347 + x350;
+        let x352 = x333 - x290 - x295 - x334 - x269 * Ixx;
+        let x353 = x285 + x284;
+        let x354 = x321 * x126;
+        let x355 = x61 * x327;
+        let x356 = psi_dot * phi_dot;
+        let x357 = x332 * x256;
+        let x358 = Iyy * x294;
+        let x359 = x261 * x279;
+        let x360 = x15 * x359;
+        let x361 = x294 * J2;
+        let x362 = Ixy * x269;
+        let x363 = ((x357 - x358) - x360) + (-x361 - x362);
+        let x364 = Ixx * x256 - x259 * Ixz - Ixy * x264;
+        let x365 = x364 * x259;
+        let x366 = Iyz * x276;
+        let x367 = x363 + (x366 - x365);
+        let x368 = x276 * Izz;
+        let x369 = Iyz * x294;
+        let x370 = J2 * x276;
+        let x371 = x269 * Ixz;
+        let x372 = x289 * x256;
+        let x373 = x282 * x303;
+        let x374 = x373 * x308;
+        let x375 = x364 * x264;
+        let x376 = x7 * x264;
+        let x377 = x294 * x9;
+        let x378 = a_ * x259;
+        let x379 = d * x279;
+        let x380 = x378 + x379;
+        let x381 = x380 * x279;
+        let x382 = x268 * x265 - a_ * (gamma2_dot * x376 + x377) + x381;
+        let x383 = x382 * x113;
+        let x384 = x7 * x294;
+        let x385 = (x294 * d - x380 * x261) + a_ * (x384 + x264 * x264 * x9);
+        let x386 = x111 * x385 - x383;
+        let x387 = ((-(x35 * x316 - x38 * x315) * J1 - x42 * x306)
+            + (x33 * x352 - ((x345 + x119 * x351) * x36 - x312 * x58) * m1))
+            + ((-x46 * x353 - theta_dot * (x354 + x355))
+                + (x28
+                    * (x356 * x150 + x367 * x20
+                        + (x369 - x368 - x370 - x371 - x372 - x374 + x375) * x25)
+                    - (x386 * x31 - x281 * x55) * m2));
+        let x388 = x33 * x335 + x387;
+        let x389 = x386 * x25;
+        let x390 = (x368 - x369) + ((x372 - x375) + (x371 + x374));
+        let x391 = x7 * x353 + x390;
+        let x392 = x391 - x315 * x131;
+        let x393 = x26 * x327;
+        let x394 = x321 * x150;
+        let x395 = x5 * x306;
+        let x396 = -x395 - x142 * x316;
+        let x397 = -(x119 * x351);
+        let x398 = x397 - x345;
+        let x399 = x398 * x20;
+        let x400 = x254 * x163 - m2 * (x389 + x188 * x281) + x20 * (x370 + x392)
+            - theta_dot * (x393 + x394) + (x367 + x396) * x25
+            - m1 * (x312 * x192 + x399);
+        let x401 = x400 * x25;
+        let x402 = x400 * x20;
+        let x403 = x320 * x263;
+        let x404 = x320 * x258;
+        let x405 = x293 - x404;
+        let x406 = d * x327;
+        let x407 = x321 * x186 + x406 * x77;
+        let x408 = x254 * x193 - theta_dot * x407
+            - m2 * (x385 * x179 + x177 * x382 + x74 * x281)
+            - m1 * (x312 * x76 + x184 * x351 + x344 * x182);
+        let x409 = x79 * x281;
+        let x410 = x321 * x219 + x406 * x84;
+        let x411 = a_ * theta_dot;
+        let x412 = x411 * theta_dot;
+        let x413 = x33 * x412;
+        let x414 = phi_dot * phi_dot;
+        let x415 = x75 + x31;
+        let x416 = x31 - x75;
+        let x417 = x3 * x416;
+        let x418 = x75 - x31;
+        let x419 = x3 * x418;
+        let x420 = -(0.5 * x415 * x3) + (0.25 * x419 - 0.25 * x417);
+        let x421 = x415 * x3;
+        let x422 = -0.5 * x421 - 0.5 * x419;
+        let x423 = x36 - x70;
+        let x424 = 0.5 * x421 + x5 * x423;
+        let x425 = x70 + x36;
+        let x426 = x5 * x425;
+        let x427 = x422 - 0.5 * x417 + x424 + x426;
+        let x428 = x427 * phi_dot;
+        let x429 = x34 + x420;
+        let x430 = x422 - 0.5 * x421 + 0.5 * x417;
+        let x431 = 0.5 * x419 - 0.5 * x421;
+        let x432 = x3 * x28;
+        let x433 = x431 + 0.5 * x417 + x424 - x426 + 2.0 * x432;
+        let x434 = phi_dot * x430 + x433 * gamma1_dot;
+        let x435 = x9 * x25;
+        let x436 = x7 * x20;
+        let x437 = x435 + x436;
+        let x438 = x435 - x436;
+        let x439 = x438 * x28;
+        let x440 = x436 - x435;
+        let x441 = x28 * x440;
+        let x442 = -(0.5 * x437 * x28) + (0.25 * x441 - 0.25 * x439);
+        let x443 = x442 - x37;
+        let x444 = x437 * x28;
+        let x445 = 0.5 * x439 - x444 - 0.5 * x441;
+        let x446 = x7 * x25;
+        let x447 = x161 + x446;
+        let x448 = x33 * x447 + 0.5 * x439;
+        let x449 = x446 - x161;
+        let x450 = x33 * x449;
+        let x451 = x28 * x9;
+        let x452 = x448 + x450 + 2.0 * x451 + 0.5 * x441;
+        let x453 = phi_dot * x445 - x452 * theta_dot;
+        let x454 = 0.5 * x441 - 0.5 * x444;
+        let x455 = x448 - x450 + 0.5 * x444 + x454;
+        let x456 = x455 * phi_dot;
+        let x457 = x406 * x88;
+        let x458 = -x20;
+        let x459 = x33 * x30;
+        let x460 = x33 * x65;
+        let x461 = x321 * theta_dot;
+        let x462 = theta_dot * x327;
+        let x463 = x81 - x82;
+        let x464 = x463 * x59 + x80;
+        let x465 = x464 * d;
+        let x466 = x7 * x463 - x200;
+        let x467 = x463 * x9 + x197;
+        let x468 = x466 * x111 + x467 * x113;
+        let x469 = -x210 - x211;
+        let x470 = x469 * x121;
+        let x471 = x207 - x206;
+        let x472 = x119 * x471;
+        let x473 = m2 * (x468 * x25 - x205) + ((-x470 - x472) * x20 + x463 * x192) * m1;
+        let x474 = m2 * (x218 + x31 * x468) + ((x470 + x472) * x36 - x463 * x58) * m1;
+        let x475 = x464 * x175 + x474;
+        let x476 = x473 * x25 + x30 * x475;
+        let x477 = x475 * x65 - x473 * x20;
+        let x478 = x0 * x471;
+        let x479 = x466 * x11;
+        let x480 = Ixx * x28;
+        let x481 = x33 * x49;
+        let x482 = x481 - x480;
+        let x483 = x432 - x5 * x70;
+        let x484 = x451 + x7 * x75;
+        let x485 = x7 * x28;
+        let x486 = x75 * x9 - x485;
+        let x487 = x5 * x28;
+        let x488 = x3 * x70 + x487;
+        let x489 = a_ * x70 - d * x483;
+        let x490 = a_ * x75 + x484 * d;
+        let x491 = (x482 + J2 * (-x3 * x483 - x484 * x9))
+            + ((x7 * x486 - x5 * x488) * J1 + d * (x489 * x59 - x52 * x490));
+        let x492 = x33 * x29;
+        let x493 = x14 + x29 * (x491 + x492 * x63);
+        let x494 = x20 * x493;
+        let x495 = x493 * x25;
+        let x496 = x89 * x176;
+        let x497 = x89 * x196;
+        let x498 = x86 - x87;
+        let x499 = x498 * x175;
+        let x500 = -2.0 * x120 - 2.0 * x122;
+        let x501 = -2.0 * x112 - 2.0 * x114;
         let x502 = x48 + x50;
-        let x503 = Ixy * x29 + x34 * (x115 - x144);
-        let x504 = x34 * (x99 - x148) + x29 * Ixz;
-        let x505 = -2.0 * x121 - 2.0 * x123;
-        let x506 = -2.0 * x105 - 2.0 * x107;
-        let x507 = (x34
-            * (x488 - x147 - (2.0 * x130 + 2.0 * x129) * J2 * x29 - x153 - x489)
-            + (x502 + x16 * x503 + x504 * x15) * x29)
-            + ((m1 * (x505 * x75 * x37 - 2.0 * (x481 * x58))
-                + (-2.0 * (x36 * x487) - 2.0 * (x39 * x485)) * J1)
-                + (J2 * (2.0 * (x42 * x480) - 2.0 * (x46 * x482))
-                    + m2 * (x32 * x506 * x70 - 2.0 * (x483 * x55))));
-        let x508 = x61 + (x34 * (x501 + x491) + x507) * x30;
-        let x509 = x64 + x30 * (x500 * x15 + x16 * x508 + x34 * (x166 * x30 + x493));
-        let x510 = x30 * (x500 + x479 * x127) + x27;
-        let x511 = x509 * x15 - x129 * x510;
-        let x512 = x170 * x65;
-        let x513 = x512 * x70;
-        let x514 = x70 * x170;
-        let x515 = x31 * x514;
-        let x516 = x178 - x180;
-        let x517 = x224 - x53 - x54;
-        let x518 = x225 - x56 + x226 - x57;
-        let x519 = m2 * ((x34 * x516 + x517 * x176) * x16 + x74 * x483)
-            + ((x518 * x176 + x34 * x190) * x15 + x481 * x76) * m1;
-        let x520 = x30 * x30;
-        let x521 = x30 * x519 + (x89 * x69 + x187 * x520) * x34 + x78;
-        let x522 = x521 * x16 + x69 * x229;
-        let x523 = x199 - x202;
-        let x524 = ((x34 * x523 + x517 * x196) * x16 + x79 * x483) * m2
-            + (x481 * x83 + (x34 * x214 + x518 * x196) * x15) * m1;
-        let x525 = x85 + x30 * x524 + x34 * (x89 * x72 + x220 * x520);
-        let x526 = x229 * x72 + x525 * x16;
-        let x527 = m2 * ((-x485 * x106 - x104 * x482) * x15 - x188 * x70)
-            + ((x487 * x122 - x480 * x120) * x16 - x75 * x192) * m1;
-        let x528 = x32 * x89 + x527 * x15;
-        let x529 = x512 * x75;
-        let x530 = x514 * x65;
-        let x531 = x521 * x15 - x69 * x244;
-        let x532 = x525 * x15 - x244 * x72;
-        let x533 = x89 * x37 - x16 * x527;
-        let x534 = x69 * x248;
-        let x535 = x248 * x72;
-        let x536 = x0 * x480;
-        let x537 = x69 * x251;
-        let x538 = x251 * x72;
-        let x539 = -(x11 * x482);
-        let x540 = x319 * x70;
-        let x541 = x320 * x485;
-        let x542 = (x540 - x541) * J1;
-        let x543 = x70 * phi_dot;
-        let x544 = theta_dot * x37;
-        let x545 = x543 - x544;
-        let x546 = gamma2_dot * x29;
-        let x547 = gamma2_dot * x15 + theta_dot;
-        let x548 = x7 * (x545 - x546) + x44 * x547;
-        let x549 = J2 * (x541 - x540 + x548);
-        let x550 = x544 - x543;
-        let x551 = a_ * (x550 + x9 * (x256 * x482 + x70 * x326)) - x323 * x485 - d * x548
-            + x104 * x540;
-        let x552 = x75 * x300;
-        let x553 = x302 * x487;
-        let x554 = gamma1_dot * x16;
-        let x555 = x554 - theta_dot;
-        let x556 = theta_dot * x32;
-        let x557 = x75 * phi_dot;
-        let x558 = x29 * gamma1_dot - x556 - x557;
-        let x559 = x41 * x555 + x5 * x558;
-        let x560 = (-x552 - x553) * J1 + J2 * (x559 + x552 + x553);
-        let x561 = x556 + x557;
-        let x562 = a_ * (x561 + (x75 * x307 - x263 * x480) * x3) - x310 * x487 - x559 * d
-            - x120 * x552;
-        let x563 = Ixz * x545;
-        let x564 = x504 * x256;
-        let x565 = x263 * x503;
-        let x566 = theta_dot - x554;
-        let x567 = x566 * x35 + x3 * x558;
-        let x568 = x9 * (x550 + x546) + x38 * x547;
-        let x569 = Ixy * x561;
-        let x570 = x315 * x15;
-        let x571 = x265 * x16;
-        let x572 = theta_dot * Ixx;
-        let x573 = (x571 - x572) - x570;
-        let x574 = phi_dot * x27;
-        let x575 = psi_dot * f64::cos(x278) + x34 * (x280 + phi_dot);
-        let x576 = x575 * x30;
-        let x577 = x258
-            + (0.75 * (psi_dot * f64::sin(x273))
-                + x34 * ((0.25 - 0.5 * x274) * psi_dot + x276)) * x520;
-        let x578 = psi_dot
-            * ((x11 * x551 - x542 - x549) * x9 + x3 * (x560 - x0 * x562) + x563 - x564
-                + x565 - (x5 * x567 + x7 * x568) * J1 - x569 + x34 * (x573 - x574))
-            + (-(x491 * x281 + x61 * x576) * x30 - x14 * x577) * theta_dot;
-        let x579 = 2.0 * x262 - 2.0 * x261;
-        let x580 = d * x545 - x375 * x487 + a_ * (x5 * x545 + x75 * x3 * x579)
-            - x481 * x300;
-        let x581 = x119 * gamma1_dot;
-        let x582 = x302 * x120;
-        let x583 = x310 - x581 + x582;
-        let x584 = x122 * x545 + x481 * x307 + x75 * x583 - x480 * x375;
-        let x585 = x357 * x15;
-        let x586 = Ixy * theta_dot + x585;
-        let x587 = x485 * x326 - x319 * x482;
-        let x588 = J2 * (x587 + x561);
-        let x589 = x587 * J1;
-        let x590 = ((Iyy * x561 - x263 * x490) + (x504 * x258 + Iyz * x545))
-            + ((x34 * x586 - x265 * x29) + (x588 - x589));
-        let x591 = x503 * x258;
-        let x592 = theta_dot * Ixz;
-        let x593 = x357 * x16;
-        let x594 = x34 * (x593 - x592);
-        let x595 = Iyz * x561;
-        let x596 = x545 * Izz;
-        let x597 = x29 * x315;
-        let x598 = x487 * x307;
-        let x599 = x480 * x300;
-        let x600 = x599 - x598;
-        let x601 = x600 * J1;
-        let x602 = x542 + x549;
-        let x603 = J2 * (x600 + x545);
-        let x604 = x256 * x490;
-        let x605 = gamma2_dot * x103;
-        let x606 = x104 * x320;
-        let x607 = x70 * (x605 - x321 - x322 - x606) + x561 * x106 - x483 * x326
-            - x340 * x482;
-        let x608 = 2.0 * x254 + 2.0 * x255;
-        let x609 = a_ * (-x608 * x9 * x70 - x7 * x561) - x340 * x485 + x319 * x483
-            - d * x561;
-        let x610 = x104 * x609;
-        let x611 = (-x30 * (x126 * x576 + x500 * x281) - x577 * x27) * theta_dot
+        let x503 = Ixy * x28 + x33 * (x92 - x93);
+        let x504 = x33 * (x98 - x97) + x28 * Ixz;
+        let x505 = (((-2.0 * (x38 * x486) - 2.0 * (x35 * x488)) * J1
+            + m1 * (x500 * x75 * x36 - 2.0 * (x489 * x58)))
+            + (J2 * (2.0 * (x42 * x483) - 2.0 * (x484 * x46))
+                + m2 * (x31 * x501 * x70 - 2.0 * (x490 * x55))))
+            + (x33 * (x480 - x96 - (2.0 * x105 + 2.0 * x106) * J2 * x28 - x103 - x481)
+                + (x502 + x20 * x503 + x504 * x25) * x28);
+        let x506 = x29 * x128;
+        let x507 = x61 + x29 * (x505 + x33 * (x491 + x506));
+        let x508 = -x112 - x114;
+        let x509 = ((m2 * (x17 * x490 + x75 * x508) + x7 * x484 * J2 - x33 * x136
+            + x486 * x131) * x20 - x129 * x28)
+            + (x33 * x145 - x142 * x488 + x5 * J2 * x483
+                + m1 * (x123 * x70 - x489 * x22)) * x25;
+        let x510 = x64 + x29 * (x507 * x20 + x509 * x25 + x33 * (x29 * x153 + x494));
+        let x511 = x29 * (x155 * x492 + x509) + x26;
+        let x512 = x510 * x25 - x106 * x511;
+        let x513 = x170 * x65;
+        let x514 = x513 * x70;
+        let x515 = x70 * x170;
+        let x516 = x30 * x515;
+        let x517 = x29 * x29;
+        let x518 = x178 - x180;
+        let x519 = x224 - x53 - x54;
+        let x520 = x225 - x56 + x226 - x57;
+        let x521 = m2 * ((x33 * x518 + x519 * x176) * x20 + x74 * x490)
+            + ((x520 * x176 + x33 * x190) * x25 + x489 * x76) * m1;
+        let x522 = (x89 * x69 + x187 * x517) * x33 + x29 * x521 + x78;
+        let x523 = x20 * x522 + x69 * x229;
+        let x524 = x199 - x202;
+        let x525 = (x489 * x83 + (x33 * x214 + x520 * x196) * x25) * m1
+            + m2 * ((x33 * x524 + x519 * x196) * x20 + x79 * x490);
+        let x526 = x85 + x29 * x525 + x33 * (x89 * x72 + x220 * x517);
+        let x527 = x526 * x20 + x229 * x72;
+        let x528 = m2 * ((-x111 * x484 - x486 * x113) * x25 - x188 * x70)
+            + ((x488 * x121 - x483 * x119) * x20 - x75 * x192) * m1;
+        let x529 = x528 * x25 + x31 * x89;
+        let x530 = x513 * x75;
+        let x531 = x515 * x65;
+        let x532 = x522 * x25 - x69 * x244;
+        let x533 = x526 * x25 - x244 * x72;
+        let x534 = x89 * x36 - x528 * x20;
+        let x535 = x69 * x248;
+        let x536 = x248 * x72;
+        let x537 = x0 * x483;
+        let x538 = x69 * x251;
+        let x539 = x251 * x72;
+        let x540 = -(x484 * x11);
+        let x541 = psi_dot * f64::cos(x317) + x33 * (x319 + phi_dot);
+        let x542 = x541 * x29;
+        let x543 = x256
+            + (0.75 * (psi_dot * f64::sin(x323))
+                + x33 * ((0.25 - 0.5 * x324) * psi_dot + x326)) * x517;
+        let x544 = x289 * x25;
+        let x545 = x332 * x20;
+        let x546 = theta_dot * Ixx;
+        let x547 = (x545 - x546) - x544;
+        let x548 = phi_dot * x26;
+        let x549 = x70 * phi_dot;
+        let x550 = theta_dot * x36;
+        let x551 = x549 - x550;
+        let x552 = x551 * Ixz;
+        let x553 = x75 * x303;
+        let x554 = x305 * x488;
+        let x555 = gamma1_dot * x20;
+        let x556 = x555 - theta_dot;
+        let x557 = theta_dot * x31;
+        let x558 = x75 * phi_dot;
+        let x559 = x28 * gamma1_dot - x557 - x558;
+        let x560 = x41 * x556 + x5 * x559;
+        let x561 = (-x553 - x554) * J1 + J2 * (x560 + x553 + x554);
+        let x562 = x557 + x558;
+        let x563 = a_ * (x562 + (x75 * x308 - x259 * x483) * x3) - x311 * x488 - x560 * d
+            - x119 * x553;
+        let x564 = x504 * x264;
+        let x565 = x259 * x503;
+        let x566 = Ixy * x562;
+        let x567 = theta_dot - x555;
+        let x568 = x567 * x34 + x3 * x559;
+        let x569 = x550 - x549;
+        let x570 = gamma2_dot * x28;
+        let x571 = gamma2_dot * x25 + theta_dot;
+        let x572 = (x569 + x570) * x9 + x37 * x571;
+        let x573 = x7 * (x551 - x570) + x44 * x571;
+        let x574 = x261 * x70;
+        let x575 = a_ * (x9 * (x70 * x279 + x484 * x264) + x569) - x268 * x486 - x573 * d
+            + x111 * x574;
+        let x576 = x486 * x265;
+        let x577 = (x576 + x573 - x574) * J2;
+        let x578 = (x574 - x576) * J1;
+        let x579 = theta_dot * (-x29 * (x491 * x320 + x61 * x542) - x14 * x543)
             + psi_dot
-                * ((x590 - x112 * x567 - x5 * x560) * x15
-                    - m1 * ((-x580 * x120 - x122 * x584) * x16 + x192 * x562)
-                    - x276 * x138
-                    + x16
-                        * (x591 + x594 + x595 + x596 - x597 - x568 * x94 - x601
-                            + x7 * x602 + x603 - x604)
-                    - m2 * (x551 * x188 + (x610 - x607 * x106) * x15));
-        let x612 = (x354 + x355) + (x351 + (x353 - x352));
-        let x613 = x126 * phi_dot;
-        let x614 = x570 + (x572 - x571);
-        let x615 = -(x347 * x104);
-        let x616 = x334
-            + (x482 * x337 + x34 * ((x362 + x396) * x15 + x16 * (x612 + x358 - x359))
-                - (x290 * x485 - x297 * x487) * J1
-                + (x34 * (x614 * x34 - x563 - x613 + x564 - x565 + x569) - x46 * x602
-                    - (x567 * x36 - x39 * x568) * J1
-                    + (x590 * x16
-                        + (x597 - x591 - x594 - x595 - x596 + x601 - x603 + x604) * x15
-                        + x500 * phi_dot) * x29 - x560 * x42) * psi_dot - x480 * x305
-                - m1
-                    * (x481 * x311 - x58 * psi_dot * x562
-                        + (x253 * x580 * x120 + x34 * x390
-                            + (x253 * x584 - x34 * x377) * x122) * x15)
-                + x34 * (x578 + x30 * x387)
-                + theta_dot
-                    * (-x491 * x277 - x30 * (x281 * x507 + x162 * x576) - x61 * x577)
+                * (x33 * (x547 - x548) + x552 + x3 * (x561 - x0 * x563) - x564 + x565
+                    - x566 - (x5 * x568 + x7 * x572) * J1
+                    + x9 * (x11 * x575 - x577 - x578));
+        let x580 = x577 + x578;
+        let x581 = x150 * phi_dot;
+        let x582 = x544 + (x546 - x545);
+        let x583 = x503 * x256;
+        let x584 = theta_dot * Ixz;
+        let x585 = x364 * x20;
+        let x586 = x33 * (x585 - x584);
+        let x587 = Iyz * x562;
+        let x588 = x28 * x289;
+        let x589 = x551 * Izz;
+        let x590 = x488 * x308;
+        let x591 = x483 * x303;
+        let x592 = x591 - x590;
+        let x593 = x592 * J1;
+        let x594 = (x592 + x551) * J2;
+        let x595 = x264 * x482;
+        let x596 = x364 * x25;
+        let x597 = Ixy * theta_dot + x596;
+        let x598 = x486 * x279 - x484 * x261;
+        let x599 = (x598 + x562) * J2;
+        let x600 = x598 * J1;
+        let x601 = ((x33 * x597 - x332 * x28) + (x599 - x600))
+            + ((x504 * x256 + Iyz * x551) + (Iyy * x562 - x259 * x482));
+        let x602 = ((x358 - x357) + x360) + (x361 + x362);
+        let x603 = -(x111 * x385);
+        let x604 = 2.0 * x262 + 2.0 * x263;
+        let x605 = a_ * (-x604 * x9 * x70 - x7 * x562) - x380 * x486 + x261 * x490
+            - d * x562;
+        let x606 = x605 * x111;
+        let x607 = gamma2_dot * x110;
+        let x608 = x111 * x265;
+        let x609 = x70 * (x607 - x266 - x267 - x608) - x279 * x490 + x562 * x113
+            - x380 * x484;
+        let x610 = x3 * (2.0 * x258 - 2.0 * x257);
+        let x611 = (x5 * x551 + x75 * x610) * a_ - x342 * x488 + d * x551 - x489 * x303;
+        let x612 = x118 * gamma1_dot;
+        let x613 = x305 * x119;
+        let x614 = x311 - x612 + x613;
+        let x615 = x489 * x308 + x75 * x614 - x483 * x342 + x551 * x121;
+        let x616 = x29
+            * (psi_dot
+                * (x33 * (x582 * x33 - x552 - x581 + x564 - x565 + x566) - x580 * x46
+                    + x28
+                        * ((x588 - x583 - x586 - x587 - x589 + x593 - x594 + x595) * x25
+                            + x20 * x601 + phi_dot * x509)
+                    - (x568 * x35 - x38 * x572) * J1 - x561 * x42)
+                + x33 * ((x370 + x390) * x25 + x20 * (x602 + x365 - x366)) - x483 * x306
+                + x33 * (x29 * x388 + x579) - (x315 * x486 - x488 * x316) * J1
                 - m2
-                    * (x16
-                        * (x34 * x615 + x253 * x610 + (x34 * x344 - x253 * x607) * x106)
-                        + x328 * x483 - x551 * psi_dot * x55) + x385 * x29) * x30;
-        let x617 = x238 * phi_dot;
-        let x618 = x34 * x281;
-        let x619 = -x172 - J2;
-        let x620 = x37 * x311 + x42 * x384 + x377 * x36;
-        let x621 = x32 * x328 + x347 * x46 - x39 * x344;
-        let x622 = x88 * x277;
-        let x623 = x29 * x88;
-        let x624 = x410 * theta_dot * x29;
-        let x625 = x5 * x415;
-        let x626 = x424 * x3;
+                    * (x281 * x490 - psi_dot * x575 * x55
+                        + x20
+                            * (x603 * x33 + x253 * x606
+                                + x113 * (x33 * x382 - x253 * x609))) + x28 * x352
+                + (-x61 * x543 - x491 * x327 - (x320 * x505 + x126 * x542) * x29)
+                    * theta_dot + x484 * x353
+                - ((x253 * x119 * x611 + x33 * x397 + (x615 * x253 - x33 * x344) * x121)
+                    * x25 - x58 * psi_dot * x563 + x489 * x312) * m1) + x335;
+        let x617 = theta_dot * (-(x150 * x542 + x320 * x509) * x29 - x543 * x26)
+            + ((x583 + x586 + x587 + x7 * x580 - x588 + x589 - x593 - x572 * x131 + x594
+                - x595) * x20 - (x192 * x563 + (-x119 * x611 - x615 * x121) * x20) * m1
+                - m2 * (x188 * x575 + (x606 - x609 * x113) * x25) - x326 * x163
+                + (x601 - x142 * x568 - x5 * x561) * x25) * psi_dot;
+        let x618 = x33 * x320;
+        let x619 = theta_dot * x65;
+        let x620 = theta_dot * x30;
+        let x621 = -x172 - J2;
+        let x622 = x88 * x327;
+        let x623 = x42 * x351 + x344 * x35 + x312 * x36;
+        let x624 = x31 * x281 - x38 * x382 + x385 * x46;
+        let x625 = x5 * x416;
+        let x626 = x425 * x3;
         let x627 = 0.25 * x625 + 0.5 * x626;
-        let x628 = x5 * x414;
-        let x629 = x5 * x417;
+        let x628 = x5 * x415;
+        let x629 = x5 * x418;
         let x630 = 0.25 * x629 - 0.25 * x628;
-        let x631 = x422 * x3;
+        let x631 = x423 * x3;
         let x632 = (x627 + x630) + (0.25 * x628 - 0.5 * x631);
         let x633 = 0.5 * x625 + x626;
         let x634 = phi_dot * (x633 + x631 + 0.5 * x629);
-        let x635 = x486 + x632;
+        let x635 = x487 + x632;
         let x636 = 0.5 * x629 - 0.5 * x628;
         let x637 = x636 + (-0.5 * x625 - 0.5 * x628);
         let x638 = 0.5 * x625 - x628 - 0.5 * x629;
         let x639 = x638 * phi_dot;
-        let x640 = x440 * x34;
-        let x641 = x34 * x436;
-        let x642 = x34 * x438;
-        let x643 = 0.25 * x640 + 0.25 * x642;
-        let x644 = (0.25 * x640 - 0.25 * x641) + x643;
-        let x645 = x644 - x484;
-        let x646 = 0.5 * x640 - 0.5 * x642;
-        let x647 = x29 * x448;
-        let x648 = x444 * x29;
-        let x649 = -x648 - 0.5 * x640;
-        let x650 = (x646 + x647 + x649 - 0.5 * x641) * phi_dot;
-        let x651 = 0.5 * x640 + 0.5 * x642;
-        let x652 = (0.5 * x641 - x647) + (x651 + x649);
-        let x653 = x646 + 0.5 * x640 + 0.5 * x641;
-        let x654 = phi_dot * x653;
-        let x655 = x34 * x34 * x520 + 1.0;
-        let x656 = x22 * x15;
-        let x657 = (Ixy + x3 * (x5 * x329 + x25)) * x16;
-        let x658 = x656 + x657;
-        let x659 = x658 + x30 * x63;
-        let x660 = x659 * x15;
-        let x661 = x502 - x40 - x47 - x62 - x60;
-        let x662 = x30 * x661 - x656 - x657;
-        let x663 = x16 * x662;
-        let x664 = x73 - x71;
-        let x665 = x59 * x664 - x52 * x76;
-        let x666 = d * x665;
-        let x667 = -x52 * x83 - x79 * x59;
-        let x668 = d * x667;
-        let x669 = x59 * x16 + x52 * x15;
-        let x670 = -(x29 * x669);
-        let x671 = d * x670;
-        let x672 = (x114 - x144) + 2.0 * x115;
-        let x673 = x15 * x672
-            + x16
-                * (((2.0 * x10 - 2.0 * x4) * J1 + m2 * (2.0 * x128 + x506)
+        let x640 = x28 * x412;
+        let x641 = x33 * x437;
+        let x642 = x33 * x440;
+        let x643 = x438 * x33;
+        let x644 = 0.25 * x641 + 0.25 * x643;
+        let x645 = (0.25 * x641 - 0.25 * x642) + x644;
+        let x646 = x645 - x485;
+        let x647 = 0.5 * x641 - 0.5 * x643;
+        let x648 = x647 + 0.5 * x641 + 0.5 * x642;
+        let x649 = x648 * phi_dot;
+        let x650 = 0.5 * x641 + 0.5 * x643;
+        let x651 = x449 * x28;
+        let x652 = -x651 - 0.5 * x641;
+        let x653 = x28 * x447;
+        let x654 = (x650 + x652) + (0.5 * x642 - x653);
+        let x655 = (x647 - 0.5 * x642 + x653 + x652) * phi_dot;
+        let x656 = x33 * x33 * x517 + 1.0;
+        let x657 = x19 * x25;
+        let x658 = (Ixy + x3 * (x5 * x282 + x23)) * x20;
+        let x659 = x657 + x658;
+        let x660 = x29 * x63 + x659;
+        let x661 = x660 * x25;
+        let x662 = x502 - x40 - x47 - x62 - x60;
+        let x663 = x29 * x662 - x657 - x658;
+        let x664 = x663 * x20;
+        let x665 = x73 - x71;
+        let x666 = x59 * x665 - x52 * x76;
+        let x667 = d * x666;
+        let x668 = -x52 * x83 - x79 * x59;
+        let x669 = d * x668;
+        let x670 = x59 * x20 + x52 * x25;
+        let x671 = -(x28 * x670);
+        let x672 = d * x671;
+        let x673 = J2 * (x140 * x20 + x133 * x25);
+        let x674 = (x144 - x93) + 2.0 * x92;
+        let x675 = x28
+            * (((x9 * x131 + J2 * x8) * x20 + x674) * x20
+                + ((x6 * J2 + x142 * x3) * x25 + x135 - x97 + 2.0 * x98) * x25);
+        let x676 = (-x38 * x435 - x3 * x35 * x20) * J1;
+        let x677 = (x28 * (x158 + x105 * (x160 + x148)) - x22 * x58 * x20) * m1;
+        let x678 = (x138 * x25 + x28 * ((x156 + x508) * x106 + x157)) * m2;
+        let x679 = (x675 - x673) + ((x676 + x677) + (x678 - x481));
+        let x680 = (x95 + 2.0 * x141 + 2.0 * x143 + (2.0 * x147 + x500 * x31) * m1
+            - x146) * x25
+            + (x137 - 2.0 * x132 - 2.0 * x134 - x100
+                + m2 * ((2.0 * x112 + 2.0 * x114) * x36 + 2.0 * x138) - x101) * x20;
+        let x681 = -x149 - x139;
+        let x682 = x154 + x680 + x681;
+        let x683 = (x679 + x506) * x25 + x682 * x20;
+        let x684 = x25 * x674
+            + x20
+                * (((2.0 * x10 - 2.0 * x4) * J1 + m2 * (2.0 * x156 + x501)
                     + J2 * (2.0 * x8 - 2.0 * x6)
-                    + (2.0 * x121 + 2.0 * x123 - 2.0 * x134) * m1) * x15 - x98 + x148
-                    - 2.0 * x99);
-        let x674 = x3 * x16;
-        let x675 = (-x36 * x674 - x39 * x434) * J1;
-        let x676 = (x29 * (x133 + x130 * (x135 + x124)) - x24 * x58 * x16) * m1;
-        let x677 = (x102 * x15 + x29 * ((x128 + x499) * x129 + x131)) * m2;
-        let x678 = x9 * x94;
-        let x679 = (((x6 * J2 + x112 * x3) * x15 + x98 - x148 + 2.0 * x99) * x15
-            + x16 * ((J2 * x8 + x678) * x16 + x672)) * x29;
-        let x680 = J2 * (x110 * x16 + x46 * x443);
-        let x681 = ((x675 + x676) + (x677 - x489)) + (x679 - x680);
-        let x682 = x673 * x15 - x231
-            + x30 * (x16 * x681 + x164 + x34 * (x658 * x16 + x28));
-        let x683 = (x146 + 2.0 * x111 + 2.0 * x113 + (2.0 * x118 + x505 * x32) * m1
-            - x117) * x15
-            + (x101 - 2.0 * x95 - 2.0 * x97 - x150
-                + m2 * ((2.0 * x105 + 2.0 * x107) * x37 + 2.0 * x102) - x151) * x16;
-        let x684 = -x125 - x109;
-        let x685 = x91 + x683 + x684;
-        let x686 = x685 * x16 + (x501 + x681) * x15;
-        let x687 = x30 * (x15 * x686 + x34 * (x130 * x659 - x64 * x16) - x165 * x16)
-            - x141 - x16 * x682;
-        let x688 = x130 * x170;
-        let x689 = x7 * x104;
-        let x690 = x9 * x106;
-        let x691 = x689 + x690;
-        let x692 = x74 * x20 + x691 * x664;
-        let x693 = x5 * x120;
-        let x694 = x3 * x122;
-        let x695 = (x693 - a_ - x23 + x694) * x15;
-        let x696 = m2 * (x29 * (x16 * x692 + x189) - x76 * x55)
-            + ((x191 + x76 * x695) * x29 - x58 * x664) * m1;
-        let x697 = -x693 - x694;
-        let x698 = x16 * (x24 + x697);
-        let x699 = m1 * (x76 * x698 + (x190 - x24 * x664) * x15)
-            + m2 * (x692 * x15 + (x516 + x20 * x76) * x16);
-        let x700 = x30 * (x696 * x16 + x186 * x15 + (x77 * x15 + x16 * x665) * x175)
-            - x240 + x15 * x699;
-        let x701 = x20 * x79 - x691 * x79;
-        let x702 = m2 * ((x523 + x20 * x83) * x16 + x15 * x701)
-            + m1 * ((x79 * x24 + x214) * x15 + x698 * x83);
-        let x703 = (x29 * (x16 * x701 + x204) - x83 * x55) * m2
-            + m1 * (x79 * x58 + x29 * (x83 * x695 + x215));
-        let x704 = x702 * x15
-            + (x219 * x15 + x703 * x16 + x175 * (x16 * x667 + x84 * x15)) * x30 - x242;
-        let x705 = m2 * x16;
-        let x706 = m1 * x15;
-        let x707 = ((2.0 * x19 + 2.0 * a_ - x689 - x690) * x37 - x222 - x223) * x705
-            + (x32 * (2.0 * a_ + 2.0 * x23 + x697) + x227) * x706;
-        let x708 = x175 * (x88 * x15 - x16 * x669) - x244 + x707 * x15;
-        let x709 = x143 - x142 - x156 - x159 - x161 - x154 - x157;
-        let x710 = -(x169 * x170);
-        let x711 = -(x129 * x170);
-        let x712 = x30 * (x175 * (x15 * x665 - x16 * x77) - x16 * x186 + x696 * x15)
-            - x16 * x699 - x194;
-        let x713 = ((x667 * x15 - x16 * x84) * x175 - x219 * x16 + x703 * x15) * x30
-            - x217 - x702 * x16;
-        let x714 = x175 * (-x16 * x88 - x669 * x15) - x229 - x16 * x707;
-        let x715 = x5 * x76;
-        let x716 = x0 * x715;
-        let x717 = x5 * x83;
-        let x718 = x0 * x717;
-        let x719 = x5 * x0 * x37;
-        let x720 = x7 * x11;
-        let x721 = x720 * x664;
-        let x722 = -(x720 * x79);
-        let x723 = -(x720 * x32);
-        let x724 = theta_dot * x281;
-        let x725 = x263 * x319;
-        let x726 = x291 - x292;
-        let x727 = -(x256 * x9);
-        let x728 = x7 * x726 - gamma2_dot * x727;
-        let x729 = x727 * x320;
-        let x730 = (x725 + x728 - x729) * J2;
-        let x731 = (x729 - x725) * J1;
-        let x732 = x256 * x343;
-        let x733 = x104 * x319;
-        let x734 = a_ * (x292 - x291 - x9 * (x263 * x326 - x732)) + x323 * x727
-            - x728 * d - x263 * x733;
-        let x735 = Ixz * x726;
-        let x736 = x263 * x370;
-        let x737 = x379 - x306 * gamma1_dot;
-        let x738 = x120 * x300;
-        let x739 = (x310 * x306 + a_ * (x287 - x3 * (x736 - x256 * x307)))
-            + (-x737 * d - x256 * x738);
-        let x740 = x306 * x302;
-        let x741 = x256 * x300;
-        let x742 = (x737 - x740 + x741) * J2 + (x740 - x741) * J1;
-        let x743 = Iyy * x263;
-        let x744 = x743 + x260;
-        let x745 = x9 * x726 - x7 * gamma2_dot * x256;
-        let x746 = x256 * Izz;
-        let x747 = -x746 - x314;
-        let x748 = x256 * x747;
-        let x749 = Ixy * x271;
-        let x750 = x256 * x315;
-        let x751 = x9 * (x11 * x734 - x730 - x731) - x724 * x27 + x735
-            + (x742 - x739 * x0) * x3 + x263 * (x744 + x259 + x260 - x264)
-            - (x5 * x371 - x7 * x745) * J1 - x748 + x749 - x750 + x658 * x267;
-        let x752 = x340 * x9;
-        let x753 = x20 * x319;
-        let x754 = a_ * (x608 * x318 + x7 * x271) - x256 * (x752 - x753) + x382;
-        let x755 = x7 * x340;
-        let x756 = x20 * x326;
-        let x757 = x323 - x605 + x606;
-        let x758 = x256 * (-x755 - x756) - x271 * x106 + x263 * x757;
-        let x759 = x20 * x328 + x754 * x104 - x758 * x106;
-        let x760 = x7 * x319;
-        let x761 = Ixy * x263 - x256 * Ixz;
-        let x762 = ((x368 - Iyy * x271)
-            + (Iyz * x726 + x256 * (x329 * x327 + x17 * x760)))
-            + (x747 * x258 + x263 * x761);
-        let x763 = x581 - x308 - x309 - x582;
-        let x764 = -x24 * x307 - x5 * x375;
-        let x765 = x764 * x263 - x256 * x763 + x122 * x726;
-        let x766 = x122 * x765;
-        let x767 = x24 * x311;
-        let x768 = (2.0 * x261 - 2.0 * x262) * x3;
-        let x769 = x3 * x375;
-        let x770 = x24 * x300;
-        let x771 = a_ * (x5 * x726 - x768 * x256) - (-x769 - x770) * x263 + d * x726;
-        let x772 = x771 * x120;
-        let x773 = x3 * x307;
-        let x774 = (x5 * x365 + x329 * x773) * x263;
-        let x775 = x256 * x761;
-        let x776 = J2 * x726;
-        let x777 = Izz * x726;
-        let x778 = x744 * x258;
-        let x779 = x730 + x731;
-        let x780 = (x762 - (x3 * x371 + x290 * x9) * J1 + x397 - x5 * x742) * x15
-            - m2 * (x759 * x15 + (x345 + x20 * x734 + x615) * x16)
-            - theta_dot * (x658 * x277 + x282 * x681)
-            - (x16 * (x767 - x766 - x772) + (x391 - x24 * x739) * x15) * m1
-            + (x774 + x775 + x612 + x776 + (x9 * x745 + x3 * x297) * J1 + x777 + x388
-                + x778 + x7 * x779 - 2.0 * x359) * x16 + x673 * x267;
-        let x781 = ((x356 - x774 - x775 - x776 - x777 - x778 + x389 + 2.0 * x359) * x15
-            + x16 * (x762 + x398) - x461 * x27 + x349 * x681) * x29 - x779 * x46
-            - (x39 * x745 + x36 * x371) * J1
-            + x34 * ((x265 - x743 - x260) * x263 - x735 + x748 - x749 + x750)
-            - ((x15 * (x766 - x767 + x772) + x392) * x29 - x739 * x58) * m1 - x42 * x742
-            - (x683 - x93) * x724 - m2 * (x29 * (x16 * x759 + x395) - x734 * x55);
-        let x782 = x7 * x347 - x344 * x9;
-        let x783 = x739 + x5 * x384 + x377 * x3;
-        let x784 = -0.5 * x648 - 0.25 * x640;
-        let x785 = 0.5 * x647 + 0.25 * x640 + x784 - 0.25 * x642 - 0.25 * x641;
-        let x786 = x651 + (0.5 * x640 - 0.5 * x641);
-        let x787 = (x633 + x636) + (0.5 * x628 - x631);
-        let x788 = 0.5 * x631 + 0.25 * x629 + x627;
+                    + (2.0 * x120 + 2.0 * x122 - 2.0 * x159) * m1) * x25 - x135 + x97
+                    - 2.0 * x98);
+        let x685 = x684 * x25 - x231
+            + (x33 * (x27 + x659 * x20) + x151 + x679 * x20) * x29;
+        let x686 = (x683 * x25 + x33 * (x105 * x660 - x20 * x64) - x20 * x152) * x29
+            - x166 - x20 * x685;
+        let x687 = x105 * x170;
+        let x688 = x7 * x111;
+        let x689 = x9 * x113;
+        let x690 = x688 + x689;
+        let x691 = x74 * x17 + x690 * x665;
+        let x692 = x5 * x119;
+        let x693 = x3 * x121;
+        let x694 = (x692 - a_ - x21 + x693) * x25;
+        let x695 = m2 * (x28 * (x20 * x691 + x189) - x76 * x55)
+            + ((x191 + x76 * x694) * x28 - x58 * x665) * m1;
+        let x696 = -x692 - x693;
+        let x697 = x20 * (x22 + x696);
+        let x698 = m1 * (x76 * x697 + (x190 - x22 * x665) * x25)
+            + m2 * (x691 * x25 + (x518 + x17 * x76) * x20);
+        let x699 = x29 * (x695 * x20 + x186 * x25 + (x77 * x25 + x20 * x666) * x175)
+            - x240 + x25 * x698;
+        let x700 = x17 * x79 - x690 * x79;
+        let x701 = m2 * ((x524 + x17 * x83) * x20 + x25 * x700)
+            + m1 * ((x79 * x22 + x214) * x25 + x697 * x83);
+        let x702 = (x28 * (x20 * x700 + x204) - x83 * x55) * m2
+            + m1 * (x79 * x58 + x28 * (x83 * x694 + x215));
+        let x703 = x701 * x25
+            + (x219 * x25 + x702 * x20 + x175 * (x20 * x668 + x84 * x25)) * x29 - x242;
+        let x704 = m2 * x20;
+        let x705 = m1 * x25;
+        let x706 = ((2.0 * x16 + 2.0 * a_ - x688 - x689) * x36 - x222 - x223) * x704
+            + (x31 * (2.0 * a_ + 2.0 * x21 + x696) + x227) * x705;
+        let x707 = x175 * (x88 * x25 - x20 * x670) - x244 + x706 * x25;
+        let x708 = x91 - x108 - x117 - x127 - x125 - x104 - x109;
+        let x709 = -(x169 * x170);
+        let x710 = -(x106 * x170);
+        let x711 = x29 * (x175 * (x25 * x666 - x20 * x77) - x20 * x186 + x695 * x25)
+            - x20 * x698 - x194;
+        let x712 = ((x668 * x25 - x20 * x84) * x175 - x219 * x20 + x702 * x25) * x29
+            - x217 - x701 * x20;
+        let x713 = x175 * (-x20 * x88 - x670 * x25) - x229 - x20 * x706;
+        let x714 = x5 * x76;
+        let x715 = x0 * x714;
+        let x716 = x5 * x83;
+        let x717 = x0 * x716;
+        let x718 = x5 * x0 * x36;
+        let x719 = x7 * x11;
+        let x720 = x719 * x665;
+        let x721 = -(x719 * x79);
+        let x722 = -(x719 * x31);
+        let x723 = x259 * x261;
+        let x724 = x258 * x274;
+        let x725 = x724 - x293;
+        let x726 = -(x264 * x9);
+        let x727 = x7 * x725 - gamma2_dot * x726;
+        let x728 = x726 * x265;
+        let x729 = (x723 + x727 - x728) * J2;
+        let x730 = (x728 - x723) * J1;
+        let x731 = x264 * x376;
+        let x732 = x111 * x261;
+        let x733 = a_ * (x293 - x724 - x9 * (x259 * x279 - x731)) + x268 * x726
+            - x727 * d - x259 * x732;
+        let x734 = Ixz * x725;
+        let x735 = x259 * x337;
+        let x736 = x346 - x307 * gamma1_dot;
+        let x737 = x119 * x303;
+        let x738 = (x311 * x307 + a_ * (x278 - x3 * (x735 - x264 * x308)))
+            + (-x736 * d - x264 * x737);
+        let x739 = x307 * x305;
+        let x740 = x264 * x303;
+        let x741 = (x736 - x739 + x740) * J2 + (x739 - x740) * J1;
+        let x742 = Iyy * x259;
+        let x743 = x742 + x330;
+        let x744 = x9 * x725 - x7 * gamma2_dot * x264;
+        let x745 = x264 * Izz;
+        let x746 = -x745 - x288;
+        let x747 = x264 * x746;
+        let x748 = Ixy * x276;
+        let x749 = theta_dot * x320;
+        let x750 = x264 * x289;
+        let x751 = x9 * (x11 * x733 - x729 - x730) + x734 + (x741 - x738 * x0) * x3
+            + x259 * (x743 + x329 + x330 - x331) - (x5 * x338 - x7 * x744) * J1 - x747
+            + x659 * x254 + x748 - x26 * x749 - x750;
+        let x752 = x612 - x309 - x310 - x613;
+        let x753 = -x22 * x308 - x5 * x342;
+        let x754 = x753 * x259 - x264 * x752 + x121 * x725;
+        let x755 = x121 * x754;
+        let x756 = x312 * x22;
+        let x757 = (2.0 * x257 - 2.0 * x258) * x3;
+        let x758 = x3 * x342;
+        let x759 = x22 * x303;
+        let x760 = a_ * (x5 * x725 - x757 * x264) - (-x758 - x759) * x259 + d * x725;
+        let x761 = x760 * x119;
+        let x762 = x380 * x9;
+        let x763 = x17 * x261;
+        let x764 = a_ * (x604 * x260 + x7 * x276) - x264 * (x762 - x763) + x349;
+        let x765 = x7 * x380;
+        let x766 = x17 * x279;
+        let x767 = x268 - x607 + x608;
+        let x768 = x264 * (-x765 - x766) - x276 * x113 + x259 * x767;
+        let x769 = x17 * x281 + x764 * x111 - x768 * x113;
+        let x770 = x7 * x261;
+        let x771 = Ixy * x259 - x264 * Ixz;
+        let x772 = ((x375 - Iyy * x276)
+            + (Iyz * x725 + x264 * (x282 * x280 + x15 * x770)))
+            + (x746 * x256 + x259 * x771);
+        let x773 = x3 * x308;
+        let x774 = (x5 * x373 + x282 * x773) * x259;
+        let x775 = x264 * x771;
+        let x776 = J2 * x725;
+        let x777 = Izz * x725;
+        let x778 = x743 * x256;
+        let x779 = x729 + x730;
+        let x780 = (x772 - (x3 * x338 + x315 * x9) * J1 - x5 * x741 + x391) * x25
+            - ((x398 - x22 * x738) * x25 + (x756 - x755 - x761) * x20) * m1
+            - m2 * ((x603 + x383 + x17 * x733) * x20 + x769 * x25)
+            - theta_dot * (x659 * x327 + x321 * x679)
+            + x20
+                * (x774 + x602 + x775 + x776 + x777 + x395 + x778 + x7 * x779
+                    - 2.0 * x366 + (x9 * x744 + x3 * x316) * J1) + x684 * x254;
+        let x781 = x33 * ((x332 - x742 - x330) * x259 - x734 + x747 - x748 + x750)
+            - m2 * ((x389 + x20 * x769) * x28 - x733 * x55) - x779 * x46
+            - (x38 * x744 + x35 * x338) * J1
+            - m1 * (((x755 - x756 + x761) * x25 + x399) * x28 - x738 * x58) - x42 * x741
+            - (x680 - x130) * x749
+            + ((x363 - x774 - x775 - x776 - x777 - x778 + x396 + 2.0 * x366) * x25
+                - x462 * x26 + x356 * x679 + (x772 + x392) * x20) * x28;
+        let x782 = x7 * x385 - x382 * x9;
+        let x783 = x738 + x5 * x351 + x344 * x3;
+        let x784 = (x633 + x636) + (0.5 * x628 - x631);
+        let x785 = 0.5 * x631 + 0.25 * x629 + x627;
+        let x786 = -0.5 * x651 - 0.25 * x641;
+        let x787 = x786 + 0.25 * x641 - 0.25 * x642 + 0.5 * x653 - 0.25 * x643;
+        let x788 = (0.5 * x641 - 0.5 * x642) + x650;
         let x789 = 2.0 * J2 - 2.0 * J1;
-        let x790 = 2.0 * x1 + x789;
-        let x791 = x790 * x3;
-        let x792 = x35 - x33;
-        let x793 = x36 * J1;
-        let x794 = x5 * (x42 * x17 - x0 * x58) + x3 * (-x2 * x792 - x793);
-        let x795 = x5 * x790 * x41 + x794;
-        let x796 = x5 * x26 + x4 * (x2 - J1);
-        let x797 = x31 * x795 + x130 * x796;
-        let x798 = x30 * x795 - x796 * x16;
-        let x799 = x798 * x15;
-        let x800 = 2.0 * J1 - 2.0 * J2;
-        let x801 = a_ * d;
-        let x802 = x130 * x5 * x800
-            + (-2.0 * (x130 * x24 * d) - 2.0 * (x801 * x129)) * m1;
-        let x803 = x3 * x802;
-        let x804 = d * x792;
-        let x805 = J2 * x792;
-        let x806 = (m1 * (x24 * x804 + (2.0 * (x32 * x801) - x58 * d) * x3)
-            + x5 * (x805 + x793)) + x17 * x43;
-        let x807 = x806 + x796 * x34;
-        let x808 = x803 + x31 * x807;
-        let x809 = (2.0 * x805 + 2.0 * x793) * x42
-            - (2.0 * (d * x160 * x122) - 2.0 * (x58 * x804)) * m1;
-        let x810 = x34 * x794 + x809;
-        let x811 = x34 * x797 + x130 * x806 + x31 * x810;
-        let x812 = (x30 * x811 - x808 * x16) * x15;
-        let x813 = d * x137;
-        let x814 = x182 * x120;
-        let x815 = x182 * x119;
-        let x816 = x76 * x813 + (x814 - x815) * x16;
-        let x817 = (x815 - x814) * x37 - x76 * x804;
-        let x818 = x175 * x715 + x817;
-        let x819 = (x816 * x15 + x818 * x31) * m1;
-        let x820 = x119 * x212;
-        let x821 = x212 * x120;
-        let x822 = x83 * x813 + (x821 - x820) * x16;
-        let x823 = (x820 - x821) * x37 - x83 * x804;
-        let x824 = x175 * x717 + x823;
-        let x825 = (x822 * x15 + x824 * x31) * m1;
-        let x826 = x813 * x37 + (-x119 * x36 - x120 * x792) * x16;
-        let x827 = x706 * (x23 * x70 + x826);
-        let x828 = x15 * x65;
-        let x829 = -(x0 * x155 * x122);
-        let x830 = m1 * (x818 * x65 - x16 * x816);
-        let x831 = (x824 * x65 - x16 * x822) * m1;
-        let x832 = m1 * (x23 * x75 * x15 - x16 * x826);
-        let x833 = -(x182 * x0);
-        let x834 = -(x212 * x0);
-        let x835 = x0 * x792;
-        let x836 = x303 * x5 + x3 * (x291 + x294 - x292);
-        let x837 = x310 * x307 - d * x836 - x308 * x307;
-        let x838 = x17 * x302;
-        let x839 = x838 * x307 + (J2 * x836 + x297 * J1);
-        let x840 = x304 * J1;
-        let x841 = x3 * (x839 - x837 * x0) - x460 * x794
-            + x5 * (x312 - x840 - x461 * x791) + x796 * x292;
-        let x842 = a_ * (x736 - x369);
-        let x843 = d * x300 * x300;
-        let x844 = x842 - x843;
-        let x845 = (x844 + x376) * x120;
-        let x846 = x5 * x377;
-        let x847 = 2.0 * x373 + x374;
-        let x848 = x847 * x300;
-        let x849 = x365 * x300;
-        let x850 = x307 * x307;
-        let x851 = x329 * x850;
-        let x852 = (x3 * (x305 - x840) - (x796 * x277 + x282 * x806) * theta_dot
-            - x5 * x839) * x15
-            - ((x3 * d * x311 - x837 * x24) * x15
-                + x16 * (a_ * ((x383 - x848) * x3 - x846) - x845)) * m1
-            + x16 * (x851 - x849) + x267 * x803;
-        let x853 = x34 * x841 - x304 * x793 - x305 * x792 - x42 * x839
-            - theta_dot * (x282 * x809 + x277 * x794) + (x849 - x851 + x349 * x806) * x37
-            - ((x845 + (x846 + x3 * (x848 - x381 - x382)) * a_) * x37 - x837 * x58
-                - x804 * x311) * m1;
-        let x854 = x380 + x848;
-        let x855 = x844 + x372;
-        let x856 = (-0.25 * x625 - 0.25 * x628) + x630;
-        let x857 = x856 - x41;
-        let x858 = (2.0 * x12 + x789) * x9;
-        let x859 = J2 * x46;
-        let x860 = x44 - x45;
-        let x861 = x860 * J1;
-        let x862 = x859 + x861;
-        let x863 = x13 - J1;
-        let x864 = -(x39 * x9);
-        let x865 = x7 * (x11 * x55 + x862) + x863 * x864;
-        let x866 = x38 * x858 + x865;
-        let x867 = x7 * x21 + x10 * x863;
-        let x868 = x30 * x866 + x867 * x15;
-        let x869 = x868 * x16;
-        let x870 = x866 * x65 - x867 * x129;
-        let x871 = -(x74 * x720);
-        let x872 = -(x39 * d);
-        let x873 = (m2 * (-x9 * (2.0 * (x801 * x37) - d * x55) - x20 * x872) - x39 * x18)
-            + x9 * x862;
-        let x874 = x873 + x34 * x867;
-        let x875 = x31 * x16;
-        let x876 = x874 * x875;
-        let x877 = x7 * x800 * x129
-            - m2 * (2.0 * (x130 * x801) + 2.0 * (x20 * d * x129));
-        let x878 = x434 * x877;
-        let x879 = -x39 * (2.0 * x859 + 2.0 * x861)
-            - m2 * (2.0 * (d * x158 * x106) - 2.0 * (x872 * x55));
-        let x880 = x34 * x865 + x879;
-        let x881 = x873 * x15 + x868 * x34 + x30 * x880;
-        let x882 = x16 * (x881 * x65 - x876 - x878);
-        let x883 = -(x11 * x155 * x106);
-        let x884 = x177 * x104 - x177 * x103;
-        let x885 = x884 * x32 - x74 * x872;
-        let x886 = x7 * x74;
-        let x887 = x885 - x175 * x886;
-        let x888 = d * x9;
-        let x889 = x16 * x888;
-        let x890 = x884 * x15 - x74 * x889;
-        let x891 = m2 * (x887 * x31 + x890 * x15);
-        let x892 = x104 * x198 - x103 * x198;
-        let x893 = x892 * x15 - x79 * x889;
-        let x894 = x7 * x79;
-        let x895 = x32 * x892 - x79 * x872;
-        let x896 = x895 - x175 * x894;
-        let x897 = m2 * (x893 * x15 + x31 * x896);
-        let x898 = (x39 * x103 - x39 * x104) * x15;
-        let x899 = x32 * x889;
-        let x900 = x898 - x899;
-        let x901 = m2 * (x900 * x15 - d * x70 * x435);
-        let x902 = x877 * x9;
-        let x903 = m2 * (x887 * x65 - x890 * x16);
-        let x904 = m2 * (x896 * x65 - x893 * x16);
-        let x905 = (x899 - x898 - x19 * x75) * x705;
-        let x906 = x177 * x11;
-        let x907 = x11 * x198;
-        let x908 = -(x39 * x11);
-        let x909 = (x324 + x7 * x289) * J1;
-        let x910 = x329 * x320;
-        let x911 = x910 * x326;
-        let x912 = x290 * J2;
-        let x913 = x290 * J1;
-        let x914 = x290 * d + x326 * x322 - x323 * x326;
-        let x915 = x268 * x867 - x865 * x460 + x7 * (x333 - x909 - x461 * x858)
-            + x9 * (x911 - x912 + x913 - x11 * x914);
-        let x916 = x912 - x911;
-        let x917 = -(x326 * x326);
-        let x918 = x17 * x917;
-        let x919 = x319 * x350;
-        let x920 = d * x319 * x319;
-        let x921 = a_ * (x732 - x342);
-        let x922 = x921 - x920 + x341;
-        let x923 = x347 + (a_ * (x256 * x727 - x346) + (x338 + 2.0 * x339) * x319);
-        let x924 = x104 * x922 + a_ * (-x9 * x923 - x7 * x344);
-        let x925 = x909 + x337;
-        let x926 = (x349 * x873 - x918 - x919) * x32 - x916 * x46 - x860 * x913
-            - m2 * (x32 * x924 - x328 * x872 + x914 * x55)
-            - (x282 * x879 + x865 * x277) * theta_dot + x34 * x915 + x39 * x925;
-        let x927 = x16
-            * (x7 * (x916 - x913) - (x282 * x873 + x867 * x277) * theta_dot - x9 * x925)
-            - (x918 + x919) * x15 - m2 * ((-x20 * x914 - x328 * x888) * x16 + x15 * x924)
-            + x902 * x267;
-        let x928 = (x643 + x784) + (0.25 * x641 - 0.5 * x647);
-        let x929 = x44 + x928;
-        let x930 = x256 * x152;
-        let x931 = x75 * theta_dot;
-        let x932 = x32 * phi_dot;
-        let x933 = x931 + x932;
-        let x934 = gamma2_dot * x34 + x933;
-        let x935 = -x934 * x7 - x453 * x547;
-        let x936 = a_ * (x933 - (x32 * x326 + x256 * x46) * x9) - x935 * d + x39 * x323
-            - x32 * x733;
-        let x937 = x32 * x319 - x39 * x320;
-        let x938 = x937 * J1;
-        let x939 = (x935 + x937) * J2;
-        let x940 = x146 * x263;
-        let x941 = x934 * x9 - x484 * x547;
-        let x942 = theta_dot * x70;
-        let x943 = phi_dot * x37;
-        let x944 = x943 - x942;
-        let x945 = x944 + x34 * gamma1_dot;
-        let x946 = x486 * x555 + x945 * x3;
-        let x947 = x933 * Ixz;
-        let x948 = Ixy * x944;
-        let x949 = x300 * x37;
-        let x950 = x36 * x302;
-        let x951 = x566 * x431 + x5 * x945;
-        let x952 = J2 * (x951 - x949 - x950) + (x949 + x950) * J1;
-        let x953 = x942 - x943;
-        let x954 = a_ * (x953 - (x42 * x263 + x307 * x37) * x3) - d * x951 + x37 * x738
-            + x310 * x36;
-        let x955 = x279 * x520;
-        let x956 = x29 + x275 * x30;
-        let x957 = x9 * (x11 * x936 + x938 - x939) - x930 + x940
-            - J1 * (x7 * x941 + x5 * x946) + (x614 + x574) * x29 - x947 + x948
-            + x3 * (x952 - x954 * x0) - (0.5 * (x61 * x955) + x14 * x956) * theta_dot;
-        let x958 = x42 * x300;
-        let x959 = x36 * x307;
-        let x960 = x958 + x959;
-        let x961 = (x960 - x931 - x932) * J2;
-        let x962 = x939 - x938;
-        let x963 = Iyz * x944;
-        let x964 = x146 * x258;
-        let x965 = x960 * J1;
-        let x966 = x51 * x256;
-        let x967 = x933 * Izz;
-        let x968 = (x592 - x593) * x29;
-        let x969 = x34 * x315;
-        let x970 = x763 * x37 - x42 * x375 - x933 * x122 - x58 * x307;
-        let x971 = x122 * x970;
-        let x972 = a_ * (x768 * x37 - x5 * x933) + x36 * x375 + x58 * x300 - d * x933;
-        let x973 = x972 * x120;
-        let x974 = x340 * x46 + x326 * x55 - x944 * x106 + x32 * x757;
-        let x975 = x319 * x55;
-        let x976 = d * x944 + x39 * x340 - x975 + a_ * (x32 * x608 * x9 + x7 * x944);
-        let x977 = x104 * x976 - x974 * x106;
-        let x978 = x29 * phi_dot;
-        let x979 = x39 * x326;
-        let x980 = x46 * x319;
-        let x981 = x980 - x979;
-        let x982 = x981 * J1;
-        let x983 = ((-Iyy * x944 - x51 * x263) + (-x29 * x586 - x34 * x265))
-            + ((-x982 - Iyz * x933) + (x152 * x258 - J2 * (x979 - x980 + x944)));
-        let x984 = (x961 + x7 * x962 - x963 + x964 - x965 - x966 - x967 + x968 - x969
-            - x941 * x94) * x16 - ((-x971 - x973) * x16 + x954 * x192) * m1
-            - m2 * (x977 * x15 + x188 * x936)
-            - theta_dot * (0.5 * (x126 * x955) + x956 * x27) + x138 * x978
-            + (x983 - x5 * x952 - x112 * x946) * x15;
-        let x985 = x34 * x957 - m2 * (x32 * x977 - x936 * x55)
-            - (x36 * x946 - x39 * x941) * J1 - x952 * x42
-            + x34 * (x930 - x940 + x947 - x948 + x29 * x573)
-            + x29
-                * (x613 + x983 * x16
-                    + (x963 - x961 - x964 + x965 + x966 + x967 - x968 + x969) * x15)
-            - ((x971 + x973) * x37 - x954 * x58) * m1 - x46 * x962
-            - (0.5 * (x162 * x955) + x61 * x956) * theta_dot;
-        let x986 = theta_dot * x279;
-        let x987 = theta_dot * x956;
-        let x988 = x269 * x49;
-        let x989 = gamma2_dot * x16 - x253;
-        let x990 = x434 * x269 + x7 * x989;
-        let x991 = gamma1_dot * x15;
-        let x992 = x5 * (x991 - x253) - x674 * x269;
-        let x993 = -(x5 * x269);
-        let x994 = x3 * (x253 - x991) + x16 * x993;
-        let x995 = x16 * x300;
-        let x996 = a_ * (x16 * x269 + x3 * (x16 * x307 - x370 * x15)) - x994 * d
-            - x120 * x995 + x310 * x137;
-        let x997 = x302 * x137;
-        let x998 = J2 * (x994 - x997 + x995) + (x997 - x995) * J1;
-        let x999 = x265 * x15;
-        let x1000 = x9 * x989 - x443 * x269;
-        let x1001 = a_ * (x9 * (x256 * x435 - x326 * x15) + x269 * x15) - x323 * x136
-            - x733 * x15 - x1000 * d;
-        let x1002 = x320 * x136 + x319 * x15;
-        let x1003 = (x1000 + x1002) * J2;
-        let x1004 = x1002 * J1;
-        let x1005 = x263 * x100;
-        let x1006 = x256 * x116;
-        let x1007 = x315 * x16;
-        let x1008 = x3 * (x998 - x0 * x996) - x988 - (x7 * x990 + x5 * x992) * J1 - x999
-            + x9 * (x1001 * x11 - x1003 + x1004) + x1005 + x284 + x1006 - x1007;
-        let x1009 = x327 - x760;
-        let x1010 = x1009 * J1;
-        let x1011 = x760 - x327;
-        let x1012 = -phi_dot - x257;
-        let x1013 = (x1011 + x1012) * J2;
-        let x1014 = ((x593 - x253 * Ixy) + x145 * x269) + (-x92 * x263 - x258 * x116);
-        let x1015 = x100 * x258;
-        let x1016 = x256 * x92;
-        let x1017 = x5 * x300;
-        let x1018 = x773 + x1017;
-        let x1019 = x1018 * J1;
-        let x1020 = J2 * (x1018 + x1012) - x1019;
-        let x1021 = x253 * Ixz;
-        let x1022 = x269 * x149;
-        let x1023 = d * x269;
-        let x1024 = (x769 - x1023 + x770) * x15 + a_ * (x15 * x993 + x674 * x579);
-        let x1025 = x120 * x1024;
-        let x1026 = x16 * x583 + (x764 - x122 * x269) * x15;
-        let x1027 = x1026 * x122;
-        let x1028 = x16 * (x753 - x1023 - x752) + a_ * (x434 * x608 - x435 * x269);
-        let x1029 = x757 * x15 + x16 * (x269 * x106 - x755 - x756);
-        let x1030 = x104 * x1028 - x1029 * x106;
-        let x1031 = x1003 - x1004;
-        let x1032 = x29
-            * (x16 * (x1014 - x16 * (x1010 + x1013))
-                + x15 * (x1016 - x1015 - x1020 * x15 - x1021 + x1022 + x585))
-            - (x36 * x992 - x39 * x990) * J1 - ((x1025 + x1027) * x37 - x58 * x996) * m1
-            - m2 * (x32 * x1030 - x1001 * x55)
-            + x34 * (x988 - x283 + x999 - x1005 - x1006 + x1007) - x46 * x1031
-            + x1008 * x34 - x335 - x42 * x998 - x336;
-        let x1033 = (x1014 - x112 * x992 - x5 * x998) * x15 - x393
-            - (x16 * (-x1025 - x1027) + x192 * x996) * m1
-            + x16
-                * (x1015 - x990 * x94 - x1016 + (x1020 - x1010 - x1013) * x15
-                    + x7 * x1031 + x1021 - x1022 - x585)
-            - m2 * (x1030 * x15 + x1001 * x188) - x394;
-        let x1034 = x447 + (-0.5 * x439 - 0.5 * x446);
-        let x1035 = x1034 - 2.0 * x38;
-        let x1036 = a_ * x411;
-        let x1037 = x430 + (-0.5 * x420 - 0.5 * x416);
-        let x1038 = x1037 + 2.0 * x35;
-        let x1039 = x256 - gamma2_dot;
-        let x1040 = -x254 - x255;
-        let x1041 = gamma2_dot + x1040;
-        let x1042 = x910 + J2 * x1041;
-        let x1043 = a_ * (x256 - x10 * x256) - x7 * (x1041 * d + x323);
-        let x1044 = theta_dot * x30;
-        let x1045 = x263 - gamma1_dot;
-        let x1046 = x838 + J2 * x1045;
-        let x1047 = x5 * (x310 - d * x1045) + x338 * (x4 - 1.0);
-        let x1048 = (x1043 * x11 - x7 * (x1039 * J1 + x1042)) * x9 + x661 * x1044
-            + x253 * x27 + (x5 * (x1046 - x1045 * J1) - x1047 * x0) * x3;
-        let x1049 = x9 * x319;
-        let x1050 = x263 - x1049;
-        let x1051 = d * x1050 - x19 * x326;
-        let x1052 = x326 * x888;
-        let x1053 = x104 * x1051 - 2.0 * (x1052 * x106);
-        let x1054 = x7 * x326;
-        let x1055 = x1049 + x1054;
-        let x1056 = x1055 * J1;
-        let x1057 = (x1056 + (2.0 * x259 + (x1050 - x1054) * J2))
-            + (x263 * (Iyy + Ixx - Izz) + Iyz * x608);
-        let x1058 = x3 * x1045;
-        let x1059 = x3 * x300;
-        let x1060 = x5 * (x375 - x374) - d * (x256 + x1059);
-        let x1061 = x120 * x1060;
-        let x1062 = x3 * (x847 - x374);
-        let x1063 = x1062 * x122;
-        let x1064 = x5 * x307;
-        let x1065 = x1064 - x1059;
-        let x1066 = J2 * (x1065 + x1040);
-        let x1067 = x256 * (Iyy - Ixx);
-        let x1068 = x1059 - x1064;
-        let x1069 = x1068 * J1;
-        let x1070 = x253 * x138 - m2 * (x1053 * x15 + x1043 * x188)
-            - (x1046 * x6 + x1057 + x1058 * x112) * x15 + (x684 - x91 + x93) * x1044
-            - (x1047 * x192 + (-x1061 - x1063) * x16) * m1
-            + (x1066 - x746 - 2.0 * x313 + x1067 + x1069 - x1039 * x678 + x8 * x1042
-                - 2.0 * x314) * x16;
-        let x1071 = ((x746 + 2.0 * x313 - x1066 - x1067 - x1069 + 2.0 * x314) * x15
-            - x16 * x1057 + x126 * psi_dot) * x29 - m2 * (x32 * x1053 - x1043 * x55)
-            + x34 * x1048 + x709 * x1044 - (x1058 * x36 + x1039 * x864) * J1
-            - x96 * x1042 - x1046 * x110 - ((x1061 + x1063) * x37 - x1047 * x58) * m1;
-        let x1072 = 2.0 * x298 + 2.0 * x299;
-        let x1073 = x300 * J1 - x1072 * J2;
-        let x1074 = (x1073 - x1 * x1072) * x3 - x1064 * J1;
-        let x1075 = x302 * x122;
-        let x1076 = -x0 * (2.0 * (x1075 * x16) + x1072 * x192)
-            - (x5 * x1073 + x112 * x307) * x15;
-        let x1077 = x34 * x1074 - x307 * x793 - x0 * (-x1072 * x58 - 2.0 * (x1075 * x37))
-            - x42 * x1073;
-        let x1078 = -(x326 * J1);
-        let x1079 = x1049 * (J1 - 2.0 * J2 - 2.0 * x12) - x7 * x1078;
-        let x1080 = 2.0 * J2 - J1;
-        let x1081 = x320 * x106;
-        let x1082 = (x760 * x1080 + x326 * x94) * x16
-            + (2.0 * (x1081 * x15) + 2.0 * (x188 * x319)) * x11;
-        let x1083 = x34 * x1079 - x980 * x1080 + x39 * x1078
-            + x11 * (2.0 * (x32 * x1081) - 2.0 * x975);
+        let x790 = (2.0 * x1 + x789) * x3;
+        let x791 = x5 * x24 + x4 * (x2 - J1);
+        let x792 = x34 - x32;
+        let x793 = x35 * J1;
+        let x794 = x5 * (x42 * x15 - x0 * x58) + x3 * (-x2 * x792 - x793);
+        let x795 = x34 * x790 + x794;
+        let x796 = x105 * x791 + x30 * x795;
+        let x797 = x29 * x795 - x791 * x20;
+        let x798 = x797 * x25;
+        let x799 = d * x792;
+        let x800 = a_ * d;
+        let x801 = J2 * x792;
+        let x802 = (m1 * (x22 * x799 + (2.0 * (x31 * x800) - x58 * d) * x3)
+            + x5 * (x801 + x793)) + x15 * x43;
+        let x803 = (2.0 * x801 + 2.0 * x793) * x42
+            - (2.0 * (d * x124 * x121) - 2.0 * (x58 * x799)) * m1;
+        let x804 = x33 * x794 + x803;
+        let x805 = x33 * x796 + x105 * x802 + x30 * x804;
+        let x806 = 2.0 * J1 - 2.0 * J2;
+        let x807 = x3
+            * (x105 * x5 * x806 + (-2.0 * (x105 * x22 * d) - 2.0 * (x800 * x106)) * m1);
+        let x808 = x802 + x791 * x33;
+        let x809 = x807 + x30 * x808;
+        let x810 = x25 * (x29 * x805 - x809 * x20);
+        let x811 = d * x162;
+        let x812 = x182 * x119;
+        let x813 = x182 * x118;
+        let x814 = x76 * x811 + (x812 - x813) * x20;
+        let x815 = (x813 - x812) * x36 - x76 * x799;
+        let x816 = x175 * x714 + x815;
+        let x817 = (x814 * x25 + x816 * x30) * m1;
+        let x818 = x118 * x212;
+        let x819 = x212 * x119;
+        let x820 = x83 * x811 + (x819 - x818) * x20;
+        let x821 = (x818 - x819) * x36 - x83 * x799;
+        let x822 = x175 * x716 + x821;
+        let x823 = (x820 * x25 + x822 * x30) * m1;
+        let x824 = x811 * x36 + (-x118 * x35 - x119 * x792) * x20;
+        let x825 = x705 * (x21 * x70 + x824);
+        let x826 = x25 * x65;
+        let x827 = -(x0 * x107 * x121);
+        let x828 = m1 * (x816 * x65 - x20 * x814);
+        let x829 = (x822 * x65 - x20 * x820) * m1;
+        let x830 = m1 * (x21 * x75 * x25 - x20 * x824);
+        let x831 = -(x182 * x0);
+        let x832 = -(x212 * x0);
+        let x833 = x0 * x792;
+        let x834 = J1 * x300;
+        let x835 = x3 * (x296 - x292 - x293) + x299 * x5;
+        let x836 = x311 * x308 - x835 * d - x309 * x308;
+        let x837 = x15 * x305;
+        let x838 = x837 * x308 + (J1 * x316 + x835 * J2);
+        let x839 = x5 * (x313 - x834 - x462 * x790) - x461 * x794
+            + (x838 - x836 * x0) * x3 + x791 * x293;
+        let x840 = x373 * x303;
+        let x841 = x308 * x308;
+        let x842 = x282 * x841;
+        let x843 = a_ * (x735 - x336);
+        let x844 = d * x303 * x303;
+        let x845 = x843 - x844;
+        let x846 = (x845 + x343) * x119;
+        let x847 = x5 * x344;
+        let x848 = 2.0 * x340 + x341;
+        let x849 = x848 * x303;
+        let x850 = x20 * (x842 - x840) + x254 * x807
+            - m1
+                * (x20 * (a_ * ((x350 - x849) * x3 - x847) - x846)
+                    + (x312 * x3 * d - x836 * x22) * x25)
+            + (x3 * (x306 - x834) - x5 * x838 - (x791 * x327 + x321 * x802) * theta_dot)
+                * x25;
+        let x851 = x33 * x839 - x306 * x792 - x42 * x838 - x793 * x300
+            - theta_dot * (x321 * x803 + x327 * x794) + (x840 - x842 + x356 * x802) * x36
+            - m1
+                * ((x846 + (x847 + x3 * (x849 - x348 - x349)) * a_) * x36 - x836 * x58
+                    - x312 * x799);
+        let x852 = x347 + x849;
+        let x853 = x845 + x339;
+        let x854 = (-0.25 * x625 - 0.25 * x628) + x630;
+        let x855 = x854 - x41;
+        let x856 = (2.0 * x12 + x789) * x9;
+        let x857 = J2 * x46;
+        let x858 = (x44 - x45) * J1;
+        let x859 = x857 + x858;
+        let x860 = x13 - J1;
+        let x861 = x7 * (x11 * x55 + x859) - x38 * x860 * x9;
+        let x862 = x37 * x856 + x861;
+        let x863 = x7 * x18 + x10 * x860;
+        let x864 = x29 * x862 + x863 * x25;
+        let x865 = x20 * x864;
+        let x866 = x862 * x65 - x863 * x106;
+        let x867 = -(x74 * x719);
+        let x868 = -(x38 * d);
+        let x869 = -x38 * (2.0 * x857 + 2.0 * x858)
+            - m2 * (2.0 * (d * x116 * x113) - 2.0 * (x868 * x55));
+        let x870 = x33 * x861 + x869;
+        let x871 = (x15 * x39 + m2 * (-x9 * (2.0 * (x800 * x36) - d * x55) - x17 * x868))
+            + x9 * x859;
+        let x872 = x33 * x864 + x29 * x870 + x871 * x25;
+        let x873 = x30 * x20;
+        let x874 = x7 * x806 * x106
+            - m2 * (2.0 * (x105 * x800) + 2.0 * (x17 * d * x106));
+        let x875 = x435 * x874;
+        let x876 = x871 + x33 * x863;
+        let x877 = x876 * x873;
+        let x878 = (x872 * x65 - x875 - x877) * x20;
+        let x879 = -(x11 * x107 * x113);
+        let x880 = x177 * x111 - x177 * x110;
+        let x881 = x880 * x31 - x74 * x868;
+        let x882 = x7 * x175;
+        let x883 = x881 - x74 * x882;
+        let x884 = d * x161;
+        let x885 = x880 * x25 - x74 * x884;
+        let x886 = m2 * (x883 * x30 + x885 * x25);
+        let x887 = x111 * x198 - x110 * x198;
+        let x888 = x887 * x25 - x79 * x884;
+        let x889 = x31 * x887 - x79 * x868;
+        let x890 = x889 - x79 * x882;
+        let x891 = m2 * (x888 * x25 + x890 * x30);
+        let x892 = (x38 * x110 - x38 * x111) * x25;
+        let x893 = x31 * x884;
+        let x894 = x892 - x893;
+        let x895 = m2 * (x894 * x25 - x16 * x20 * x70);
+        let x896 = x874 * x9;
+        let x897 = m2 * (x883 * x65 - x885 * x20);
+        let x898 = m2 * (x890 * x65 - x888 * x20);
+        let x899 = x704 * (x893 - x892 - x16 * x75);
+        let x900 = x177 * x11;
+        let x901 = x11 * x198;
+        let x902 = -(x38 * x11);
+        let x903 = (x271 + x7 * x314) * J1;
+        let x904 = x283 * x279;
+        let x905 = x315 * J2;
+        let x906 = x315 * J1;
+        let x907 = x315 * d + x279 * x267 - x268 * x279;
+        let x908 = x7 * (x286 - x903 - x462 * x856) - x461 * x861
+            + x9 * (x904 - x905 + x906 - x11 * x907) + x273 * x863;
+        let x909 = x903 + x353;
+        let x910 = x905 - x904;
+        let x911 = x385 + (a_ * (x264 * x726 - x384) + (x378 + 2.0 * x379) * x261);
+        let x912 = x261 * x261;
+        let x913 = d * x912;
+        let x914 = a_ * (x731 - x377);
+        let x915 = x381 - x913 + x914;
+        let x916 = a_ * (-x9 * x911 - x7 * x382) + x915 * x111;
+        let x917 = x15 * x912;
+        let x918 = -(x279 * x279);
+        let x919 = x15 * x918;
+        let x920 = x38 * x909 - x910 * x46 - m2 * (x31 * x916 - x281 * x868 + x907 * x55)
+            + x31 * (x356 * x871 - x917 - x919) - x315 * x858
+            - theta_dot * (x327 * x861 + x321 * x869) + x33 * x908;
+        let x921 = (x7 * (x910 - x906) - x909 * x9
+            - (x321 * x871 + x863 * x327) * theta_dot) * x20 - (x917 + x919) * x25
+            - m2 * (x916 * x25 + x20 * (-x17 * x907 - x281 * d * x9)) + x896 * x254;
+        let x922 = x7 * x406;
+        let x923 = (0.25 * x642 - 0.5 * x653) + (x786 + x644);
+        let x924 = x44 + x923;
+        let x925 = x264 * x102;
+        let x926 = x95 * x259;
+        let x927 = theta_dot * x70;
+        let x928 = phi_dot * x36;
+        let x929 = x928 - x927;
+        let x930 = x929 + x33 * gamma1_dot;
+        let x931 = x487 * x556 + x930 * x3;
+        let x932 = -(x28 * x571);
+        let x933 = x31 * phi_dot;
+        let x934 = x75 * theta_dot;
+        let x935 = x933 + x934;
+        let x936 = gamma2_dot * x33 + x935;
+        let x937 = x7 * x932 + x936 * x9;
+        let x938 = x28 + x325 * x29;
+        let x939 = x318 * x517;
+        let x940 = Ixy * x929;
+        let x941 = x31 * x261 - x38 * x265;
+        let x942 = x941 * J1;
+        let x943 = x9 * x932 - x7 * x936;
+        let x944 = (x943 + x941) * J2;
+        let x945 = x38 * x268 - x943 * d - x31 * x732
+            + a_ * (x935 - (x31 * x279 + x264 * x46) * x9);
+        let x946 = x303 * x36;
+        let x947 = x35 * x305;
+        let x948 = x567 * x432 + x5 * x930;
+        let x949 = J2 * (x948 - x946 - x947) + (x946 + x947) * J1;
+        let x950 = x927 - x928;
+        let x951 = a_ * (x950 - (x42 * x259 + x308 * x36) * x3) - d * x948 + x36 * x737
+            + x311 * x35;
+        let x952 = x935 * Ixz;
+        let x953 = (x582 + x548) * x28 - x925 + x926 - (x5 * x931 + x7 * x937) * J1
+            - (x14 * x938 + 0.5 * (x61 * x939)) * theta_dot + x940
+            + (x942 - x944 + x11 * x945) * x9 + x3 * (x949 - x951 * x0) - x952;
+        let x954 = x944 - x942;
+        let x955 = x380 * x46 + x279 * x55 - x929 * x113 + x31 * x767;
+        let x956 = x261 * x55;
+        let x957 = d * x929 + x38 * x380 - x956 + a_ * (x31 * x604 * x9 + x7 * x929);
+        let x958 = x111 * x957 - x955 * x113;
+        let x959 = x42 * x303;
+        let x960 = x35 * x308;
+        let x961 = x959 + x960;
+        let x962 = J2 * (x961 - x933 - x934);
+        let x963 = Iyz * x929;
+        let x964 = x95 * x256;
+        let x965 = x961 * J1;
+        let x966 = x51 * x264;
+        let x967 = (x584 - x585) * x28;
+        let x968 = x33 * x289;
+        let x969 = x935 * Izz;
+        let x970 = x38 * x279;
+        let x971 = x46 * x261;
+        let x972 = x971 - x970;
+        let x973 = x972 * J1;
+        let x974 = ((-Iyy * x929 - x51 * x259) + (-x28 * x597 - x33 * x332))
+            + ((-x973 - Iyz * x935) + (x102 * x256 - J2 * (x970 - x971 + x929)));
+        let x975 = x35 * x342 + x58 * x303 + a_ * (x757 * x36 - x5 * x935) - d * x935;
+        let x976 = x975 * x119;
+        let x977 = x752 * x36 - x935 * x121 - x42 * x342 - x58 * x308;
+        let x978 = x121 * x977;
+        let x979 = x33 * (x925 - x926 - x940 + x28 * x547 + x952) - x954 * x46
+            + x953 * x33 - m2 * (x31 * x958 - x945 * x55) - x949 * x42
+            + x28
+                * ((x963 - x962 - x964 + x965 + x966 - x967 + x968 + x969) * x25 + x581
+                    + x974 * x20) - ((x976 + x978) * x36 - x951 * x58) * m1
+            - (x35 * x931 - x38 * x937) * J1
+            - theta_dot * (0.5 * (x126 * x939) + x61 * x938);
+        let x980 = x28 * phi_dot;
+        let x981 = (x974 - x5 * x949 - x142 * x931) * x25
+            - theta_dot * (0.5 * (x150 * x939) + x26 * x938)
+            + x20
+                * (x962 - x963 + x7 * x954 + x964 - x965 - x966 + x967 - x937 * x131
+                    - x968 - x969) - m2 * (x188 * x945 + x958 * x25)
+            - (x20 * (-x976 - x978) + x951 * x192) * m1 + x163 * x980;
+        let x982 = theta_dot * x938;
+        let x983 = gamma1_dot * x25;
+        let x984 = x5 * x291 + x3 * (x253 - x983);
+        let x985 = x305 * x162;
+        let x986 = x20 * x303;
+        let x987 = J2 * (x984 - x985 + x986) + (x985 - x986) * J1;
+        let x988 = a_ * (x3 * (x20 * x308 - x337 * x25) - x291) - x984 * d - x119 * x986
+            + x311 * x162;
+        let x989 = gamma2_dot * x20 - x253;
+        let x990 = x435 * x274 + x7 * x989;
+        let x991 = x5 * (x983 - x253) + x3 * x291;
+        let x992 = x274 * x49;
+        let x993 = x332 * x25;
+        let x994 = x265 * x161 + x261 * x25;
+        let x995 = x994 * J1;
+        let x996 = -(x274 * x25);
+        let x997 = x7 * x996 + x9 * x989;
+        let x998 = J2 * (x994 + x997);
+        let x999 = a_ * ((x376 * x20 - x279 * x25) * x9 - x996) - x997 * d - x268 * x161
+            - x732 * x25;
+        let x1000 = x259 * x136;
+        let x1001 = x264 * x145;
+        let x1002 = x289 * x20;
+        let x1003 = x3 * (x987 - x0 * x988) - (x7 * x990 + x5 * x991) * J1 - x992 - x993
+            + x9 * (x995 - x998 + x11 * x999) + x328 + x1000 + x1001 - x1002;
+        let x1004 = x136 * x256;
+        let x1005 = x264 * x129;
+        let x1006 = x5 * x303;
+        let x1007 = x773 + x1006;
+        let x1008 = x1007 * J1;
+        let x1009 = -phi_dot - x255;
+        let x1010 = J2 * (x1007 + x1009) - x1008;
+        let x1011 = x280 - x770;
+        let x1012 = x1011 * J1;
+        let x1013 = x770 - x280;
+        let x1014 = (x1013 + x1009) * J2;
+        let x1015 = x998 - x995;
+        let x1016 = x253 * Ixz;
+        let x1017 = x274 * x99;
+        let x1018 = ((x585 - x253 * Ixy) + x94 * x274) + (-x129 * x259 - x256 * x145);
+        let x1019 = x767 * x25 + x20 * (x274 * x113 - x765 - x766);
+        let x1020 = d * x274;
+        let x1021 = x20 * (x763 - x1020 - x762) + (x7 * x291 + x435 * x604) * a_;
+        let x1022 = x111 * x1021 - x1019 * x113;
+        let x1023 = x20 * x614 + (x753 - x121 * x274) * x25;
+        let x1024 = x1023 * x121;
+        let x1025 = (x758 - x1020 + x759) * x25 + a_ * (x610 * x20 + x5 * x996);
+        let x1026 = x1025 * x119;
+        let x1027 = x20
+            * (x1004 - x990 * x131 - x1005 + (x1010 - x1012 - x1014) * x25 + x7 * x1015
+                + x1016 - x1017 - x596) - x393 - x394
+            + (x1018 - x142 * x991 - x5 * x987) * x25 - m2 * (x1022 * x25 + x188 * x999)
+            - (x20 * (-x1024 - x1026) + x192 * x988) * m1;
+        let x1028 = x28
+            * (x20 * (x1018 - x20 * (x1012 + x1014))
+                + x25 * (x1005 - x1004 - x1010 * x25 - x1016 + x1017 + x596))
+            - x42 * x987 + x33 * (x992 - x322 + x993 - x1000 - x1001 + x1002)
+            - x1015 * x46 - ((x1024 + x1026) * x36 - x58 * x988) * m1 + x33 * x1003
+            - x354 - x355 - m2 * (x1022 * x31 - x999 * x55)
+            - (x35 * x991 - x38 * x990) * J1;
+        let x1029 = x411 * x33;
+        let x1030 = (-0.5 * x444 - 0.5 * x439) + x454;
+        let x1031 = x1030 - 2.0 * x37;
+        let x1032 = x431 + (-0.5 * x421 - 0.5 * x417);
+        let x1033 = x1032 + 2.0 * x34;
+        let x1034 = x264 - gamma2_dot;
+        let x1035 = -x262 - x263;
+        let x1036 = gamma2_dot + x1035;
+        let x1037 = x283 + J2 * x1036;
+        let x1038 = a_ * (x264 - x10 * x264) - x7 * (x1036 * d + x268);
+        let x1039 = x259 - gamma1_dot;
+        let x1040 = x837 + J2 * x1039;
+        let x1041 = x5 * (x311 - d * x1039) + x378 * (x4 - 1.0);
+        let x1042 = theta_dot * x29;
+        let x1043 = (x1038 * x11 - x7 * (x1034 * J1 + x1037)) * x9 + x253 * x26
+            + (x5 * (x1040 - x1039 * J1) - x1041 * x0) * x3 + x662 * x1042;
+        let x1044 = x5 * x308;
+        let x1045 = x3 * x303;
+        let x1046 = x1044 - x1045;
+        let x1047 = J2 * (x1046 + x1035);
+        let x1048 = x264 * (Iyy - Ixx);
+        let x1049 = x1045 - x1044;
+        let x1050 = x1049 * J1;
+        let x1051 = x9 * x261;
+        let x1052 = x7 * x279;
+        let x1053 = x1051 + x1052;
+        let x1054 = x1053 * J1;
+        let x1055 = x259 - x1051;
+        let x1056 = (x1054 + (2.0 * x329 + (x1055 - x1052) * J2))
+            + (x259 * (Iyy + Ixx - Izz) + Iyz * x604);
+        let x1057 = d * x1055 - x16 * x279;
+        let x1058 = d * x280;
+        let x1059 = x111 * x1057 - 2.0 * (x1058 * x113);
+        let x1060 = x3 * x1039;
+        let x1061 = x1034 * x9;
+        let x1062 = x5 * (x342 - x341) - d * (x264 + x1045);
+        let x1063 = x119 * x1062;
+        let x1064 = x3 * (x848 - x341);
+        let x1065 = x1064 * x121;
+        let x1066 = ((x745 + 2.0 * x287 - x1047 - x1048 - x1050 + 2.0 * x288) * x25
+            - x20 * x1056 + x150 * psi_dot) * x28 + x33 * x1043
+            - m2 * (x31 * x1059 - x1038 * x55) - x133 * x1037 - x1040 * x140
+            - (x1060 * x35 - x38 * x1061) * J1 + x708 * x1042
+            - ((x1063 + x1065) * x36 - x1041 * x58) * m1;
+        let x1067 = (x681 - x154 + x130) * x1042 + x253 * x163
+            - m2 * (x1038 * x188 + x1059 * x25)
+            - (x1040 * x6 + x1056 + x1060 * x142) * x25
+            - (x1041 * x192 + (-x1063 - x1065) * x20) * m1
+            + x20
+                * (x1047 - x745 - 2.0 * x287 + x1048 + x1050 + x8 * x1037 - 2.0 * x288
+                    - x1061 * x131);
+        let x1068 = 2.0 * x301 + 2.0 * x302;
+        let x1069 = x303 * J1 - x1068 * J2;
+        let x1070 = (x1069 - x1 * x1068) * x3 - x1044 * J1;
+        let x1071 = x305 * x121;
+        let x1072 = -x0 * (2.0 * (x1071 * x20) + x1068 * x192)
+            - (x5 * x1069 + x142 * x308) * x25;
+        let x1073 = x33 * x1070 - x308 * x793 - x0 * (-x1068 * x58 - 2.0 * (x1071 * x36))
+            - x42 * x1069;
+        let x1074 = -(x279 * J1);
+        let x1075 = x1051 * (J1 - 2.0 * J2 - 2.0 * x12) - x7 * x1074;
+        let x1076 = 2.0 * J2 - J1;
+        let x1077 = x265 * x113;
+        let x1078 = (x770 * x1076 + x279 * x131) * x20
+            + (2.0 * (x1077 * x25) + 2.0 * (x188 * x261)) * x11;
+        let x1079 = x33 * x1075 - x971 * x1076 + x38 * x1074
+            + x11 * (2.0 * (x31 * x1077) - 2.0 * x956);
         Derivatives {
             qdot: [
                 psi_dot,
@@ -5056,8 +5062,8 @@ pub mod maggi {
             ],
             matrix: [
                 [x14, x64, x68, 0.0, 0.0, x78, x85, x90],
-                [x64, x141 + x166 * x31, x168, x171, x174, x195, x221, x230],
-                [x68, x168, x235 * x65 - x232 * x16, x239, 0.0, x241, x243, x245],
+                [x64, x30 * x153 + x166, x168, x171, x174, x195, x221, x230],
+                [x68, x168, x235 * x65 - x232 * x20, x239, 0.0, x241, x243, x245],
                 [0.0, x171, x239, x2, 0.0, x246, x247, x248],
                 [0.0, x174, 0.0, 0.0, x13, x249, x250, x251],
                 [x78, x195, x241, x246, x249, x252, 0.0, 0.0],
@@ -5065,25 +5071,27 @@ pub mod maggi {
                 [x90, x230, x245, x248, x251, 0.0, 0.0, x252],
             ],
             force: [
-                x334,
-                x31 * x387 + x400,
-                x387 * x65 - x401,
-                x301 * x307 - x0 * x384 - x362 + x238 * x268 - x402 * x237,
-                x326 * x330 - x347 * x11 - x354 + x404 * x173,
-                x407,
-                x216 * x267 - (x377 * x212 + x384 * x208 + x83 * x311) * m1
-                    - theta_dot * x408 - m2 * (x344 * x198 + x409 + x347 * x201),
-                (x349 * x228 - x88 * x456) * x29
-                    - (x412
-                        + d
-                            * (x413 * x419 + (x427 + gamma1_dot * x428) * gamma1_dot
-                                + theta_dot * (x433 + theta_dot * x428))) * m1
+                x335,
+                x30 * x388 + x401,
+                x388 * x65 - x402,
+                x304 * x308 - x0 * x351 - x370 + x238 * x273 - x403 * x237,
+                x282 * x359 + x405 * x173 - x361 - x385 * x11,
+                x408,
+                x216 * x254 - m2 * (x409 + x385 * x201 + x382 * x198)
+                    - (x344 * x212 + x351 * x208 + x312 * x83) * m1 - theta_dot * x410,
+                x28 * (x356 * x228 - x457 * theta_dot)
+                    - m1
+                        * (x413
+                            + d
+                                * (x414 * x420 + (x428 + gamma1_dot * x429) * gamma1_dot
+                                    + theta_dot * (x434 + theta_dot * x429)))
                     - m2
-                        * (((theta_dot * x442 + x451) * theta_dot
-                            + gamma2_dot * (x455 + gamma2_dot * x442) + x441 * x413) * d
-                            - x412),
+                        * (d
+                            * (gamma2_dot * (gamma2_dot * x443 + x453)
+                                + theta_dot * (x456 + theta_dot * x443) + x414 * x442)
+                            - x413),
             ],
-            checks: [x29],
+            checks: [x28],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5104,130 +5112,128 @@ pub mod maggi {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x464, x78, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x475, x195, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x476, x241, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x477, x246, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x478, x249, 0.0],
-                    [x464, x475, x476, x477, x478, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x465, x78, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x476, x195, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x477, x241, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x478, x246, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x479, x249, 0.0],
+                    [x465, x476, x477, x478, x479, 0.0, 0.0, 0.0],
                     [x78, x195, x241, x246, x249, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x493, x494, 0.0, 0.0, x495, x496, x498],
-                    [
-                        x493,
-                        (x509 + x15 * x510) * x16,
-                        x511,
-                        x513,
-                        x515,
-                        x522,
-                        x526,
-                        x528,
-                    ],
+                    [0.0, x494, x495, 0.0, 0.0, x496, x497, x499],
                     [
                         x494,
-                        x511,
-                        (x68 - x16 * x510
-                            + x30
-                                * (x508 * x15 - x500 * x16 + x34 * (x30 * x235 + x494)))
-                            * x15,
+                        (x510 + x511 * x25) * x20,
+                        x512,
+                        x514,
+                        x516,
+                        x523,
+                        x527,
                         x529,
+                    ],
+                    [
+                        x495,
+                        x512,
+                        ((x507 * x25 - x20 * x509 + x33 * (x29 * x235 + x495)) * x29
+                            - x511 * x20 + x68) * x25,
                         x530,
                         x531,
                         x532,
                         x533,
+                        x534,
                     ],
-                    [0.0, x513, x529, 0.0, 0.0, x534, x535, x536],
-                    [0.0, x515, x530, 0.0, 0.0, x537, x538, x539],
-                    [x495, x522, x531, x534, x537, 0.0, 0.0, 0.0],
-                    [x496, x526, x532, x535, x538, 0.0, 0.0, 0.0],
-                    [x498, x528, x533, x536, x539, 0.0, 0.0, 0.0],
+                    [0.0, x514, x530, 0.0, 0.0, x535, x536, x537],
+                    [0.0, x516, x531, 0.0, 0.0, x538, x539, x540],
+                    [x496, x523, x532, x535, x538, 0.0, 0.0, 0.0],
+                    [x497, x527, x533, x536, x539, 0.0, 0.0, 0.0],
+                    [x499, x529, x534, x537, x540, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x660, x663, 0.0, 0.0, x666, x668, x671],
+                    [0.0, x661, x664, 0.0, 0.0, x667, x669, x672],
                     [
-                        x660,
-                        x682 * x15 - x167
-                            + x30
-                                * (x16 * x686 + (x165 + x34 * (x64 + x16 * x659)) * x15),
+                        x661,
+                        x29 * ((x33 * (x660 * x20 + x64) + x152) * x25 + x683 * x20)
+                            + x685 * x25 - x167,
+                        x686,
                         x687,
-                        x688,
                         x171,
-                        x700,
-                        x704,
-                        x708,
+                        x699,
+                        x703,
+                        x707,
                     ],
                     [
-                        x663,
-                        x687,
-                        x30
-                            * ((x685 * x15
-                                + (x680 - x679 - x675 - x676 + x30 * x709 + x489 - x677)
-                                    * x16) * x15
-                                + (x34 * (x67 - x66 + x662 * x15) + x233 - x234) * x16)
-                            - (x30 * (x34 * (x658 * x15 - x67) - x233 + x15 * x681)
-                                - x673 * x16 - x139) * x16 - x232 * x15,
+                        x664,
+                        x686,
+                        x29
+                            * ((x20
+                                * (x29 * x708 + x673 - x676 - x677 - x675 + x481 - x678)
+                                + x682 * x25) * x25
+                                + (x233 + x33 * (x663 * x25 - x66 + x67) - x234) * x20)
+                            - x20
+                                * ((x33 * (x659 * x25 - x67) - x233 + x679 * x25) * x29
+                                    - x684 * x20 - x164) - x232 * x25,
+                        x709,
                         x710,
                         x711,
                         x712,
                         x713,
-                        x714,
                     ],
-                    [0.0, x688, x710, 0.0, 0.0, x716, x718, x719],
-                    [0.0, x171, x711, 0.0, 0.0, x721, x722, x723],
-                    [x666, x700, x712, x716, x721, 0.0, 0.0, 0.0],
-                    [x668, x704, x713, x718, x722, 0.0, 0.0, 0.0],
-                    [x671, x708, x714, x719, x723, 0.0, 0.0, 0.0],
+                    [0.0, x687, x709, 0.0, 0.0, x715, x717, x718],
+                    [0.0, x171, x710, 0.0, 0.0, x720, x721, x722],
+                    [x667, x699, x711, x715, x720, 0.0, 0.0, 0.0],
+                    [x669, x703, x712, x717, x721, 0.0, 0.0, 0.0],
+                    [x672, x707, x713, x718, x722, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x5 * x791, x797, x799, 0.0, 0.0, x716, x718, x719],
-                    [x797, x130 * x808 + x31 * x811, x812, 0.0, 0.0, x819, x825, x827],
+                    [x5 * x790, x796, x798, 0.0, 0.0, x715, x717, x718],
+                    [x796, x30 * x805 + x105 * x809, x810, 0.0, 0.0, x817, x823, x825],
                     [
-                        x799,
-                        x812,
-                        x828 * (x34 * x798 - x806 * x16 + x30 * x810)
-                            - (x828 * x807 - x674 * x802) * x16,
+                        x798,
+                        x810,
+                        (x33 * x797 - x802 * x20 + x29 * x804) * x826
+                            - x20 * (x826 * x808 - x20 * x807),
+                        x827,
+                        0.0,
+                        x828,
                         x829,
-                        0.0,
                         x830,
-                        x831,
-                        x832,
                     ],
-                    [0.0, 0.0, x829, 0.0, 0.0, x833, x834, x835],
+                    [0.0, 0.0, x827, 0.0, 0.0, x831, x832, x833],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x716, x819, x830, x833, 0.0, 0.0, 0.0, 0.0],
-                    [x718, x825, x831, x834, 0.0, 0.0, 0.0, 0.0],
-                    [x719, x827, x832, x835, 0.0, 0.0, 0.0, 0.0],
+                    [x715, x817, x828, x831, 0.0, 0.0, 0.0, 0.0],
+                    [x717, x823, x829, x832, 0.0, 0.0, 0.0, 0.0],
+                    [x718, x825, x830, x833, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x7 * x858, x869, x870, 0.0, 0.0, x871, x722, x723],
+                    [x7 * x856, x865, x866, 0.0, 0.0, x867, x721, x722],
                     [
-                        x869,
-                        (x876 + x878) * x15 + x881 * x875,
-                        x882,
+                        x865,
+                        x872 * x873 + (x875 + x877) * x25,
+                        x878,
                         0.0,
-                        x883,
+                        x879,
+                        x886,
                         x891,
-                        x897,
-                        x901,
+                        x895,
                     ],
                     [
-                        x870,
-                        x882,
-                        (x34 * x870 - x873 * x129 + x880 * x65) * x65
-                            - x129 * (x874 * x65 - x902),
+                        x866,
+                        x878,
+                        (x870 * x65 + x33 * x866 - x871 * x106) * x65
+                            - (x876 * x65 - x896) * x106,
                         0.0,
                         0.0,
-                        x903,
-                        x904,
-                        x905,
+                        x897,
+                        x898,
+                        x899,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x883, 0.0, 0.0, 0.0, x906, x907, x908],
-                    [x871, x891, x903, 0.0, x906, 0.0, 0.0, 0.0],
-                    [x722, x897, x904, 0.0, x907, 0.0, 0.0, 0.0],
-                    [x723, x901, x905, 0.0, x908, 0.0, 0.0, 0.0],
+                    [0.0, x879, 0.0, 0.0, 0.0, x900, x901, x902],
+                    [x867, x886, x897, 0.0, x900, 0.0, 0.0, 0.0],
+                    [x721, x891, x898, 0.0, x901, 0.0, 0.0, 0.0],
+                    [x722, x895, x899, 0.0, x902, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5347,220 +5353,214 @@ pub mod maggi {
                     0.0,
                     0.0,
                     0.0,
-                    x472 * x267 - theta_dot * (x282 * x473 + x463 * x405)
-                        - (x377 * x468 + x462 * x311 + x384 * x470) * m1
-                        - m2 * (x347 * x465 - x466 * x344 - x409),
-                    x407,
+                    x473 * x254 - m2 * (x466 * x385 - x409 - x467 * x382)
+                        - m1 * (x344 * x469 + x351 * x471 + x463 * x312)
+                        - theta_dot * (x321 * x474 + x464 * x406),
+                    x408,
                     0.0,
                 ],
                 [
-                    x578,
-                    x611 * x15 + x616 * x16,
-                    x616 * x15 - x611 * x16,
-                    (J2 * (x550 + x598 - x599) + x601 - x580 * x0 - x617 * x70) * psi_dot
-                        - theta_dot * (x575 * x237 + x238 * x618) * x65,
-                    psi_dot * (x588 - x11 * x609 - x589 - x173 * x557)
-                        - theta_dot * (x618 * x619 + x575 * x173) * x31,
-                    (x228 * x176 - x34 * x193) * x349
-                        - (x69 * x620
-                            + psi_dot * (x182 * x584 + x580 * x184 + x76 * x562)) * m1
+                    x579,
+                    x616 * x20 + x617 * x25,
+                    x616 * x25 - x20 * x617,
+                    (x593 - x238 * x549 + J2 * (x590 - x591 + x569) - x0 * x611)
+                        * psi_dot - (x541 * x237 + x238 * x618) * x619,
+                    (x599 - x605 * x11 - x173 * x558 - x600) * psi_dot
+                        - x620 * (x618 * x621 + x541 * x173),
+                    (-x29 * (x320 * x521 + x542 * x186) - d * (x176 * x622 + x543 * x77))
+                        * theta_dot
+                        - (psi_dot * (x76 * x563 + x615 * x182 + x184 * x611)
+                            + x69 * x623) * m1 + (x228 * x176 - x33 * x193) * x356
                         - m2
-                            * (x621 * x69
-                                + psi_dot * (x74 * x551 + x179 * x609 + x177 * x607))
+                            * (x624 * x69
+                                + (x74 * x575 + x605 * x179 + x177 * x609) * psi_dot),
+                    (x228 * x196 - x33 * x216) * x356
+                        - m1
+                            * (x623 * x72
+                                + (x615 * x212 + x208 * x611 + x83 * x563) * psi_dot)
                         + theta_dot
-                            * (-x30 * (x281 * x519 + x576 * x186)
-                                - d * (x176 * x622 + x577 * x77)),
-                    (x228 * x196 - x34 * x216) * x349
+                            * (-(x543 * x84 + x196 * x622) * d
+                                - x29 * (x320 * x525 + x219 * x542))
                         - m2
-                            * (x621 * x72
-                                + (x201 * x609 + x551 * x79 + x607 * x198) * psi_dot)
-                        + theta_dot
-                            * (-(x577 * x84 + x196 * x622) * d
-                                - x30 * (x281 * x524 + x219 * x576))
-                        - (psi_dot * (x212 * x584 + x83 * x562 + x580 * x208)
-                            + x72 * x620) * m1,
-                    x349 * (x29 * x527 - x34 * x228)
-                        - theta_dot * d * (x34 * x497 * x277 + x623 * x577)
-                        - (x624
-                            + d
-                                * (x632 * x413
-                                    + (x635 * theta_dot - x634
-                                        + gamma1_dot * (x637 - 2.0 * x41)) * theta_dot
-                                    + gamma1_dot * (x639 + x635 * gamma1_dot))) * m1
+                            * ((x79 * x575 + x605 * x201 + x198 * x609) * psi_dot
+                                + x624 * x72),
+                    (x28 * x528 - x33 * x228) * x356
                         - (d
-                            * (theta_dot * (theta_dot * x645 + x650)
-                                + gamma2_dot
-                                    * (theta_dot * (x652 + 2.0 * x44) + x654
-                                        + gamma2_dot * x645) + x413 * x644) - x624) * m2,
+                            * (x632 * x414
+                                + (x635 * theta_dot - x634
+                                    + gamma1_dot * (x637 - 2.0 * x41)) * theta_dot
+                                + gamma1_dot * (x639 + x635 * gamma1_dot)) + x640) * m1
+                        - theta_dot * d * (x33 * x498 * x327 + x28 * x543 * x88)
+                        - m2
+                            * ((gamma2_dot
+                                * (gamma2_dot * x646 + x649
+                                    + (2.0 * x44 + x654) * theta_dot)
+                                + (theta_dot * x646 + x655) * theta_dot + x645 * x414) * d
+                                - x640),
                 ],
                 [
                     x751,
-                    x780 * x15 - x401
-                        + (x781 * x16 + x15 * x386 + x34 * (x751 * x16 + x334 * x15))
-                            * x30,
-                    x30 * (x781 * x15 - x16 * x386 + x34 * (x751 * x15 - x334 * x16))
-                        - x780 * x16 - x400,
-                    x238 * x404 - x776 - x0 * x771 + (x17 * x773 + x5 * x301) * x263,
-                    x268 * x619 - x402 * x173 - x256 * (x17 * x327 + x329 * x760)
-                        - x754 * x11 - x362,
-                    x267 * x699
+                    x780 * x25
+                        + x29
+                            * (x33 * (x335 * x25 + x20 * x751) + x20 * x781 + x25 * x387)
+                        - x402,
+                    (x781 * x25 - x20 * x387 + x33 * (x751 * x25 - x335 * x20)) * x29
+                        - x20 * x780 - x401,
+                    x238 * x405 - x776 - x0 * x760 + (x15 * x773 + x5 * x304) * x259,
+                    x273 * x621 - x403 * x173 - x264 * (x15 * x280 + x282 * x770)
+                        - x764 * x11 - x370,
+                    x254 * x698
                         - m2
-                            * (x177 * x758 + x754 * x179 + x74 * x734 + x782 * x664
-                                + x76 * x328)
-                        - (x182 * x765 + x76 * x783 + x664 * x311 + x184 * x771) * m1
-                        - theta_dot * (x405 * x665 + x696 * x282),
-                    x702 * x267
+                            * (x177 * x768 + x764 * x179 + x74 * x733 + x782 * x665
+                                + x76 * x281)
+                        - (x182 * x754 + x76 * x783 + x312 * x665 + x184 * x760) * m1
+                        - theta_dot * (x406 * x666 + x695 * x321),
+                    x701 * x254 - theta_dot * (x406 * x668 + x321 * x702)
+                        - (x212 * x754 - x312 * x79 + x83 * x783 + x760 * x208) * m1
                         - m2
-                            * (x754 * x201 + x328 * x83 - x782 * x79 + x79 * x734
-                                + x758 * x198) - theta_dot * (x405 * x667 + x282 * x703)
-                        - (x212 * x765 - x79 * x311 + x83 * x783 + x771 * x208) * m1,
-                    x267 * x707
+                            * (x764 * x201 - x79 * x782 + x281 * x83 + x79 * x733
+                                + x768 * x198),
+                    x254 * x706
                         - d
-                            * (m2
-                                * (gamma2_dot
-                                    * (gamma2_dot * x785 + theta_dot * x653 + x652 * phi_dot)
-                                    + x785 * x413
-                                    + theta_dot * (theta_dot * x785 + x786 * phi_dot))
-                                + m1
-                                    * ((x787 * phi_dot + x638 * gamma1_dot - x788 * theta_dot)
-                                        * theta_dot
-                                        + gamma1_dot * (x637 * phi_dot - x788 * gamma1_dot)
-                                        - x788 * x413) + x461 * x670),
+                            * (m1
+                                * ((x784 * phi_dot + x638 * gamma1_dot - x785 * theta_dot)
+                                    * theta_dot
+                                    + gamma1_dot * (x637 * phi_dot - x785 * gamma1_dot)
+                                    - x785 * x414) + x462 * x671
+                                + m2
+                                    * (theta_dot * (theta_dot * x787 + phi_dot * x788)
+                                        + x787 * x414
+                                        + gamma2_dot
+                                            * (x654 * phi_dot + theta_dot * x648 + gamma2_dot * x787))),
                 ],
                 [
-                    x841,
-                    x852 * x15 + x31 * x853,
-                    x853 * x65 - x852 * x16,
-                    x0 * ((x402 + x268) * x122 - x842 - x376 + x843) - x301 * x300
-                        + x850 * x17,
+                    x839,
+                    x850 * x25 + x30 * x851,
+                    x851 * x65 - x850 * x20,
+                    x0 * ((x403 + x273) * x121 - x843 - x343 + x844) - x304 * x303
+                        + x841 * x15,
                     0.0,
+                    (x182 * x351 - x836 * x76 - x182 * x852 + x254 * x814 - x184 * x853
+                        - (x406 * x714 + x321 * x815) * theta_dot) * m1,
                     m1
-                        * (x182 * x384 - x182 * x854 + x267 * x816 - x837 * x76
-                            - x184 * x855 - (x405 * x715 + x282 * x817) * theta_dot),
-                    m1
-                        * (x212 * x384 - x212 * x854 - x855 * x208
-                            - theta_dot * (x282 * x823 + x405 * x717) + x267 * x822
-                            - x837 * x83),
-                    ((x349 * x826 - x5 * x405 * x255) * x29
+                        * (x212 * x351 - x212 * x852 - x853 * x208
+                            - theta_dot * (x321 * x821 + x406 * x716) + x254 * x820
+                            - x836 * x83),
+                    ((x356 * x824 - x5 * x406 * x263) * x28
                         - d
                             * (theta_dot
-                                * (x639 + (2.0 * x486 + x787) * gamma1_dot
-                                    + x857 * theta_dot) + x413 * x856
-                                + gamma1_dot * (x857 * gamma1_dot - x634))) * m1,
+                                * (x639 + (2.0 * x487 + x784) * gamma1_dot
+                                    + x855 * theta_dot) + x414 * x854
+                                + gamma1_dot * (x855 * gamma1_dot - x634))) * m1,
                 ],
                 [
-                    x915,
-                    x926 * x31 + x927 * x15,
-                    x926 * x65 - x927 * x16,
+                    x908,
+                    x30 * x920 + x921 * x25,
+                    x920 * x65 - x921 * x20,
                     0.0,
-                    x11 * (x920 + (x403 - x292) * x106 - x921 - x341) + x319 * x330
-                        + x329 * x917,
+                    (x913 + (x404 - x293) * x113 - x381 - x914) * x11 + x282 * x918
+                        + x282 * x912,
                     m2
-                        * (x344 * x179 - x177 * x923 + x74 * x914 - x179 * x922
-                            + x890 * x267 + theta_dot * (x405 * x886 - x282 * x885)),
+                        * (theta_dot * (x74 * x922 - x321 * x881) - x177 * x911
+                            + x74 * x907 - x915 * x179 + x382 * x179 + x885 * x254),
                     m2
-                        * (x79 * x914 + theta_dot * (x405 * x894 - x282 * x895)
-                            - x201 * x922 + x344 * x201 + x893 * x267 - x923 * x198),
-                    m2
-                        * (x29 * (x900 * x349 + x435 * x456)
-                            - d
-                                * ((x654 + theta_dot * x929) * theta_dot
-                                    + (gamma2_dot * x929 + theta_dot * (x786 - 2.0 * x484)
-                                        + x650) * gamma2_dot + x928 * x413)),
+                        * (x382 * x201 + x79 * x907 - x915 * x201 + x888 * x254
+                            + theta_dot * (x79 * x922 - x321 * x889) - x198 * x911),
+                    (x28 * (x258 * x922 + x356 * x894)
+                        - ((x649 + theta_dot * x924) * theta_dot
+                            + gamma2_dot
+                                * (gamma2_dot * x924 + x655
+                                    + (x788 - 2.0 * x485) * theta_dot) + x923 * x414) * d) * m2,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x957,
-                    x984 * x15 + x985 * x31,
-                    x985 * x65 - x16 * x984,
-                    x617 * x32 - 0.5 * (x986 * x237 * x65) + x965 - x972 * x0
-                        + J2 * (x933 - x958 - x959),
-                    (x943 - 0.5 * (x31 * x986)) * x173 - x982 + (x953 + x981) * J2
-                        - x11 * x976,
-                    x193 * x978 - m2 * (x179 * x976 + x177 * x974 + x74 * x936)
-                        - m1 * (x954 * x76 + x182 * x970 + x972 * x184)
-                        - theta_dot * (0.5 * (x955 * x186) + x78 * x956),
-                    x216 * x978 - (x85 * x956 + 0.5 * (x219 * x955)) * theta_dot
-                        - m2 * (x201 * x976 + x79 * x936 + x974 * x198)
-                        - m1 * (x212 * x970 + x972 * x208 + x954 * x83),
-                    (x228 * phi_dot - x987 * x89) * x29,
+                    x953,
+                    x30 * x979 + x981 * x25,
+                    x979 * x65 - x981 * x20,
+                    J2 * (x935 - x959 - x960) - x975 * x0 + x238 * x933 + x965
+                        - 0.5 * (x619 * x237 * x318),
+                    (x928 - 0.5 * (x620 * x318)) * x173 - x973 + (x950 + x972) * J2
+                        - x11 * x957,
+                    x193 * x980 - theta_dot * (0.5 * (x939 * x186) + x78 * x938)
+                        - m1 * (x182 * x977 + x184 * x975 + x951 * x76)
+                        - m2 * (x179 * x957 + x177 * x955 + x74 * x945),
+                    x216 * x980 - (x85 * x938 + 0.5 * (x219 * x939)) * theta_dot
+                        - m2 * (x201 * x957 + x79 * x945 + x955 * x198)
+                        - (x975 * x208 + x212 * x977 + x951 * x83) * m1,
+                    (x228 * phi_dot - x982 * x89) * x28,
                 ],
                 [
-                    x1008,
-                    x31 * x1032 + x1033 * x15,
-                    x1032 * x65 - x1033 * x16,
-                    (J2 * (x269 - x773 - x1017) - x281 * x237 + x1019) * x15
-                        - x0 * x1024,
-                    x16 * (J2 * (x1009 + x269) - x281 * x173 + x1011 * J1) - x11 * x1028,
-                    -(m2 * (x179 * x1028 + x74 * x1001 + x177 * x1029) + x406
-                        + m1 * (x182 * x1026 + x76 * x996 + x184 * x1024)),
-                    -((x212 * x1026 + x208 * x1024 + x83 * x996) * m1 + x408
-                        + m2 * (x1001 * x79 + x1029 * x198 + x201 * x1028)),
+                    x1003,
+                    x1027 * x25 + x30 * x1028,
+                    x1028 * x65 - x1027 * x20,
+                    (J2 * (x274 - x773 - x1006) - x320 * x237 + x1008) * x25
+                        - x1025 * x0,
+                    x20 * (J2 * (x1011 + x274) - x320 * x173 + x1013 * J1) - x1021 * x11,
+                    -(m2 * (x1021 * x179 + x74 * x999 + x177 * x1019) + x407
+                        + (x182 * x1023 + x1025 * x184 + x76 * x988) * m1),
+                    -(m2 * (x1021 * x201 + x79 * x999 + x1019 * x198) + x410
+                        + (x1025 * x208 + x212 * x1023 + x83 * x988) * m1),
                     -(m2
-                        * (d * (x1035 * theta_dot - gamma2_dot * x454 + x451)
-                            - 2.0 * x1036)
-                        + ((theta_dot * x1038 + x433) * d + 2.0 * x1036) * m1
-                        + x623 * x405),
+                        * ((x456 + x1031 * theta_dot - gamma2_dot * x452) * d
+                            - 2.0 * x1029) + x457 * x28
+                        + (2.0 * x1029 + (theta_dot * x1033 + x434) * d) * m1),
                 ],
                 [
-                    x1048,
-                    x1070 * x15 + x1071 * x31,
-                    x1071 * x65 - x1070 * x16,
-                    J2 * (x256 + x1068) + x238 * x254 + x1065 * J1 - x0 * x1060
-                        - x255 * x237,
-                    x263 * x173 - x1056 - x11 * x1051 + (x262 - x261 + x1055) * J2,
-                    x253 * x193
-                        - m2 * (x179 * x1051 + x74 * x1043 + 2.0 * (x177 * x1052))
-                        - m1 * (x184 * x1060 + x1047 * x76 + x182 * x1062)
-                        - x187 * x1044,
+                    x1043,
+                    x30 * x1066 + x1067 * x25,
+                    x65 * x1066 - x20 * x1067,
+                    J2 * (x264 + x1049) + x238 * x262 + x1046 * J1 - x0 * x1062
+                        - x263 * x237,
+                    x259 * x173 - x1054 - x11 * x1057 + (x258 - x257 + x1053) * J2,
+                    x253 * x193 - m1 * (x184 * x1062 + x1041 * x76 + x182 * x1064)
+                        - x187 * x1042
+                        - m2 * (x179 * x1057 + 2.0 * (x177 * x1058) + x74 * x1038),
                     x253 * x216
-                        - m2 * (2.0 * (x1052 * x198) + x201 * x1051 + x1043 * x79)
-                        - (x212 * x1062 + x1047 * x83 + x208 * x1060) * m1
-                        - x220 * x1044,
+                        - m2 * (x201 * x1057 + 2.0 * (x1058 * x198) + x1038 * x79)
+                        - (x212 * x1064 + x1041 * x83 + x208 * x1062) * m1
+                        - x220 * x1042,
                     x253 * x228
-                        - d
-                            * (m2
-                                * (gamma2_dot * x452 + theta_dot * x450 + phi_dot * x1034)
-                                + (x426 * gamma1_dot + x1037 * phi_dot + theta_dot * x429)
-                                    * m1 + x88 * x411),
+                        - ((phi_dot * x1030 + gamma2_dot * x445 + theta_dot * x455) * m2
+                            + (x427 * gamma1_dot + x1032 * phi_dot + theta_dot * x430)
+                                * m1 + x33 * theta_dot * x88) * d,
                 ],
                 [
-                    x1074,
-                    x1076 * x15 + x31 * x1077,
-                    x1077 * x65 - x1076 * x16,
+                    x1070,
+                    x1072 * x25 + x30 * x1073,
+                    x1073 * x65 - x1072 * x20,
                     0.0,
                     0.0,
-                    -((x1072 * x76 - 2.0 * (x182 * x302)) * x0),
-                    -(x0 * (x1072 * x83 - 2.0 * (x212 * x302))),
-                    -(x0 * (gamma1_dot * x1038 + x427 + theta_dot * x432)),
+                    -((x1068 * x76 - 2.0 * (x182 * x305)) * x0),
+                    -(x0 * (x1068 * x83 - 2.0 * (x212 * x305))),
+                    -(x0 * (gamma1_dot * x1033 + x428 + theta_dot * x433)),
                 ],
                 [
-                    x1079,
-                    x1082 * x15 + x1083 * x31,
-                    x1083 * x65 - x16 * x1082,
+                    x1075,
+                    x1078 * x25 + x1079 * x30,
+                    x1079 * x65 - x20 * x1078,
                     0.0,
                     0.0,
-                    -((2.0 * (x177 * x320) - 2.0 * (x74 * x319)) * x11),
-                    -((2.0 * (x320 * x198) - 2.0 * (x79 * x319)) * x11),
-                    -(x11 * (x455 + x1035 * gamma2_dot)),
+                    -((2.0 * (x177 * x265) - 2.0 * (x74 * x261)) * x11),
+                    -((2.0 * (x265 * x198) - 2.0 * (x79 * x261)) * x11),
+                    -(x11 * (x453 + x1031 * gamma2_dot)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             w: [
-                [0.0, x31, x65, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x15, x457, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x458, x459, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x30, x65, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x25, x458, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x459, x460, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [x460, -x267, x461, 0.0, 0.0, 0.0, 0.0, 0.0],
+            c: [x461, -x254, x462, 0.0, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5573,9 +5573,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x31 * x479, x479 * x65, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x30 * x492, x492 * x65, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x655 * x16, x655 * x15, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x656 * x20, x656 * x25, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5583,9 +5583,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x65, -x31, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x457, -x15, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x459, -x458, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x65, -x30, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x458, -x25, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x460, -x459, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5726,9 +5726,9 @@ pub mod maggi {
             d_c: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x575 * theta_dot * x520,
-                    x34 * x349,
-                    theta_dot * x577,
+                    x541 * theta_dot * x517,
+                    x33 * x356,
+                    theta_dot * x543,
                     0.0,
                     0.0,
                     0.0,
@@ -5741,9 +5741,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.5 * theta_dot * x955, -x978, x987, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x282, 0.0, x277, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x1044, -x253, x34 * x1044, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.5 * theta_dot * x939, -x980, x982, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x321, 0.0, x327, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1042, -x253, x33 * x1042, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -6091,16 +6091,16 @@ pub mod kane {
         let x78 = x9 * x52;
         let x79 = x9 * x57;
         let x80 = m2 + m0 + m1;
-        let x81 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x82 = u2 * x7;
-        let x83 = u3 + 2.0 * u4;
-        let x84 = x12 * u1;
-        let x85 = a_ * u3;
-        let x86 = d * (x82 * x83 + x83 * x84) + x85 * u1;
-        let x87 = x82 + x84;
-        let x88 = u3 + u4;
-        let x89 = x16 * x87;
-        let x90 = x88 * x89 - J2 * u4 * x87;
+        let x81 = u2 * x7;
+        let x82 = x12 * u1;
+        let x83 = x81 + x82;
+        let x84 = u3 + u4;
+        let x85 = x16 * x83;
+        let x86 = x84 * x85 - J2 * u4 * x83;
+        let x87 = a_ * u3;
+        let x88 = x87 * u1;
+        let x89 = u3 + 2.0 * u4;
+        let x90 = x88 + d * (x81 * x89 + x89 * x82);
         let x91 = 2.0 * u5 + u2;
         let x92 = u5 + u2;
         let x93 = x14 * u1;
@@ -6108,28 +6108,29 @@ pub mod kane {
         let x95 = x93 - x94;
         let x96 = (J2 * x91 - J1 * x92) * x95;
         let x97 = a_ * u2;
-        let x98 = d * (x91 * x94 - x93 * x91) - x97 * u1;
-        let x99 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x100 = x11 * u1 + x14 * u3;
-        let x101 = x14 * u5;
-        let x102 = x12 * u4;
-        let x103 = x12 * u2 - x7 * u1;
-        let x104 = a_ * u1;
-        let x105 = 2.0 * gamma2;
-        let x106 = f64::sin(x105);
-        let x107 = u1 * u1;
-        let x108 = x20 * x95 * x100;
-        let x109 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x110 = x89 * x103;
-        let x111 = 2.0 * gamma1;
-        let x112 = f64::sin(x111);
-        let x113 = d * u1;
-        let x114 = x7 * x113 - x18 * u2;
-        let x115 = x85 * u3 * x7 - x87 * x114;
-        let x116 = -x11 * x113 - u3 * x22;
-        let x117 = x116 * x95 + u2 * x11 * x97;
-        let x118 = (u5 * d + u2 * x44) * x92 - x116 * x100 - x97 * x101;
-        let x119 = x114 * x103 + x85 * x102 - (u3 * x61 + d * u4) * x88;
+        let x98 = x97 * u1;
+        let x99 = d * (x91 * x94 - x93 * x91) - x98;
+        let x100 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x101 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x102 = x11 * u1 + x14 * u3;
+        let x103 = x14 * u5;
+        let x104 = x12 * u4;
+        let x105 = x12 * u2 - x7 * u1;
+        let x106 = x20 * x95 * x102;
+        let x107 = 2.0 * gamma2;
+        let x108 = f64::sin(x107);
+        let x109 = u1 * u1;
+        let x110 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x111 = x85 * x105;
+        let x112 = 2.0 * gamma1;
+        let x113 = f64::sin(x112);
+        let x114 = d * u1;
+        let x115 = x7 * x114 - x18 * u2;
+        let x116 = x87 * u3 * x7 - x83 * x115;
+        let x117 = -x11 * x114 - u3 * x22;
+        let x118 = x117 * x95 + u2 * x11 * x97;
+        let x119 = (u5 * d + u2 * x44) * x92 - x117 * x102 - x97 * x103;
+        let x120 = x115 * x105 + x87 * x104 - (u3 * x61 + d * u4) * x84;
         Assembly {
             qdot: [x3, u2 * x2 - u3 * x1, x4 * x3 + u1, u4, u5, u6, u7, u8],
             matrix: [
@@ -6172,33 +6173,32 @@ pub mod kane {
                 [x40, x58, x73, x76, x79, 0.0, 0.0, x80],
             ],
             force: [
-                x7 * (x90 - x5 * x86) - u2 * x81 + x11 * (x98 * x9 - x96) + x99 * u3
-                    - (x102 * x103 - x100 * x101) * J1,
-                x81 * u1
+                x7 * (x86 - x5 * x90) + (x9 * x99 - x96) * x11 - u2 * x100 + x101 * u3
+                    - (x104 * x105 - x102 * x103) * J1,
+                x100 * u1 - x41 * x90 - x12 * x86 - x7 * u4 * x105 * J1 + x106
                     - m2
                         * (d
                             * (d
-                                * ((0.5 * (u3 * x106) - f64::cos(x105) * u1) * u3
-                                    - 0.5 * (x107 * x106))
-                                + ((u3 * u3 - x107 - (u5 + 2.0 * u2) * u5) * x11
-                                    - 2.0 * (x93 * u3)) * a_) - x85 * x104) - x12 * x90
-                    - x7 * u4 * x103 * J1 + x108 - x41 * x86 - x109 * u3,
-                x110 - x98 * x60 - u5 * x100 * x59 + u2 * x109
-                    - (d
-                        * (a_
-                            * ((u2 * u2 - x107 - u4 * (2.0 * u3 + u4)) * x7
-                                + 2.0 * (u2 * x84))
-                            + (u2 * (0.5 * (u2 * x112) + u1 * f64::cos(x111))
-                                - 0.5 * (x107 * x112)) * d) + x104 * x97) * m1 - x99 * u1
-                    - x14 * x96,
-                x110 - x115 * x5,
-                x108 - x9 * x117,
-                -(m2 * (x98 * x33 + x117 * x47 + x118 * x48)
-                    + m1 * (x86 * x29 + x64 * x119 + x115 * x63)),
-                -((x68 * x119 + x86 * x37 + x115 * x67) * m1
-                    + m2 * (x53 * x118 + x98 * x38 + x117 * x52)),
-                -((x115 * x71 + x86 * x55 + x72 * x119) * m1
-                    + m2 * (x57 * x117 + x98 * x70 - x118 * x56)),
+                                * ((0.5 * (u3 * x108) - f64::cos(x107) * u1) * u3
+                                    - 0.5 * (x109 * x108))
+                                + ((u3 * u3 - x109 - (u5 + 2.0 * u2) * u5) * x11
+                                    - 2.0 * (x93 * u3)) * a_) - x88 * a_) - x110 * u3,
+                x111 - u5 * x102 * x59 + u2 * x110 - x99 * x60
+                    - (a_ * x98
+                        + d
+                            * (a_
+                                * ((u2 * u2 - x109 - u4 * (2.0 * u3 + u4)) * x7
+                                    + 2.0 * (u2 * x82))
+                                + (u2 * (0.5 * (u2 * x113) + u1 * f64::cos(x112))
+                                    - 0.5 * (x109 * x113)) * d)) * m1 - x101 * u1 - x14 * x96,
+                x111 - x116 * x5,
+                x106 - x9 * x118,
+                -(m2 * (x118 * x47 + x119 * x48 + x33 * x99)
+                    + (x64 * x120 + x29 * x90 + x116 * x63) * m1),
+                -(m1 * (x37 * x90 + x68 * x120 + x116 * x67)
+                    + m2 * (x53 * x119 + x38 * x99 + x118 * x52)),
+                -(m2 * (x57 * x118 - x119 * x56 + x70 * x99)
+                    + (x116 * x71 + x55 * x90 + x72 * x120) * m1),
             ],
             checks: [x0],
         }
@@ -6666,124 +6666,124 @@ pub mod kane {
         let x22 = x21 * x21;
         let x23 = x14 * d;
         let x24 = a_ + x23;
-        let x25 = -(x18 * x24);
+        let x25 = -(x24 * x18);
         let x26 = J1 - J2;
         let x27 = x25 + x14 * x26;
-        let x28 = x27 * x21 - Ixy;
+        let x28 = x21 * x27 - Ixy;
         let x29 = J2 - J1;
-        let x30 = x16 * x29;
-        let x31 = x16 * d;
-        let x32 = x31 + a_;
-        let x33 = -(x11 * x32);
-        let x34 = x30 - x33;
-        let x35 = x34 * x9 - Ixz;
-        let x36 = f64::sin(psi);
-        let x37 = x2 * x36;
-        let x38 = x7 * x3;
-        let x39 = f64::cos(psi);
-        let x40 = x37 + x38 * x39;
-        let x41 = x21 * m1;
-        let x42 = m2 * x9;
-        let x43 = x7 * x2;
-        let x44 = x39 * x43;
-        let x45 = x3 * x36;
-        let x46 = x44 - x45;
-        let x47 = d * (x40 * x41 - x42 * x46);
-        let x48 = x39 * x3 + x43 * x36;
-        let x49 = x42 * x48;
-        let x50 = x39 * x2;
-        let x51 = x38 * x36;
-        let x52 = x51 - x50;
-        let x53 = d * (x41 * x52 - x49);
-        let x54 = x42 * x2;
-        let x55 = x41 * x3;
-        let x56 = d * (x55 - x54);
-        let x57 = x56 * x0;
-        let x58 = -(m1 * x24);
-        let x59 = d * d;
-        let x60 = -Iyz;
-        let x61 = x16 * a_;
-        let x62 = x61 + d;
-        let x63 = J2 + x11 * x62;
-        let x64 = x39 * x0;
-        let x65 = x9 * x64;
-        let x66 = x16 * x40;
-        let x67 = x65 + x66;
-        let x68 = x16 * x0;
-        let x69 = x38 * x9;
-        let x70 = (x68 - x69) * x39 - x9 * x37;
-        let x71 = a_ * x9;
-        let x72 = (x67 * x62 - x70 * x71) * m2 + x58 * x40;
-        let x73 = x0 * x36;
-        let x74 = x9 * x73;
-        let x75 = x16 * x52;
-        let x76 = x74 + x75;
-        let x77 = x50 - x51;
-        let x78 = x16 * x73;
-        let x79 = x77 * x9 + x78;
-        let x80 = x58 * x52 + m2 * (x62 * x76 - x79 * x71);
-        let x81 = x0 * x3;
-        let x82 = x7 * x9;
-        let x83 = x16 * x81;
-        let x84 = x83 - x82;
-        let x85 = x9 * x81 + x16 * x7;
-        let x86 = x58 * x81 + m2 * (x62 * x84 + x71 * x85);
-        let x87 = -(m2 * x32);
-        let x88 = x14 * a_;
-        let x89 = x88 + d;
-        let x90 = J2 + x89 * x18;
-        let x91 = a_ * x21;
-        let x92 = x21 * x43 + x14 * x0;
-        let x93 = x92 * x39;
-        let x94 = x21 * x45;
-        let x95 = x93 - x94;
-        let x96 = x14 * x46 - x21 * x64;
-        let x97 = x46 * x87 + (x91 * x95 + x89 * x96) * m1;
-        let x98 = x48 * x87;
-        let x99 = x14 * x48;
-        let x100 = x21 * x73;
-        let x101 = x99 - x100;
-        let x102 = x48 * x21;
-        let x103 = x14 * x73;
-        let x104 = x102 + x103;
-        let x105 = x98 + (x89 * x101 + x104 * x91) * m1;
-        let x106 = x0 * x2;
-        let x107 = x106 * x21;
-        let x108 = x14 * x7;
-        let x109 = x107 - x108;
-        let x110 = x7 * x21 + x14 * x106;
-        let x111 = x106 * x87 + (x109 * x91 + x89 * x110) * m1;
-        let x112 = x18 * x96;
-        let x113 = x18 * x101;
-        let x114 = x110 * x18;
-        let x115 = x67 * x11;
-        let x116 = x11 * x76;
-        let x117 = x11 * x84;
-        let x118 = m2 + m0 + m1;
-        let x119 = u3 * u1;
-        let x120 = u2 * x21;
-        let x121 = u3 + 2.0 * u4;
-        let x122 = x14 * u1;
-        let x123 = a_ * x119 + (x120 * x121 + x121 * x122) * d;
-        let x124 = x120 + x122;
-        let x125 = x124 * x26;
-        let x126 = u3 + u4;
-        let x127 = J2 * u4;
-        let x128 = x125 * x126 - x127 * x124;
-        let x129 = x128 - x123 * x18;
+        let x30 = x16 * d;
+        let x31 = a_ + x30;
+        let x32 = -(x11 * x31);
+        let x33 = x16 * x29 - x32;
+        let x34 = x33 * x9 - Ixz;
+        let x35 = f64::sin(psi);
+        let x36 = x2 * x35;
+        let x37 = x7 * x3;
+        let x38 = f64::cos(psi);
+        let x39 = x36 + x37 * x38;
+        let x40 = x21 * m1;
+        let x41 = m2 * x9;
+        let x42 = x7 * x2;
+        let x43 = x38 * x42;
+        let x44 = x3 * x35;
+        let x45 = x43 - x44;
+        let x46 = d * (x39 * x40 - x41 * x45);
+        let x47 = x38 * x3 + x42 * x35;
+        let x48 = x41 * x47;
+        let x49 = x38 * x2;
+        let x50 = x37 * x35;
+        let x51 = x50 - x49;
+        let x52 = d * (x40 * x51 - x48);
+        let x53 = x41 * x2;
+        let x54 = x40 * x3;
+        let x55 = d * (x54 - x53);
+        let x56 = x55 * x0;
+        let x57 = -(x24 * m1);
+        let x58 = d * d;
+        let x59 = -Iyz;
+        let x60 = x16 * a_;
+        let x61 = x60 + d;
+        let x62 = J2 + x11 * x61;
+        let x63 = x38 * x0;
+        let x64 = x9 * x63;
+        let x65 = x16 * x39;
+        let x66 = x64 + x65;
+        let x67 = x16 * x0;
+        let x68 = x37 * x9;
+        let x69 = (x67 - x68) * x38 - x9 * x36;
+        let x70 = a_ * x9;
+        let x71 = (x66 * x61 - x69 * x70) * m2 + x57 * x39;
+        let x72 = x0 * x35;
+        let x73 = x9 * x72;
+        let x74 = x16 * x51;
+        let x75 = x73 + x74;
+        let x76 = x49 - x50;
+        let x77 = x16 * x72;
+        let x78 = x76 * x9 + x77;
+        let x79 = x57 * x51 + m2 * (x61 * x75 - x78 * x70);
+        let x80 = x0 * x3;
+        let x81 = x7 * x9;
+        let x82 = x16 * x80;
+        let x83 = x82 - x81;
+        let x84 = x9 * x80 + x16 * x7;
+        let x85 = x57 * x80 + m2 * (x61 * x83 + x70 * x84);
+        let x86 = -(m2 * x31);
+        let x87 = x14 * a_;
+        let x88 = x87 + d;
+        let x89 = J2 + x88 * x18;
+        let x90 = a_ * x21;
+        let x91 = x21 * x42 + x14 * x0;
+        let x92 = x91 * x38;
+        let x93 = x21 * x44;
+        let x94 = x92 - x93;
+        let x95 = x14 * x45 - x21 * x63;
+        let x96 = x45 * x86 + (x90 * x94 + x88 * x95) * m1;
+        let x97 = x47 * x86;
+        let x98 = x14 * x47;
+        let x99 = x21 * x72;
+        let x100 = x98 - x99;
+        let x101 = x47 * x21;
+        let x102 = x14 * x72;
+        let x103 = x101 + x102;
+        let x104 = x97 + (x88 * x100 + x103 * x90) * m1;
+        let x105 = x0 * x2;
+        let x106 = x105 * x21;
+        let x107 = x14 * x7;
+        let x108 = x106 - x107;
+        let x109 = x7 * x21 + x14 * x105;
+        let x110 = (x108 * x90 + x88 * x109) * m1 + x105 * x86;
+        let x111 = x18 * x95;
+        let x112 = x18 * x100;
+        let x113 = x109 * x18;
+        let x114 = x66 * x11;
+        let x115 = x11 * x75;
+        let x116 = x11 * x83;
+        let x117 = m2 + m0 + m1;
+        let x118 = u2 * x21;
+        let x119 = x14 * u1;
+        let x120 = x118 + x119;
+        let x121 = x120 * x26;
+        let x122 = u3 + u4;
+        let x123 = J2 * u4;
+        let x124 = x121 * x122 - x123 * x120;
+        let x125 = u3 + 2.0 * u4;
+        let x126 = a_ * u1;
+        let x127 = (x118 * x125 + x125 * x119) * d + u3 * x126;
+        let x128 = x124 - x18 * x127;
+        let x129 = u3 * x9;
         let x130 = x16 * u1;
-        let x131 = 2.0 * u5 + u2;
-        let x132 = u3 * x9;
-        let x133 = a_ * u2;
-        let x134 = d * (x131 * x132 - x130 * x131) - x133 * u1;
-        let x135 = x134 * x11;
-        let x136 = J2 * x131;
-        let x137 = u5 + u2;
-        let x138 = J1 * x137;
-        let x139 = x136 - x138;
-        let x140 = x130 - x132;
-        let x141 = x139 * x140;
-        let x142 = x135 - x141;
+        let x131 = x130 - x129;
+        let x132 = 2.0 * u5 + u2;
+        let x133 = J2 * x132;
+        let x134 = u5 + u2;
+        let x135 = J1 * x134;
+        let x136 = x133 - x135;
+        let x137 = x131 * x136;
+        let x138 = -(x16 * x132);
+        let x139 = x9 * x132;
+        let x140 = (x138 * u1 + u3 * x139) * d - u2 * x126;
+        let x141 = x11 * x140;
+        let x142 = x141 - x137;
         let x143 = x21 * u1;
         let x144 = x14 * u2;
         let x145 = x144 - x143;
@@ -6798,279 +6798,279 @@ pub mod kane {
         let x154 = Iyz * u3;
         let x155 = Ixy * u1;
         let x156 = u2 * Iyy - x154 - x155;
-        let x157 = a_ * a_;
-        let x158 = u1 * u1;
-        let x159 = u3 * u3;
-        let x160 = x159 - x158;
-        let x161 = x160 - (u5 + 2.0 * u2) * u5;
-        let x162 = 2.0 * gamma2;
-        let x163 = f64::sin(x162);
-        let x164 = u3 * x163;
-        let x165 = f64::cos(x162);
-        let x166 = x165 * u1;
-        let x167 = u4 * J1;
-        let x168 = x145 * x21;
-        let x169 = x29 * x140;
-        let x170 = x169 * x149;
-        let x171 = u3 * Ixz;
-        let x172 = u2 * Ixy;
-        let x173 = Ixx * u1 - x171 - x172;
-        let x174 = x145 * x26;
-        let x175 = x174 * x124;
-        let x176 = x16 * x140;
-        let x177 = u5 * J1;
-        let x178 = -(x9 * x149);
-        let x179 = a_ * u1;
-        let x180 = u2 * u2 - x158 - u4 * (2.0 * u3 + u4);
-        let x181 = 2.0 * gamma1;
-        let x182 = f64::sin(x181);
-        let x183 = u2 * x182;
-        let x184 = f64::cos(x181);
-        let x185 = u1 * x184;
-        let x186 = x21 * d;
-        let x187 = x186 * u1;
-        let x188 = u2 * x24;
-        let x189 = x187 - x188;
-        let x190 = x189 * x124;
-        let x191 = u3 * x91;
-        let x192 = x191 * u3;
-        let x193 = x192 - x190;
-        let x194 = u3 * x32;
-        let x195 = d * x9;
-        let x196 = u1 * x195;
-        let x197 = -x194 - x196;
-        let x198 = u2 * x71;
-        let x199 = x197 * x140 + u2 * x198;
-        let x200 = x88 * u3 * u4 - (x89 * u3 + d * u4) * x126;
-        let x201 = x189 * x145;
-        let x202 = x200 + x201;
-        let x203 = x16 * x133;
-        let x204 = x197 * x149;
-        let x205 = (u2 * x62 + u5 * d) * x137 - u5 * x203 - x204;
-        let x206 = -((x202 * x95 + x96 * x193 + x123 * x40) * m1
-            + (x205 * x70 + x134 * x46 + x67 * x199) * m2);
-        let x207 = x134 * x48;
-        let x208 = m2 * (x84 * x199 + x134 * x106 - x205 * x85)
-            + (x110 * x193 + x123 * x81 + x109 * x202) * m1;
-        let x209 = (x77 * x41 + x49) * d;
-        let x210 = x16 * x77;
-        let x211 = x210 - x74;
-        let x212 = x9 * x52 - x78;
-        let x213 = m2 * (x211 * x62 - x212 * x71) + x77 * x58;
-        let x214 = -x102 - x103;
-        let x215 = x100 - x99;
-        let x216 = (x214 * x91 + x89 * x215) * m1 - x98;
-        let x217 = x18 * x215;
-        let x218 = x211 * x11;
-        let x219 = x7 * x1;
-        let x220 = x56 * x64;
-        let x221 = x56 * x73;
-        let x222 = x7 * (x54 - x55) * d;
-        let x223 = x39 * x86;
-        let x224 = x86 * x36;
-        let x225 = x69 - x68;
-        let x226 = x0 * x9 + x16 * x38;
-        let x227 = m2 * (-x225 * x71 - x226 * x62) - x38 * x58;
-        let x228 = x111 * x39;
-        let x229 = x111 * x36;
-        let x230 = x21 * x0 - x14 * x43;
-        let x231 = (x89 * x230 - x92 * x91) * m1 - x43 * x87;
-        let x232 = x39 * x114;
-        let x233 = x114 * x36;
-        let x234 = x18 * x230;
-        let x235 = x117 * x39;
-        let x236 = x117 * x36;
-        let x237 = -(x226 * x11);
-        let x238 = x45 - x44;
-        let x239 = d * (x238 * x41 - x42 * x40);
-        let x240 = d * (-x42 * x52 - x48 * x41);
-        let x241 = -(x0 * d * (x41 * x2 + x42 * x3));
-        let x242 = x16 * x62;
-        let x243 = x46 * x9;
-        let x244 = m2 * (x238 * x242 - x243 * x71) + x58 * x238;
-        let x245 = x48 * x9;
-        let x246 = m2 * (-x245 * x71 - x48 * x242) - x58 * x48;
-        let x247 = x106 * (-x58 - m2 * (x9 * x71 + x242));
-        let x248 = (x21 * x91 + x14 * x89) * m1 + x87;
-        let x249 = x40 * x248;
-        let x250 = x52 * x248;
-        let x251 = x248 * x81;
-        let x252 = x14 * x18;
-        let x253 = x252 * x40;
-        let x254 = x252 * x52;
-        let x255 = x252 * x81;
-        let x256 = x16 * x11;
-        let x257 = x256 * x238;
-        let x258 = -(x256 * x48);
-        let x259 = -(x256 * x106);
-        let x260 = x16 * x199;
-        let x261 = x21 * x202 + x14 * x193;
-        let x262 = 2.0 * J2 - 2.0 * J1;
-        let x263 = x22 * (x20 - J1) + x14 * x27;
-        let x264 = 2.0 * J1 - 2.0 * J2;
-        let x265 = x18 * x21;
-        let x266 = x40 * x265;
-        let x267 = x52 * x265;
-        let x268 = x265 * x81;
-        let x269 = x18 * x91;
-        let x270 = -x269;
-        let x271 = x94 - x93;
-        let x272 = m1 * (x88 * x95 + x89 * x271);
-        let x273 = (x89 * x214 + x104 * x88) * m1;
-        let x274 = x108 - x107;
-        let x275 = m1 * (x88 * x109 + x89 * x274);
-        let x276 = x18 * x271;
-        let x277 = x214 * x18;
-        let x278 = x18 * x274;
-        let x279 = x124 * x167 + x129;
-        let x280 = (x126 * x174 + x145 * x167) + x127 * (x143 - x144);
-        let x281 = x144 * x121 - x143 * x121;
-        let x282 = x281 * d;
-        let x283 = u1 * x182;
-        let x284 = u2 * x184;
-        let x285 = x174 * x145 - x125 * x124;
-        let x286 = d * x124;
-        let x287 = x159 * x88 - x286 * x124;
-        let x288 = x192 - x190 + x145 * x286;
-        let x289 = x287 + x200;
-        let x290 = x10 * (x26 - x12) + x16 * x34;
-        let x291 = -(x256 * x46);
-        let x292 = x11 * x71;
-        let x293 = -x292;
-        let x294 = m2 * (x62 * x70 - x16 * a_ * x70);
-        let x295 = m2 * (a_ * (-x79 * x16 - (x75 + x210) * x9) + x79 * x62);
-        let x296 = m2 * (x61 * x85 - x62 * x85);
-        let x297 = x11 * x243;
-        let x298 = x11 * x245;
-        let x299 = x106 * x11 * x9;
-        let x300 = x11 * x70;
-        let x301 = x79 * x11;
-        let x302 = -(x11 * x85);
-        let x303 = x132 - x130;
-        let x304 = x177 * x303;
-        let x305 = x148 * x131 + x147 * x131;
-        let x306 = d * x305;
-        let x307 = (x177 + x138) - x136;
-        let x308 = x140 * x169 - x29 * x149 * x149;
-        let x309 = x303 * d;
-        let x310 = u2 * x203 + x140 * x309 - x204;
-        let x311 = x309 * x149;
-        let x312 = a_ * u3 + x23 * x121;
-        let x313 = x126 * x26;
-        let x314 = x313 - x127;
-        let x315 = Ixy * u3;
-        let x316 = u2 * Ixz;
-        let x317 = x16 * x307;
-        let x318 = -x133 - x31 * x131;
-        let x319 = x9 * x140;
+        let x157 = x29 * x131;
+        let x158 = x157 * x149;
+        let x159 = a_ * u3;
+        let x160 = u1 * u1;
+        let x161 = 2.0 * gamma2;
+        let x162 = f64::sin(x161);
+        let x163 = u3 * x162;
+        let x164 = f64::cos(x161);
+        let x165 = x164 * u1;
+        let x166 = u3 * u3 - x160;
+        let x167 = x166 - (u5 + 2.0 * u2) * u5;
+        let x168 = u4 * J1;
+        let x169 = x145 * x168;
+        let x170 = u3 * Ixz;
+        let x171 = u2 * Ixy;
+        let x172 = Ixx * u1 - x170 - x171;
+        let x173 = x145 * x26;
+        let x174 = x173 * x120;
+        let x175 = u5 * J1;
+        let x176 = -(x9 * x149);
+        let x177 = a_ * u2;
+        let x178 = u2 * u2 - x160 - u4 * (2.0 * u3 + u4);
+        let x179 = 2.0 * gamma1;
+        let x180 = f64::sin(x179);
+        let x181 = u2 * x180;
+        let x182 = f64::cos(x179);
+        let x183 = u1 * x182;
+        let x184 = x143 * d;
+        let x185 = x24 * u2;
+        let x186 = x184 - x185;
+        let x187 = x186 * x120;
+        let x188 = u3 * x90;
+        let x189 = x188 * u3;
+        let x190 = x189 - x187;
+        let x191 = x147 * d;
+        let x192 = u3 * x31;
+        let x193 = -x191 - x192;
+        let x194 = u2 * x70;
+        let x195 = x193 * x131 + u2 * x194;
+        let x196 = u2 * x60;
+        let x197 = x193 * x149;
+        let x198 = (u2 * x61 + u5 * d) * x134 - u5 * x196 - x197;
+        let x199 = x186 * x145;
+        let x200 = x87 * u3;
+        let x201 = x200 * u4 - (x88 * u3 + d * u4) * x122;
+        let x202 = x199 + x201;
+        let x203 = -(m2 * (x198 * x69 + x66 * x195 + x45 * x140)
+            + (x190 * x95 + x202 * x94 + x39 * x127) * m1);
+        let x204 = x47 * x140;
+        let x205 = m2 * (x83 * x195 + x105 * x140 - x198 * x84)
+            + (x80 * x127 + x202 * x108 + x190 * x109) * m1;
+        let x206 = (x76 * x40 + x48) * d;
+        let x207 = x16 * x76;
+        let x208 = x207 - x73;
+        let x209 = x9 * x51 - x77;
+        let x210 = m2 * (x208 * x61 - x209 * x70) + x76 * x57;
+        let x211 = -x101 - x102;
+        let x212 = x99 - x98;
+        let x213 = (x211 * x90 + x88 * x212) * m1 - x97;
+        let x214 = x18 * x212;
+        let x215 = x208 * x11;
+        let x216 = x7 * x1;
+        let x217 = x55 * x63;
+        let x218 = x55 * x72;
+        let x219 = x7 * (x53 - x54) * d;
+        let x220 = x38 * x85;
+        let x221 = x85 * x35;
+        let x222 = x68 - x67;
+        let x223 = x0 * x9 + x16 * x37;
+        let x224 = m2 * (-x222 * x70 - x223 * x61) - x37 * x57;
+        let x225 = x110 * x38;
+        let x226 = x110 * x35;
+        let x227 = x21 * x0 - x14 * x42;
+        let x228 = (x88 * x227 - x91 * x90) * m1 - x42 * x86;
+        let x229 = x38 * x113;
+        let x230 = x113 * x35;
+        let x231 = x18 * x227;
+        let x232 = x116 * x38;
+        let x233 = x116 * x35;
+        let x234 = -(x223 * x11);
+        let x235 = x44 - x43;
+        let x236 = d * (x235 * x40 - x41 * x39);
+        let x237 = d * (-x41 * x51 - x47 * x40);
+        let x238 = -(x0 * d * (x40 * x2 + x41 * x3));
+        let x239 = x16 * x61;
+        let x240 = x9 * x70;
+        let x241 = m2 * (x235 * x239 - x45 * x240) + x235 * x57;
+        let x242 = m2 * (-x47 * x240 - x47 * x239) - x47 * x57;
+        let x243 = x105 * (-x57 - m2 * (x240 + x239));
+        let x244 = (x21 * x90 + x14 * x88) * m1 + x86;
+        let x245 = x39 * x244;
+        let x246 = x51 * x244;
+        let x247 = x244 * x80;
+        let x248 = x14 * x18;
+        let x249 = x248 * x39;
+        let x250 = x248 * x51;
+        let x251 = x248 * x80;
+        let x252 = x16 * x11;
+        let x253 = x252 * x235;
+        let x254 = -(x252 * x47);
+        let x255 = -(x252 * x105);
+        let x256 = x198 * x9;
+        let x257 = x16 * x195;
+        let x258 = x202 * x21 + x14 * x190;
+        let x259 = 2.0 * J2 - 2.0 * J1;
+        let x260 = x14 * x27 + x22 * (x20 - J1);
+        let x261 = 2.0 * J1 - 2.0 * J2;
+        let x262 = x18 * x21;
+        let x263 = x39 * x262;
+        let x264 = x51 * x262;
+        let x265 = x262 * x80;
+        let x266 = x18 * x90;
+        let x267 = -x266;
+        let x268 = x93 - x92;
+        let x269 = m1 * (x87 * x94 + x88 * x268);
+        let x270 = (x88 * x211 + x103 * x87) * m1;
+        let x271 = x107 - x106;
+        let x272 = m1 * (x87 * x108 + x88 * x271);
+        let x273 = x18 * x268;
+        let x274 = x211 * x18;
+        let x275 = x18 * x271;
+        let x276 = x128 + x120 * x168;
+        let x277 = (x169 + x122 * x173) + x123 * (x143 - x144);
+        let x278 = x144 * x125 - x143 * x125;
+        let x279 = x278 * d;
+        let x280 = u1 * x180;
+        let x281 = u2 * x182;
+        let x282 = x173 * x145 - x121 * x120;
+        let x283 = d * x120;
+        let x284 = x200 * u3 - x283 * x120;
+        let x285 = x189 - x187 + x145 * x283;
+        let x286 = x284 + x201;
+        let x287 = x10 * (x26 - x12) + x16 * x33;
+        let x288 = -(x252 * x45);
+        let x289 = x11 * x70;
+        let x290 = -x289;
+        let x291 = m2 * (x61 * x69 - x16 * a_ * x69);
+        let x292 = m2 * (a_ * (-x78 * x16 - (x74 + x207) * x9) + x78 * x61);
+        let x293 = m2 * (x60 * x84 - x61 * x84);
+        let x294 = x11 * x9;
+        let x295 = x45 * x294;
+        let x296 = x47 * x294;
+        let x297 = x105 * x294;
+        let x298 = x11 * x69;
+        let x299 = x78 * x11;
+        let x300 = -(x11 * x84);
+        let x301 = (x175 + x135) - x133;
+        let x302 = x148 * x132 + u1 * x139;
+        let x303 = x302 * d;
+        let x304 = x129 - x130;
+        let x305 = x175 * x304;
+        let x306 = x131 * x157 - x29 * x149 * x149;
+        let x307 = d * x304;
+        let x308 = x131 * x307 - x197 + u2 * x196;
+        let x309 = x307 * x149;
+        let x310 = Ixy * u3;
+        let x311 = d * x125;
+        let x312 = x159 + x14 * x311;
+        let x313 = x122 * x26;
+        let x314 = x313 - x123;
+        let x315 = u2 * Ixz;
+        let x316 = x16 * x301;
+        let x317 = x138 * d - x177;
+        let x318 = Izz - Ixx;
+        let x319 = x131 * x9;
         let x320 = x16 * x149;
-        let x321 = Izz - Ixx;
-        let x322 = Ixx - Iyy;
-        let x323 = x21 * x124;
-        let x324 = x14 * x189;
-        let x325 = x186 * x124 + x324;
-        let x326 = x16 * x197;
-        let x327 = x326 - x140 * x195;
-        let x328 = x21 * (x188 - x187 + x145 * d);
-        let x329 = x9 * (x194 + x196 + d * x149);
-        let x330 = x309 - x179;
-        let x331 = Iyy - Izz;
-        let x332 = Iyz * u1;
-        let x333 = u1 * x157;
-        let x334 = 2.0 * x120 + 2.0 * x122;
-        let x335 = x16 * x169;
-        let x336 = x14 * x125;
-        let x337 = x174 * x21 + x336;
-        let x338 = x189 * x21 - x124 * x24;
-        let x339 = d * x137 + x62 * x137 + x61 * (u2 - u5);
-        let x340 = x324 - x145 * x24;
-        let x341 = x186 * x121;
-        let x342 = x179 + x286;
-        let x343 = 2.0 * x132 - 2.0 * x130;
-        let x344 = x335 + x9 * x149 * x26;
-        let x345 = -x197 * x9 - x140 * x32;
-        let x346 = x326 - x149 * x32;
-        let x347 = x131 * x195;
-        let x348 = x88 * (u4 - u3) - x89 * x126 - x126 * d;
-        let x349 = x125 - J2 * x124;
-        let x350 = 2.0 * u3 + 2.0 * u4;
-        let x351 = 2.0 * J2 - J1;
-        let x352 = 2.0 * u5 + 2.0 * u2;
+        let x321 = Ixx - Iyy;
+        let x322 = x21 * x120;
+        let x323 = x14 * x186;
+        let x324 = x21 * x283 + x323;
+        let x325 = x16 * x193;
+        let x326 = x325 - x319 * d;
+        let x327 = x21 * (x145 * d - x184 + x185);
+        let x328 = (x191 + x192 + d * x149) * x9;
+        let x329 = Iyy - Izz;
+        let x330 = x307 - x126;
+        let x331 = Iyz * u1;
+        let x332 = x16 * x157;
+        let x333 = a_ * x126;
+        let x334 = 2.0 * x118 + 2.0 * x119;
+        let x335 = x14 * x121;
+        let x336 = x173 * x21 + x335;
+        let x337 = x186 * x21 - x24 * x120;
+        let x338 = x323 - x24 * x145;
+        let x339 = x21 * x311;
+        let x340 = d * x134 + x61 * x134 + x60 * (u2 - u5);
+        let x341 = x126 + x283;
+        let x342 = x332 + x9 * x149 * x26;
+        let x343 = 2.0 * x129 - 2.0 * x130;
+        let x344 = -x193 * x9 - x131 * x31;
+        let x345 = x325 - x31 * x149;
+        let x346 = d * x139;
+        let x347 = x87 * (u4 - u3) - x88 * x122 - x122 * d;
+        let x348 = x121 - J2 * x120;
+        let x349 = 2.0 * u3 + 2.0 * u4;
+        let x350 = x131 * (2.0 * J2 - J1);
+        let x351 = 2.0 * u5 + 2.0 * u2;
         Derivatives {
             qdot: [x5, x6, x8 + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
                     x10 * x13 + Ixx + (x15 + x17) * J1 + x20 * x22,
                     x28,
-                    x35,
+                    x34,
                     0.0,
                     0.0,
-                    x47,
-                    x53,
-                    x57,
+                    x46,
+                    x52,
+                    x56,
                 ],
                 [
                     x28,
-                    Iyy - x58 * x24 + m2 * (x59 + a_ * (2.0 * x31 + a_))
-                        + J2 * (x15 + 1.0) + x22 * J1,
-                    x60,
+                    Iyy - x24 * x57 + J2 * (x15 + 1.0)
+                        + m2 * (x58 + a_ * (a_ + 2.0 * x30)) + x22 * J1,
+                    x59,
                     0.0,
-                    x63,
-                    x72,
-                    x80,
-                    x86,
+                    x62,
+                    x71,
+                    x79,
+                    x85,
                 ],
                 [
-                    x35,
-                    x60,
-                    J2 * (x17 + 1.0) + x10 * J1 - x32 * x87 + Izz
-                        + (x59 + a_ * (a_ + 2.0 * x23)) * m1,
-                    x90,
+                    x34,
+                    x59,
+                    J2 * (x17 + 1.0) + (a_ * (a_ + 2.0 * x23) + x58) * m1 + x10 * J1
+                        + Izz - x31 * x86,
+                    x89,
                     0.0,
-                    x97,
-                    x105,
-                    x111,
+                    x96,
+                    x104,
+                    x110,
                 ],
-                [0.0, 0.0, x90, x20, 0.0, x112, x113, x114],
-                [0.0, x63, 0.0, 0.0, x13, x115, x116, x117],
-                [x47, x72, x97, x112, x115, x118, 0.0, 0.0],
-                [x53, x80, x105, x113, x116, 0.0, x118, 0.0],
-                [x57, x86, x111, x114, x117, 0.0, 0.0, x118],
+                [0.0, 0.0, x89, x20, 0.0, x111, x112, x113],
+                [0.0, x62, 0.0, 0.0, x13, x114, x115, x116],
+                [x46, x71, x96, x111, x114, x117, 0.0, 0.0],
+                [x52, x79, x104, x112, x115, 0.0, x117, 0.0],
+                [x56, x85, x110, x113, x116, 0.0, 0.0, x117],
             ],
             force: [
-                x21 * x129 + x9 * x142 - (x146 * u4 + u5 * x150) * J1 - u2 * x153
+                x128 * x21 + x142 * x9 - (x146 * u4 + u5 * x150) * J1 - u2 * x153
                     + x156 * u3,
-                x153 * u1 - x14 * x128
+                x158 - x14 * x124 + x153 * u1
                     - m2
-                        * ((a_ * (x9 * x161 - 2.0 * (x16 * x119))
-                            + d * ((0.5 * x164 - x166) * u3 - 0.5 * (x158 * x163))) * d
-                            - x119 * x157) - x167 * x168 - x123 * x58 + x170 - x173 * u3,
-                x175 - x134 * x87 - x139 * x176 + u2 * x173 + x177 * x178 - x156 * u1
-                    - (x179 * x133
+                        * (d
+                            * (d * ((0.5 * x163 - x165) * u3 - 0.5 * (x160 * x162))
+                                + (x167 * x9 - 2.0 * (x148 * u1)) * a_) - x159 * x126)
+                    - x57 * x127 - x169 * x21 - x172 * u3,
+                x174 - x140 * x86 + u2 * x172 - x16 * x137 + x175 * x176 - x156 * u1
+                    - (x126 * x177
                         + d
-                            * (a_ * (x180 * x21 + 2.0 * (x144 * u1))
-                                + (u2 * (0.5 * x183 + x185) - 0.5 * (x158 * x182)) * d))
+                            * (a_ * (x178 * x21 + 2.0 * (x144 * u1))
+                                + (u2 * (0.5 * x181 + x183) - 0.5 * (x160 * x180)) * d))
                         * m1,
-                x175 - x18 * x193,
-                x170 - x11 * x199,
-                x206,
-                -(m2 * (x199 * x76 + x207 + x79 * x205)
-                    + m1 * (x123 * x52 + x101 * x193 + x104 * x202)),
-                -x208,
+                x174 - x190 * x18,
+                x158 - x11 * x195,
+                x203,
+                -(m2 * (x78 * x198 + x195 * x75 + x204)
+                    + m1 * (x190 * x100 + x51 * x127 + x103 * x202)),
+                -x205,
             ],
             checks: [x0],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x5 * x219, 0.0, x4 + x8 * x219, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x6, -x4, x6 * x219, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x5 * x216, 0.0, x4 + x8 * x216, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x6, -x4, x6 * x216, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x2, x3, x1 * x43, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x3, -x2, x38 * x1, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x2, x3, x1 * x42, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x3, -x2, x37 * x1, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -7079,90 +7079,90 @@ pub mod kane {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x209, x47, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x213, x72, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x216, x97, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x217, x112, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x218, x115, 0.0],
-                    [x209, x213, x216, x217, x218, 0.0, 0.0, 0.0],
-                    [x47, x72, x97, x112, x115, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x206, x46, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x210, x71, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x213, x96, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x214, x111, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x215, x114, 0.0],
+                    [x206, x210, x213, x214, x215, 0.0, 0.0, 0.0],
+                    [x46, x71, x96, x111, x114, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x220, x221, x222],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x223, x224, x227],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x228, x229, x231],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x217, x218, x219],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x220, x221, x224],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x225, x226, x228],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x229, x230, x231],
                     [0.0, 0.0, 0.0, 0.0, 0.0, x232, x233, x234],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x235, x236, x237],
-                    [x220, x223, x228, x232, x235, 0.0, 0.0, 0.0],
-                    [x221, x224, x229, x233, x236, 0.0, 0.0, 0.0],
-                    [x222, x227, x231, x234, x237, 0.0, 0.0, 0.0],
+                    [x217, x220, x225, x229, x232, 0.0, 0.0, 0.0],
+                    [x218, x221, x226, x230, x233, 0.0, 0.0, 0.0],
+                    [x219, x224, x228, x231, x234, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x239, x240, x241],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x244, x246, x247],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x236, x237, x238],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x241, x242, x243],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x245, x246, x247],
                     [0.0, 0.0, 0.0, 0.0, 0.0, x249, x250, x251],
                     [0.0, 0.0, 0.0, 0.0, 0.0, x253, x254, x255],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x257, x258, x259],
-                    [x239, x244, x249, x253, x257, 0.0, 0.0, 0.0],
-                    [x240, x246, x250, x254, x258, 0.0, 0.0, 0.0],
-                    [x241, x247, x251, x255, x259, 0.0, 0.0, 0.0],
+                    [x236, x241, x245, x249, x253, 0.0, 0.0, 0.0],
+                    [x237, x242, x246, x250, x254, 0.0, 0.0, 0.0],
+                    [x238, x243, x247, x251, x255, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        x14 * (2.0 * x19 + x262) * x21,
+                        x14 * (2.0 * x19 + x259) * x21,
+                        x260,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x249,
+                        x250,
+                        x251,
+                    ],
+                    [
+                        x260,
+                        (2.0 * x25 + x14 * x261) * x21,
+                        0.0,
+                        0.0,
+                        0.0,
                         x263,
+                        x264,
+                        x265,
+                    ],
+                    [0.0, 0.0, -(2.0 * x266), x267, 0.0, x269, x270, x272],
+                    [0.0, 0.0, x267, 0.0, 0.0, x273, x274, x275],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x249, x263, x269, x273, 0.0, 0.0, 0.0, 0.0],
+                    [x250, x264, x270, x274, 0.0, 0.0, 0.0, 0.0],
+                    [x251, x265, x272, x275, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x16 * (2.0 * x12 + x259) * x9,
+                        0.0,
+                        x287,
                         0.0,
                         0.0,
-                        0.0,
-                        x253,
+                        x288,
                         x254,
                         x255,
                     ],
+                    [0.0, -(2.0 * x289), 0.0, 0.0, x290, x291, x292, x293],
                     [
-                        x263,
-                        (2.0 * x25 + x14 * x264) * x21,
+                        x287,
+                        0.0,
+                        (x16 * x261 + 2.0 * x32) * x9,
                         0.0,
                         0.0,
-                        0.0,
-                        x266,
-                        x267,
-                        x268,
-                    ],
-                    [0.0, 0.0, -(2.0 * x269), x270, 0.0, x272, x273, x275],
-                    [0.0, 0.0, x270, 0.0, 0.0, x276, x277, x278],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x253, x266, x272, x276, 0.0, 0.0, 0.0, 0.0],
-                    [x254, x267, x273, x277, 0.0, 0.0, 0.0, 0.0],
-                    [x255, x268, x275, x278, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        x16 * (2.0 * x12 + x262) * x9,
-                        0.0,
-                        x290,
-                        0.0,
-                        0.0,
-                        x291,
-                        x258,
-                        x259,
-                    ],
-                    [0.0, -(2.0 * x292), 0.0, 0.0, x293, x294, x295, x296],
-                    [
-                        x290,
-                        0.0,
-                        (x16 * x264 + 2.0 * x33) * x9,
-                        0.0,
-                        0.0,
+                        x295,
+                        x296,
                         x297,
-                        x298,
-                        x299,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x293, 0.0, 0.0, 0.0, x300, x301, x302],
-                    [x291, x294, x297, 0.0, x300, 0.0, 0.0, 0.0],
-                    [x258, x295, x298, 0.0, x301, 0.0, 0.0, 0.0],
-                    [x259, x296, x299, 0.0, x302, 0.0, 0.0, 0.0],
+                    [0.0, x290, 0.0, 0.0, 0.0, x298, x299, x300],
+                    [x288, x291, x295, 0.0, x298, 0.0, 0.0, 0.0],
+                    [x254, x292, x296, 0.0, x299, 0.0, 0.0, 0.0],
+                    [x255, x293, x297, 0.0, x300, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -7282,9 +7282,9 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(m1 * (x214 * x202 + x77 * x123 + x215 * x193)
-                        + m2 * (x205 * x212 - x207 + x211 * x199)),
-                    x206,
+                    -(m2 * (x198 * x209 - x204 + x208 * x195)
+                        + m1 * (x202 * x211 + x190 * x212 + x76 * x127)),
+                    x203,
                     0.0,
                 ],
                 [
@@ -7293,10 +7293,10 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(x208 * x39),
-                    -(x208 * x36),
-                    -(m2 * (x205 * x225 - x134 * x43 - x226 * x199)
-                        + m1 * (x230 * x193 - x123 * x38 - x92 * x202)),
+                    -(x205 * x38),
+                    -(x205 * x35),
+                    -((x198 * x222 - x223 * x195 - x140 * x42) * m2
+                        + m1 * (x190 * x227 - x37 * x127 - x202 * x91)),
                 ],
                 [
                     0.0,
@@ -7304,115 +7304,114 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(m2 * (x260 * x238 + x134 * x40 + x205 * x243)
-                        + m1 * (x40 * x261 + x123 * x238)),
-                    -((x52 * x261 - x123 * x48) * m1
-                        + m2 * (x134 * x52 - x260 * x48 + x205 * x245)),
+                    -(m2 * (x39 * x140 + x45 * x256 + x235 * x257)
+                        + (x39 * x258 + x235 * x127) * m1),
+                    -(m1 * (x51 * x258 - x47 * x127)
+                        + m2 * (x140 * x51 - x47 * x257 + x47 * x256)),
                     -(x0
-                        * (m2 * (x134 * x3 + (x205 * x9 - x260) * x2)
-                            + (x261 * x3 - x123 * x2) * m1)),
+                        * (m2 * (x140 * x3 + (x256 - x257) * x2)
+                            + (x258 * x3 - x2 * x127) * m1)),
                 ],
                 [
-                    x14 * x279 + (x280 - x18 * x282) * x21,
-                    x21 * x279 - x25 * x281 - x280 * x14,
-                    x285
-                        - (a_ * (x14 * x180 - 2.0 * (x120 * u1))
-                            + d * ((x284 - 2.0 * x283) * u2 - x158 * x184)) * x18,
-                    x285 - x18 * (x287 - x201),
+                    x14 * x276 + x21 * (x277 - x18 * x279),
+                    x21 * x276 - x278 * x25 - x14 * x277,
+                    x282
+                        - x18
+                            * (a_ * (x14 * x178 - 2.0 * (u2 * x143))
+                                + d * ((x281 - 2.0 * x280) * u2 - x160 * x182)),
+                    x282 - x18 * (x284 - x199),
                     0.0,
-                    -(m1 * (x95 * x288 + x289 * x96 + x282 * x40 + x271 * x193)),
-                    -(m1 * (x282 * x52 + x104 * x288 + x214 * x193 + x101 * x289)),
-                    -((x274 * x193 + x110 * x289 + x109 * x288 + x282 * x81) * m1),
+                    -((x285 * x94 + x279 * x39 + x190 * x268 + x286 * x95) * m1),
+                    -((x286 * x100 + x190 * x211 + x279 * x51 + x103 * x285) * m1),
+                    -((x109 * x286 + x285 * x108 + x190 * x271 + x279 * x80) * m1),
                 ],
                 [
-                    x16 * (x142 - x304) + x9 * (x306 * x11 - x149 * x307),
-                    x308
-                        - x11
-                            * (d * (2.0 * (x119 * x163) + x165 * x160)
-                                + a_ * (x16 * x161 + 2.0 * (x119 * x9))),
-                    x150 * x307 - x33 * x305 + x9 * (x304 - x135 + x141),
+                    x9 * (x11 * x303 - x149 * x301) + x16 * (x142 - x305),
+                    x306
+                        - (a_ * (x16 * x167 + 2.0 * (x147 * u3))
+                            + (x164 * x166 + 2.0 * (x163 * u1)) * d) * x11,
+                    x150 * x301 - x302 * x32 + x9 * (x137 - x141 + x305),
                     0.0,
-                    x308 - x11 * x310,
-                    -(m2 * (x306 * x46 - x311 * x70 + x205 * (-x65 - x66) + x67 * x310)),
-                    -(m2 * (x306 * x48 + x310 * x76 + x205 * x211 - x79 * x311)),
-                    -(m2 * (x311 * x85 + x205 * (x82 - x83) + x306 * x106 + x84 * x310)),
+                    x306 - x308 * x11,
+                    -(m2 * (x308 * x66 + x303 * x45 + x198 * (-x64 - x65) - x309 * x69)),
+                    -(m2 * (x303 * x47 + x208 * x198 - x78 * x309 + x308 * x75)),
+                    -(m2 * (x308 * x83 + x105 * x303 + x198 * (x81 - x82) + x309 * x84)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x14 * (x167 + x314) - x18 * x312) * x21 - x315 + x316
-                        + x9 * (x317 + x11 * x318),
-                    J2 * (x319 + x320)
+                    x21 * (x14 * (x168 + x314) - x18 * x312) - x310 + x315
+                        + (x316 + x317 * x11) * x9,
+                    x318 * u3 + J2 * (x319 + x320) - x57 * x312 - x15 * x314 - x151
                         - m2
                             * (d
                                 * (-(2.0 * x147 + 2.0 * x148) * a_
-                                    - (u1 * x163 + x165 * u3) * d) - u3 * x157) + x321 * u3
-                        - x15 * x314 - x58 * x312 - x151 - 2.0 * x152
-                        + (x22 * u4 - x319 - x320) * J1,
-                    u2 * x322 - x17 * x139 - x318 * x87 + x154 + 2.0 * x155
-                        + (x146 - u5 * x10 - x323) * J1 + J2 * (x323 - x146)
-                        - (d * (a_ * (2.0 * x144 - 2.0 * x143) + d * (x284 - x283))
-                            + a_ * x133) * m1,
-                    x18 * x325 + x29 * x323 + x14 * x174,
-                    x30 * x149 - x11 * x327 + x9 * x169,
-                    -((x328 * x95 - x96 * x325 + x40 * x312) * m1
-                        + (x46 * x318 + x329 * x70 + x67 * x327) * m2),
-                    -((x52 * x312 - x101 * x325 + x104 * x328) * m1
-                        + (x327 * x76 + x48 * x318 + x79 * x329) * m2),
-                    -(m2 * (x84 * x327 - x329 * x85 + x106 * x318)
-                        + (x109 * x328 + x81 * x312 - x110 * x325) * m1),
+                                    - (u1 * x162 + x164 * u3) * d) - a_ * x159)
+                        + (x22 * u4 - x319 - x320) * J1 - 2.0 * x152,
+                    u2 * x321 - x17 * x136 + x154 - x317 * x86 + 2.0 * x155
+                        + (x146 - u5 * x10 - x322) * J1 + J2 * (x322 - x146)
+                        - (d * (a_ * (2.0 * x144 - 2.0 * x143) + d * (x281 - x280))
+                            + a_ * x177) * m1,
+                    x29 * x322 + x324 * x18 + x14 * x173,
+                    x9 * x157 - x11 * x326 + x29 * x320,
+                    -((x39 * x312 - x324 * x95 + x327 * x94) * m1
+                        + m2 * (x66 * x326 + x317 * x45 + x328 * x69)),
+                    -(m1 * (x103 * x327 - x324 * x100 + x312 * x51)
+                        + m2 * (x78 * x328 + x326 * x75 + x317 * x47)),
+                    -(m1 * (x312 * x80 + x327 * x108 - x324 * x109)
+                        + m2 * (x317 * x105 - x328 * x84 + x83 * x326)),
                 ],
                 [
-                    x9 * (x11 * x330 - x169) + x22 * (x314 - x19 * x121) + 2.0 * x151
-                        + x152 + u3 * x331 - x15 * x167,
-                    x21 * (x14 * (x127 - x313 - x167) - x25 * x121) + 2.0 * (u5 * x292)
-                        + x315 - x332,
-                    x322 * u1 - x171 - (x333 + d * (d * (x183 + x185) + a_ * x334)) * m1
-                        - 2.0 * x172 - x335 - x330 * x87 + x337,
-                    x18 * x338 + x337,
-                    -(2.0 * x11 * x198),
-                    -(m2 * (2.0 * (x67 * x198) + x339 * x70 + x46 * x330)
-                        + (x95 * x340 - x338 * x96 + x40 * x341) * m1),
-                    -((2.0 * (x198 * x76) + x48 * x330 + x79 * x339) * m2
-                        + m1 * (x104 * x340 + x52 * x341 - x338 * x101)),
-                    -(m2 * (2.0 * (x84 * x198) - x339 * x85 + x106 * x330)
-                        + (x341 * x81 + x109 * x340 - x110 * x338) * m1),
+                    (x314 - x18 * x311) * x22 + 2.0 * x151 + x152 + u3 * x329
+                        + (x11 * x330 - x157) * x9 - x15 * x168,
+                    2.0 * (u5 * x289) + x310 - x331
+                        + x21 * (x14 * (x123 - x313 - x168) - x25 * x125),
+                    x321 * u1 - x170 - x332 - 2.0 * x171 - x330 * x86
+                        - (x333 + d * (d * (x181 + x183) + a_ * x334)) * m1 + x336,
+                    x337 * x18 + x336,
+                    -(2.0 * x11 * x194),
+                    -((x338 * x94 + x39 * x339 - x337 * x95) * m1
+                        + m2 * (2.0 * (x66 * x194) + x45 * x330 + x340 * x69)),
+                    -(m1 * (x103 * x338 - x337 * x100 + x51 * x339)
+                        + m2 * (2.0 * (x194 * x75) + x47 * x330 + x78 * x340)),
+                    -((x339 * x80 - x337 * x109 + x108 * x338) * m1
+                        + m2 * (2.0 * (x83 * x194) - x340 * x84 + x105 * x330)),
                 ],
                 [
-                    u2 * x331 + x10 * (x136 + x12 * x131 - x138) - 2.0 * x154 - x155
-                        + x177 * x17 + x21 * (x125 - x342 * x18),
-                    2.0 * x171 - m2 * (d * (d * (x164 - x166) + a_ * x343) - x333)
-                        + x321 * u1 + x344 + x172 - x336 - x342 * x58,
-                    2.0 * (x269 * u4) - x316 + (-x317 - x131 * x33) * x9 + x332,
-                    -(2.0 * x191 * x18),
-                    x344 - x345 * x11,
-                    -(m2 * (x46 * x347 - x346 * x70 + x67 * x345)
-                        + (2.0 * (x191 * x96) + x342 * x40 + x348 * x95) * m1),
-                    -((x104 * x348 + 2.0 * (x191 * x101) + x342 * x52) * m1
-                        + m2 * (x345 * x76 - x79 * x346 + x48 * x347)),
-                    -(m2 * (x345 * x84 + x346 * x85 + x106 * x347)
-                        + m1 * (x109 * x348 + 2.0 * (x191 * x110) + x342 * x81)),
+                    u2 * x329 + x10 * (x133 + x12 * x132 - x135) - 2.0 * x154 - x155
+                        + x175 * x17 + x21 * (x121 - x341 * x18),
+                    2.0 * x170 + x318 * u1 + x342 + x171 - x341 * x57 - x335
+                        - (d * (a_ * x343 + (x163 - x165) * d) - x333) * m2,
+                    x9 * (-x316 - x132 * x32) + 2.0 * (x266 * u4) - x315 + x331,
+                    -(2.0 * x188 * x18),
+                    x342 - x11 * x344,
+                    -(m2 * (x45 * x346 - x69 * x345 + x66 * x344)
+                        + (2.0 * (x188 * x95) + x341 * x39 + x347 * x94) * m1),
+                    -(m2 * (x344 * x75 - x78 * x345 + x47 * x346)
+                        + (x103 * x347 + 2.0 * (x188 * x100) + x341 * x51) * m1),
+                    -(m2 * (x345 * x84 + x105 * x346 + x83 * x344)
+                        + m1 * (x108 * x347 + 2.0 * (x188 * x109) + x341 * x80)),
                 ],
                 [
-                    x21 * (x349 - x19 * x334) - x146 * J1,
-                    -(x168 * J1 + x25 * x334 + x14 * x349),
-                    x350 * x269,
+                    x21 * (x348 - x19 * x334) - x146 * J1,
+                    -(x14 * x348 + x25 * x334 + x145 * x21 * J1),
+                    x349 * x266,
                     0.0,
                     0.0,
-                    -(x18 * (x40 * x334 - x350 * x95)),
-                    -(x18 * (x52 * x334 - x104 * x350)),
-                    -((x334 * x81 - x350 * x109) * x18),
+                    -(x18 * (x39 * x334 - x349 * x94)),
+                    -(x18 * (x51 * x334 - x103 * x349)),
+                    -((x334 * x80 - x349 * x108) * x18),
                 ],
                 [
-                    x9 * (x12 * x343 - x140 * x351) - x150 * J1,
-                    x352 * x292,
-                    J1 * x178 - x351 * x176 - x343 * x33,
+                    (x12 * x343 - x350) * x9 - x150 * J1,
+                    x351 * x289,
+                    J1 * x176 - x343 * x32 - x16 * x350,
                     0.0,
                     0.0,
-                    -(x11 * (x46 * x343 + x352 * x70)),
-                    -((x79 * x352 + x48 * x343) * x11),
-                    -(x11 * (x106 * x343 - x352 * x85)),
+                    -(x11 * (x351 * x69 + x45 * x343)),
+                    -(x11 * (x78 * x351 + x47 * x343)),
+                    -(x11 * (x105 * x343 - x351 * x84)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -7706,11 +7705,11 @@ pub mod reduced_volterra {
         let x43 = x4 * x21 + x17 * x42;
         let x44 = x0 * x2;
         let x45 = x9 * x44 - x4 * x6;
-        let x46 = 1.0 - x5 * m2;
+        let x46 = x21 * x21;
         let x47 = 1.0 - x5 * m1;
-        let x48 = d * d;
-        let x49 = x6 * x6;
-        let x50 = x21 * x21;
+        let x48 = x33 * x6;
+        let x49 = 1.0 - x5 * m2;
+        let x50 = d * d;
         let x51 = x17 * x17;
         let x52 = x9 * x9;
         let x53 = J1 - J2;
@@ -7722,76 +7721,78 @@ pub mod reduced_volterra {
         let x59 = m2 * d;
         let x60 = x30 + x19 * m1;
         let x61 = (x9 * x58 + x59 * (x5 * x60 + x29)) * x6 - Ixz;
-        let x62 = x33 * (x5 * d);
-        let x63 = x17 * x54 * x62;
-        let x64 = x54 * x21;
-        let x65 = -(x9 * x5 * x59 * x64);
-        let x66 = d * x6;
-        let x67 = x62 * x64;
-        let x68 = x67 - Iyz;
-        let x69 = (x15 - x5 * (x9 * x55 + x33 * x66)) * x59 + J2;
-        let x70 = J2 + x54 * (x26 - x5 * (x21 * x64 + x17 * x60));
-        let x71 = u2 * x21;
-        let x72 = x17 * u1;
-        let x73 = x71 + x72;
-        let x74 = u3 + u4;
-        let x75 = x53 * x73;
-        let x76 = x74 * x75 - J2 * u4 * x73;
-        let x77 = a_ * u3;
-        let x78 = x77 * u1;
-        let x79 = u3 + 2.0 * u4;
-        let x80 = x78 + (x71 * x79 + x79 * x72) * d;
-        let x81 = u2 * u2;
-        let x82 = u5 * (u5 + 2.0 * u2);
-        let x83 = u1 * u1;
-        let x84 = -x82 - x83;
-        let x85 = x9 * u1;
-        let x86 = x85 * u3;
-        let x87 = x80 * m1;
-        let x88 = m2 * (((x84 - x81) * x6 - x86) * d - x78) + x87;
-        let x89 = 2.0 * u5 + u2;
-        let x90 = u3 * x6;
-        let x91 = a_ * u2;
-        let x92 = x91 * u1;
-        let x93 = d * (x89 * x90 - x85 * x89) - x92;
-        let x94 = m2 * x93;
-        let x95 = -u3 * x79 - u4 * u4;
-        let x96 = u2 * x72;
-        let x97 = x94 + (d * (x21 * (x95 - x83) + x96) + x92) * m1;
-        let x98 = x17 * u4;
-        let x99 = x21 * u1;
-        let x100 = x17 * u2 - x99;
-        let x101 = x6 * u1 + x9 * u3;
-        let x102 = x9 * u5;
-        let x103 = u5 + u2;
-        let x104 = x85 - x90;
-        let x105 = (J2 * x89 - J1 * x103) * x104;
-        let x106 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x107 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x108 = u3 * u3;
-        let x109 = 2.0 * gamma2;
-        let x110 = f64::sin(x109);
-        let x111 = x81 + x108;
-        let x112 = a_ * x111;
-        let x113 = ((x71 * u1 + x17 * (x95 - x81)) * d - x112) * m1
-            + m2 * (x112 + (x9 * (x82 + x111) + u1 * x90) * d);
-        let x114 = a_ * u1;
-        let x115 = x58 * x104 * x101;
-        let x116 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x117 = x75 * x100;
-        let x118 = 2.0 * gamma1;
-        let x119 = f64::sin(x118);
-        let x120 = x77 * u3 * x21;
-        let x121 = x99 * d - x19 * u2;
-        let x122 = x121 * x73;
-        let x123 = x120 - x122;
-        let x124 = x77 * x98 - x74 * (u3 * x26 + d * u4) + x121 * x100;
-        let x125 = -u3 * x29 - u1 * x66;
-        let x126 = x104 * x125;
-        let x127 = u2 * x6 * x91;
-        let x128 = x126 + x127;
-        let x129 = (u5 * d + u2 * x15) * x103 - x91 * x102 - x101 * x125;
-        let x130 = (x17 * x124 - x21 * x123) * m1 + m2 * (x6 * x128 + x9 * x129);
+        let x62 = x5 * d;
+        let x63 = x33 * x62;
+        let x64 = x17 * x54 * x63;
+        let x65 = x54 * x21;
+        let x66 = -(x9 * m2 * x62 * x65);
+        let x67 = x48 * d;
+        let x68 = x63 * x65;
+        let x69 = x68 - Iyz;
+        let x70 = (x15 - x5 * (x9 * x55 + x67)) * x59 + J2;
+        let x71 = x6 * J1;
+        let x72 = x54 * x46;
+        let x73 = J2 + (x26 - x5 * (x72 + x17 * x60)) * x54;
+        let x74 = u2 * x21;
+        let x75 = x17 * u1;
+        let x76 = x74 + x75;
+        let x77 = u3 + u4;
+        let x78 = x53 * x76;
+        let x79 = x77 * x78 - J2 * u4 * x76;
+        let x80 = 2.0 * u5 + u2;
+        let x81 = u5 + u2;
+        let x82 = x9 * u1;
+        let x83 = u3 * x6;
+        let x84 = x82 - x83;
+        let x85 = (J2 * x80 - J1 * x81) * x84;
+        let x86 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x87 = a_ * u3;
+        let x88 = x87 * u1;
+        let x89 = u3 + 2.0 * u4;
+        let x90 = x88 + (x74 * x89 + x89 * x75) * d;
+        let x91 = x90 * m1;
+        let x92 = u2 * u2;
+        let x93 = u5 * (u5 + 2.0 * u2);
+        let x94 = u1 * u1;
+        let x95 = -x93 - x94;
+        let x96 = x82 * u3;
+        let x97 = x91 + m2 * (((x95 - x92) * x6 - x96) * d - x88);
+        let x98 = a_ * u2;
+        let x99 = x98 * u1;
+        let x100 = d * (x80 * x83 - x82 * x80) - x99;
+        let x101 = m2 * x100;
+        let x102 = -u3 * x89 - u4 * u4;
+        let x103 = u2 * x75;
+        let x104 = x101 + (x99 + d * (x21 * (x102 - x94) + x103)) * m1;
+        let x105 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x106 = x6 * u1 + x9 * u3;
+        let x107 = x9 * u5;
+        let x108 = x17 * u4;
+        let x109 = x17 * u2 - x21 * u1;
+        let x110 = u3 * u3;
+        let x111 = 2.0 * gamma2;
+        let x112 = f64::sin(x111);
+        let x113 = x92 + x110;
+        let x114 = a_ * x113;
+        let x115 = ((x74 * u1 + x17 * (x102 - x92)) * d - x114) * m1
+            + m2 * (x114 + (x9 * (x93 + x113) + u1 * x83) * d);
+        let x116 = x58 * x84 * x106;
+        let x117 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x118 = x78 * x109;
+        let x119 = 2.0 * gamma1;
+        let x120 = f64::sin(x119);
+        let x121 = x87 * u3 * x21;
+        let x122 = d * u1;
+        let x123 = -x6 * x122 - u3 * x29;
+        let x124 = (u5 * d + u2 * x15) * x81 - x123 * x106 - x98 * x107;
+        let x125 = x123 * x84;
+        let x126 = u2 * x6 * x98;
+        let x127 = x125 + x126;
+        let x128 = x21 * x122 - x19 * u2;
+        let x129 = x87 * x108 - x77 * (u3 * x26 + d * u4) + x128 * x109;
+        let x130 = x128 * x76;
+        let x131 = x121 - x130;
+        let x132 = m2 * (x9 * x124 + x127 * x6) + (x17 * x129 - x131 * x21) * m1;
         Assembly {
             qdot: [
                 x3,
@@ -7828,63 +7829,60 @@ pub mod reduced_volterra {
             ],
             matrix: [
                 [
-                    (x33 * x6 * x46 + x21 * x47 * x32) * x48 + (x49 + x50) * J2 + Ixx
-                        + (x51 + x52) * J1,
+                    (x46 * x47 * m1 + x48 * x49) * x50 + Ixx + (x51 + x52) * J1
+                        + J2 * (x46 + x6 * x6),
                     x57,
                     x61,
-                    x63,
-                    x65,
+                    x64,
+                    x66,
                 ],
                 [
                     x57,
                     Iyy + J2 * (x51 + 1.0)
-                        + m2 * (x48 - x62 * x66 + a_ * (a_ + 2.0 * x28)) - x19 * x20
-                        - x55 * x56 + x50 * J1,
-                    x68,
-                    x67,
+                        + m2 * (x50 - x62 * x67 + a_ * (a_ + 2.0 * x28)) - x19 * x20
+                        - x55 * x56 + x46 * J1,
                     x69,
+                    x68,
+                    x70,
                 ],
                 [
                     x61,
+                    x69,
+                    x6 * x71 - x5 * (x60 * x60 + x54 * x72) + Izz + J2 * (x52 + 1.0)
+                        + (a_ * (a_ + 2.0 * x18) + x50) * m1 - x30 * x29,
+                    x73,
                     x68,
-                    x49 * J1 - x5 * (x60 * x60 + x64 * x64) + Izz + J2 * (x52 + 1.0)
-                        + (a_ * (a_ + 2.0 * x18) + x48) * m1 - x30 * x29,
-                    x70,
-                    x67,
                 ],
-                [x63, x67, x70, x54 * x47 * d + J2, x67],
-                [x65, x69, x67, x67, J2 + x59 * d * x46],
+                [x64, x68, x73, x54 * x47 * d + J2, x68],
+                [x66, x70, x68, x68, J2 + x59 * d * x49],
             ],
             force: [
-                x21 * x76 + (x33 * (x93 - x97 * x5) - (x80 - x5 * x88) * x32) * d
-                    - (x98 * x100 - x101 * x102) * J1 - x105 * x6 - u2 * x106
-                    + x107 * u3,
-                x88 * x56 - x17 * x76
+                x21 * x79 - x85 * x6 - u2 * x86
+                    + d * (x33 * (x100 - x5 * x104) - x32 * (x90 - x5 * x97)) + x105 * u3
+                    - (x108 * x109 - x106 * x107) * J1,
+                x97 * x56 - x17 * x79
                     + m2
-                        * (x5 * x113 * x66
-                            - (a_ * (x6 * (x84 + x108) - 2.0 * x86)
+                        * (x6 * x62 * x115
+                            - (a_ * (x6 * (x95 + x110) - 2.0 * x96)
                                 + d
-                                    * ((0.5 * (u3 * x110) - f64::cos(x109) * u1) * u3
-                                        - 0.5 * (x83 * x110))) * d + x77 * x114) + x106 * u1
-                    - x80 * x20 + x115 - x21 * u4 * x100 * J1 - x116 * u3,
-                x117 - u5 * x6 * x101 * J1 + u2 * x116
-                    - (d
-                        * (a_ * ((x81 - x83 - u4 * (2.0 * u3 + u4)) * x21 + 2.0 * x96)
-                            + (u2 * (0.5 * (u2 * x119) + u1 * f64::cos(x118))
-                                - 0.5 * (x83 * x119)) * d) + x114 * x91) * m1 - x107 * u1
-                    - x30 * x93 + x5 * (x97 * x60 - x113 * x64) - x9 * x105,
-                x117
-                    + x54
-                        * (x122 - x120
-                            + x5
-                                * (x17 * (x94 + (x124 * x21 + x17 * x123) * m1)
-                                    - x21 * x130)),
-                x115
+                                    * ((0.5 * (u3 * x112) - f64::cos(x111) * u1) * u3
+                                        - 0.5 * (x94 * x112))) * d + x88 * a_) + x86 * u1
+                    - x90 * x20 - x21 * u4 * x109 * J1 + x116 - x117 * u3,
+                x118 - u5 * x106 * x71 + x5 * (x60 * x104 - x115 * x65) + u2 * x117
+                    - (a_ * x99
+                        + d
+                            * (a_
+                                * ((x92 - x94 - u4 * (2.0 * u3 + u4)) * x21 + 2.0 * x103)
+                                + (u2 * (0.5 * (u2 * x120) + u1 * f64::cos(x119))
+                                    - 0.5 * (x94 * x120)) * d)) * m1 - x105 * u1 - x9 * x85
+                    - x30 * x100,
+                x54
+                    * (x5 * (x17 * (x101 + (x129 * x21 + x17 * x131) * m1) - x21 * x132)
+                        - x121 + x130) + x118,
+                x116
                     + x59
-                        * (-x126
-                            - x5
-                                * (-x6 * x130 - x9 * ((x9 * x128 - x129 * x6) * m2 + x87))
-                            - x127),
+                        * (-x5 * (-x9 * (x91 + m2 * (x9 * x127 - x124 * x6)) - x6 * x132)
+                            - x125 - x126),
             ],
             checks: [x0],
         }
@@ -8336,375 +8334,374 @@ pub mod reduced_volterra {
         let x8 = f64::sin(theta);
         let x9 = x8 * x6;
         let x10 = 1.0 / (m2 + m0 + m1);
-        let x11 = u5 * m2;
-        let x12 = f64::cos(gamma2);
-        let x13 = f64::sin(psi);
-        let x14 = x1 * x13;
-        let x15 = x8 * x0;
-        let x16 = f64::cos(psi);
-        let x17 = x14 + x15 * x16;
-        let x18 = f64::sin(gamma2);
-        let x19 = x4 * x18;
-        let x20 = x12 * x17 + x16 * x19;
-        let x21 = f64::sin(gamma1);
-        let x22 = x21 * m1;
-        let x23 = x17 * x22;
-        let x24 = m2 * x18;
-        let x25 = x8 * x1;
-        let x26 = x16 * x25;
-        let x27 = x0 * x13;
-        let x28 = x26 - x27;
-        let x29 = x24 * x28;
-        let x30 = f64::cos(gamma1);
-        let x31 = x21 * x4;
-        let x32 = x30 * x28 - x16 * x31;
-        let x33 = u4 * m1;
-        let x34 = x12 * d;
-        let x35 = x34 + a_;
-        let x36 = -(m2 * x35);
-        let x37 = a_ * x21;
-        let x38 = x21 * x25 + x30 * x4;
-        let x39 = x38 * x16;
-        let x40 = x21 * x27;
-        let x41 = x39 - x40;
-        let x42 = x30 * a_;
-        let x43 = x42 + d;
-        let x44 = x28 * x36 + m1 * (x37 * x41 + x32 * x43);
-        let x45 = x12 * a_;
-        let x46 = x45 + d;
-        let x47 = x12 * x4;
-        let x48 = x15 * x18;
-        let x49 = (x47 - x48) * x16 - x18 * x14;
-        let x50 = a_ * x18;
-        let x51 = x30 * d;
-        let x52 = a_ + x51;
-        let x53 = -(x52 * m1);
-        let x54 = m2 * (x46 * x20 - x49 * x50) + x17 * x53;
-        let x55 = (-u3 * x44 - u2 * x54)
-            - (x11 * x20 + u1 * (x23 - x29) + x32 * x33) * d;
-        let x56 = x16 * x1;
-        let x57 = x15 * x13;
-        let x58 = x57 - x56;
-        let x59 = x56 - x57;
-        let x60 = x4 * x13;
-        let x61 = x12 * x60;
-        let x62 = x59 * x18 + x61;
-        let x63 = x18 * x60;
-        let x64 = x12 * x58;
-        let x65 = x63 + x64;
-        let x66 = x53 * x58 + m2 * (x46 * x65 - x62 * x50);
-        let x67 = x16 * x0 + x25 * x13;
-        let x68 = x30 * x67;
-        let x69 = x21 * x60;
-        let x70 = x68 - x69;
-        let x71 = x67 * x21;
-        let x72 = x30 * x60;
-        let x73 = x71 + x72;
-        let x74 = x67 * x36;
-        let x75 = (x43 * x70 + x73 * x37) * m1 + x74;
-        let x76 = x24 * x67;
-        let x77 = x22 * x58;
-        let x78 = x4 * x0;
-        let x79 = x12 * x78 - x8 * x18;
-        let x80 = x18 * x78 + x12 * x8;
-        let x81 = m2 * (x46 * x79 + x50 * x80) + x53 * x78;
-        let x82 = x4 * x1;
-        let x83 = x8 * x21 + x30 * x82;
-        let x84 = x82 * x21;
-        let x85 = x30 * x8;
-        let x86 = x84 - x85;
-        let x87 = x82 * x36 + m1 * (x83 * x43 + x86 * x37);
-        let x88 = x24 * x1;
-        let x89 = x22 * x0;
-        let x90 = (-u2 * x81 - u3 * x87)
-            - d * (x83 * x33 + x79 * x11 + x4 * u1 * (x89 - x88));
-        let x91 = x18 * x18;
-        let x92 = x21 * x21;
-        let x93 = x30 * x30;
-        let x94 = x12 * x12;
-        let x95 = x10 * m1;
-        let x96 = 1.0 - x95;
-        let x97 = x10 * m2;
-        let x98 = 1.0 - x97;
-        let x99 = x98 * x18;
-        let x100 = d * d;
-        let x101 = J1 - J2;
-        let x102 = d * m1;
-        let x103 = m2 * x35;
-        let x104 = x53 + x103;
-        let x105 = x10 * x104;
-        let x106 = x52 + x105;
-        let x107 = x30 * x101 - x102 * x106;
-        let x108 = x107 * x21 - Ixy;
-        let x109 = x52 * m1;
-        let x110 = x109 + x36;
-        let x111 = x110 * x10;
-        let x112 = x35 + x111;
-        let x113 = m2 * d;
-        let x114 = J2 - J1;
-        let x115 = x12 * x114;
-        let x116 = (x112 * x113 + x115) * x18 - Ixz;
-        let x117 = x10 * x113;
-        let x118 = x117 * x102;
-        let x119 = x30 * x18;
-        let x120 = x118 * x119;
-        let x121 = x102 * x21;
-        let x122 = x117 * x121;
-        let x123 = x12 * x122;
-        let x124 = -x123;
-        let x125 = x117 * d;
-        let x126 = x18 * x122;
-        let x127 = x126 - Iyz;
-        let x128 = x113 * (x46 - x10 * (x91 * x113 + x12 * x104)) + J2;
-        let x129 = J2 + (x43 - x10 * (x30 * x110 + x21 * x121)) * x102;
-        let x130 = x102 * d;
-        let x131 = x96 * x130;
-        let x132 = x113 * d;
-        let x133 = 2.0 * u5 + u2;
-        let x134 = J2 * x133;
-        let x135 = u5 + u2;
-        let x136 = J1 * x135;
-        let x137 = x134 - x136;
-        let x138 = x12 * u1;
-        let x139 = u3 * x18;
-        let x140 = x138 - x139;
-        let x141 = x18 * x140;
-        let x142 = x21 * u1;
-        let x143 = x30 * u2;
-        let x144 = x143 - x142;
-        let x145 = x30 * x144;
-        let x146 = x18 * u1;
-        let x147 = x12 * u3;
-        let x148 = x146 + x147;
-        let x149 = -(x12 * x148);
-        let x150 = a_ * u3;
-        let x151 = x150 * u1;
-        let x152 = u2 * x21;
-        let x153 = u3 + 2.0 * u4;
-        let x154 = x30 * u1;
-        let x155 = x151 + (x152 * x153 + x153 * x154) * d;
-        let x156 = x155 * m1;
-        let x157 = u1 * u1;
-        let x158 = u5 * (u5 + 2.0 * u2);
-        let x159 = u2 * u2;
-        let x160 = -x158 - x159;
-        let x161 = x160 - x157;
-        let x162 = x147 * u1;
-        let x163 = m2 * ((x18 * x161 - x162) * d - x151);
-        let x164 = x156 + x163;
-        let x165 = x155 - x10 * x164;
-        let x166 = u3 * x153;
-        let x167 = u4 * u4;
-        let x168 = -x166 - x167;
-        let x169 = x168 - x157;
-        let x170 = x143 * u1;
-        let x171 = a_ * u2;
-        let x172 = x171 * u1;
-        let x173 = d * (x133 * x139 - x138 * x133) - x172;
-        let x174 = m2 * x173;
-        let x175 = (d * (x21 * x169 + x170) + x172) * m1 + x174;
-        let x176 = x173 - x10 * x175;
-        let x177 = u3 + u4;
-        let x178 = x152 + x154;
-        let x179 = x101 * x178;
-        let x180 = J2 * u4;
-        let x181 = x177 * x179 - x180 * x178;
-        let x182 = x181 * x21;
-        let x183 = u2 * Iyz;
-        let x184 = u1 * Ixz;
-        let x185 = u3 * Izz - x183 - x184;
-        let x186 = Iyz * u3;
-        let x187 = Ixy * u1;
-        let x188 = u2 * Iyy - x186 - x187;
-        let x189 = x30 * x181;
-        let x190 = u4 * J1;
-        let x191 = x144 * x21;
-        let x192 = a_ * u1;
-        let x193 = x10 * d;
-        let x194 = u2 * x142;
-        let x195 = u3 * u3;
-        let x196 = x159 + x195;
-        let x197 = a_ * x196;
-        let x198 = x146 * u3;
-        let x199 = m1 * ((x194 + x30 * (x168 - x159)) * d - x197)
-            + m2 * (x197 + (x12 * (x158 + x196) + x198) * d);
-        let x200 = 2.0 * gamma2;
-        let x201 = f64::sin(x200);
-        let x202 = u3 * x201;
-        let x203 = f64::cos(x200);
-        let x204 = x203 * u1;
-        let x205 = x195 - x157;
-        let x206 = x205 - x158;
-        let x207 = x114 * x140;
-        let x208 = x148 * x207;
-        let x209 = u3 * Ixz;
-        let x210 = u2 * Ixy;
-        let x211 = Ixx * u1 - x209 - x210;
-        let x212 = x179 * x144;
-        let x213 = x12 * x140;
-        let x214 = u5 * J1;
-        let x215 = -(x18 * x148);
-        let x216 = x159 - x157 - u4 * (2.0 * u3 + u4);
-        let x217 = 2.0 * gamma1;
-        let x218 = f64::sin(x217);
-        let x219 = u2 * x218;
-        let x220 = f64::cos(x217);
-        let x221 = u1 * x220;
-        let x222 = x150 * u3 * x21;
-        let x223 = x30 * x150;
-        let x224 = u4 * x223;
-        let x225 = x177 * (u3 * x43 + d * u4);
-        let x226 = x224 - x225;
-        let x227 = x142 * d;
-        let x228 = u2 * x52;
-        let x229 = x227 - x228;
-        let x230 = x144 * x229;
-        let x231 = x226 + x230;
-        let x232 = x229 * x178;
-        let x233 = x222 - x232;
-        let x234 = x174 + m1 * (x231 * x21 + x30 * x233);
-        let x235 = (u5 * d + u2 * x46) * x135;
-        let x236 = x12 * x171;
-        let x237 = u5 * x236;
-        let x238 = x146 * d;
-        let x239 = x35 * u3;
-        let x240 = -x238 - x239;
-        let x241 = x240 * x148;
-        let x242 = x235 - x237 - x241;
-        let x243 = x240 * x140;
-        let x244 = u2 * x18 * x171;
-        let x245 = x243 + x244;
-        let x246 = m2 * (x12 * x242 + x18 * x245);
-        let x247 = (x30 * x231 - x21 * x233) * m1;
-        let x248 = x246 + x247;
-        let x249 = m2 * (x12 * x245 - x18 * x242);
-        let x250 = x12 * x59;
-        let x251 = x250 - x63;
-        let x252 = -x71 - x72;
-        let x253 = x69 - x68;
-        let x254 = x8 * x5;
-        let x255 = x10 * x90;
-        let x256 = x19 + x12 * x15;
-        let x257 = x31 - x30 * x25;
-        let x258 = x88 - x89;
-        let x259 = a_ * x91;
-        let x260 = x27 - x26;
-        let x261 = x12 * x46;
-        let x262 = x30 * x33;
-        let x263 = x12 * x11;
-        let x264 = u3 * ((a_ * x92 + x30 * x43) * m1 + x36);
-        let x265 = x40 - x39;
-        let x266 = x85 - x84;
-        let x267 = x30 * x21;
-        let x268 = 2.0 * J2 - 2.0 * J1;
-        let x269 = x30 * x107 + (x114 + x131) * x92;
-        let x270 = -x126;
-        let x271 = x118 * (x30 * x12);
-        let x272 = -x271;
-        let x273 = 2.0 * a_ + 2.0 * x51;
-        let x274 = 2.0 * J1 - 2.0 * J2;
-        let x275 = x30 * x102;
-        let x276 = (x10 * (x110 - x275) - a_) * x121;
-        let x277 = x10 * x24;
-        let x278 = x30 * x169 - x194;
-        let x279 = x95 - 1.0;
-        let x280 = x143 * x153 - x142 * x153;
-        let x281 = x101 * x144;
-        let x282 = x180 * (x142 - x143) + x177 * x281;
-        let x283 = (x159 + x166 + x167) * x21 + x170;
-        let x284 = x113 * x18;
-        let x285 = u1 * x218;
-        let x286 = u2 * x220;
-        let x287 = x281 * x144 - x179 * x178;
-        let x288 = d * x178;
-        let x289 = x288 * x178;
-        let x290 = u3 * x223;
-        let x291 = x289 - x290;
-        let x292 = x21 * (x225 - x224 + x291) + x30 * x144 * x288;
-        let x293 = x117 * m1;
-        let x294 = x12 * x18;
-        let x295 = x113 * ((x97 - 1.0) * x91 * d + x12 * x112) + x91 * x101 + x114 * x94;
-        let x296 = x12 * x113;
-        let x297 = (x10 * (x104 - x296) - a_) * x284;
-        let x298 = 2.0 * x34 + 2.0 * a_;
-        let x299 = -x120;
-        let x300 = x12 * x161 + x198;
-        let x301 = x147 * x133 + x146 * x133;
-        let x302 = x139 - x138;
-        let x303 = (x160 - x195) * x18 + x162;
-        let x304 = x140 * x207 - x114 * x148 * x148;
-        let x305 = (x214 + x136) - x134;
-        let x306 = u2 * x236;
-        let x307 = x302 * d;
-        let x308 = x140 * x307;
-        let x309 = x306 - x235 + x237 + x308;
-        let x310 = x309 * x18 - x34 * x302 * x148;
-        let x311 = x18 * x148;
-        let x312 = Ixy * u3;
-        let x313 = x150 + x51 * x153;
-        let x314 = x313 * m1;
-        let x315 = m2 * (-2.0 * x238 - x239) + x314;
-        let x316 = x177 * x101;
-        let x317 = x316 - x180;
-        let x318 = -x171 - x34 * x133;
-        let x319 = m2 * x318;
-        let x320 = x319 + (x228 - 2.0 * x227) * m1;
-        let x321 = u2 * Ixz;
+        let x11 = f64::cos(gamma2);
+        let x12 = x11 * a_;
+        let x13 = x12 + d;
+        let x14 = f64::sin(gamma2);
+        let x15 = f64::cos(psi);
+        let x16 = x15 * x4;
+        let x17 = f64::sin(psi);
+        let x18 = x1 * x17;
+        let x19 = x8 * x0;
+        let x20 = x18 + x19 * x15;
+        let x21 = x14 * x16 + x11 * x20;
+        let x22 = x11 * x4;
+        let x23 = x19 * x14;
+        let x24 = (x22 - x23) * x15 - x14 * x18;
+        let x25 = a_ * x14;
+        let x26 = f64::cos(gamma1);
+        let x27 = x26 * d;
+        let x28 = a_ + x27;
+        let x29 = -(x28 * m1);
+        let x30 = m2 * (x13 * x21 - x24 * x25) + x20 * x29;
+        let x31 = x8 * x1;
+        let x32 = x15 * x31;
+        let x33 = x0 * x17;
+        let x34 = x32 - x33;
+        let x35 = x11 * d;
+        let x36 = x35 + a_;
+        let x37 = -(m2 * x36);
+        let x38 = x26 * a_;
+        let x39 = x38 + d;
+        let x40 = f64::sin(gamma1);
+        let x41 = x26 * x34 - x40 * x16;
+        let x42 = a_ * x40;
+        let x43 = x40 * x31 + x26 * x4;
+        let x44 = x43 * x15;
+        let x45 = x40 * x33;
+        let x46 = x44 - x45;
+        let x47 = x34 * x37 + (x39 * x41 + x42 * x46) * m1;
+        let x48 = u5 * m2;
+        let x49 = x40 * m1;
+        let x50 = x20 * x49;
+        let x51 = m2 * x14;
+        let x52 = x51 * x34;
+        let x53 = u4 * m1;
+        let x54 = (-u2 * x30 - x47 * u3)
+            - d * (x21 * x48 + u1 * (x50 - x52) + x53 * x41);
+        let x55 = x15 * x1;
+        let x56 = x19 * x17;
+        let x57 = x56 - x55;
+        let x58 = x55 - x56;
+        let x59 = x4 * x17;
+        let x60 = x11 * x59;
+        let x61 = x58 * x14 + x60;
+        let x62 = x14 * x59;
+        let x63 = x11 * x57;
+        let x64 = x62 + x63;
+        let x65 = x29 * x57 + m2 * (x13 * x64 - x61 * x25);
+        let x66 = x15 * x0 + x31 * x17;
+        let x67 = x26 * x66;
+        let x68 = x40 * x59;
+        let x69 = x67 - x68;
+        let x70 = x66 * x40;
+        let x71 = x26 * x59;
+        let x72 = x70 + x71;
+        let x73 = x66 * x37;
+        let x74 = (x39 * x69 + x72 * x42) * m1 + x73;
+        let x75 = x51 * x66;
+        let x76 = x49 * x57;
+        let x77 = x4 * x0;
+        let x78 = x11 * x77 - x8 * x14;
+        let x79 = x14 * x77 + x11 * x8;
+        let x80 = m2 * (x13 * x78 + x25 * x79) + x29 * x77;
+        let x81 = x4 * x1;
+        let x82 = x8 * x40 + x26 * x81;
+        let x83 = x81 * x40;
+        let x84 = x26 * x8;
+        let x85 = x83 - x84;
+        let x86 = x81 * x37 + m1 * (x82 * x39 + x85 * x42);
+        let x87 = x51 * x1;
+        let x88 = x49 * x0;
+        let x89 = (-u2 * x80 - u3 * x86)
+            - d * (x82 * x53 + x78 * x48 + x4 * u1 * (x88 - x87));
+        let x90 = x14 * x14;
+        let x91 = x40 * x40;
+        let x92 = x26 * x26;
+        let x93 = x11 * x11;
+        let x94 = x10 * m1;
+        let x95 = 1.0 - x94;
+        let x96 = x10 * m2;
+        let x97 = 1.0 - x96;
+        let x98 = x97 * x14;
+        let x99 = d * d;
+        let x100 = J1 - J2;
+        let x101 = d * m1;
+        let x102 = m2 * x36;
+        let x103 = x29 + x102;
+        let x104 = x10 * x103;
+        let x105 = x28 + x104;
+        let x106 = x26 * x100 - x101 * x105;
+        let x107 = x106 * x40 - Ixy;
+        let x108 = x28 * m1;
+        let x109 = x108 + x37;
+        let x110 = x109 * x10;
+        let x111 = x36 + x110;
+        let x112 = m2 * d;
+        let x113 = J2 - J1;
+        let x114 = (x111 * x112 + x11 * x113) * x14 - Ixz;
+        let x115 = x10 * x112;
+        let x116 = x115 * x101;
+        let x117 = x26 * x14;
+        let x118 = x116 * x117;
+        let x119 = x101 * x40;
+        let x120 = x115 * x119;
+        let x121 = x11 * x120;
+        let x122 = -x121;
+        let x123 = x90 * d;
+        let x124 = x14 * x120;
+        let x125 = x124 - Iyz;
+        let x126 = x112 * (x13 - x10 * (x90 * x112 + x11 * x103)) + J2;
+        let x127 = J2 + (x39 - x10 * (x26 * x109 + x40 * x119)) * x101;
+        let x128 = x101 * d;
+        let x129 = x95 * x128;
+        let x130 = x112 * d;
+        let x131 = x40 * u1;
+        let x132 = x26 * u2;
+        let x133 = x132 - x131;
+        let x134 = x26 * x133;
+        let x135 = x14 * u1;
+        let x136 = x11 * u3;
+        let x137 = x135 + x136;
+        let x138 = -(x11 * x137);
+        let x139 = 2.0 * u5 + u2;
+        let x140 = J2 * x139;
+        let x141 = u5 + u2;
+        let x142 = J1 * x141;
+        let x143 = x140 - x142;
+        let x144 = x11 * u1;
+        let x145 = u3 * x14;
+        let x146 = x144 - x145;
+        let x147 = x143 * x146;
+        let x148 = a_ * u3;
+        let x149 = x148 * u1;
+        let x150 = u3 + 2.0 * u4;
+        let x151 = x40 * x150;
+        let x152 = x26 * u1;
+        let x153 = x149 + d * (u2 * x151 + x150 * x152);
+        let x154 = u1 * u1;
+        let x155 = u5 * (u5 + 2.0 * u2);
+        let x156 = u2 * u2;
+        let x157 = -x155 - x156;
+        let x158 = x157 - x154;
+        let x159 = x136 * u1;
+        let x160 = m2 * ((x14 * x158 - x159) * d - x149);
+        let x161 = x153 * m1;
+        let x162 = x160 + x161;
+        let x163 = x153 - x10 * x162;
+        let x164 = u3 * x150;
+        let x165 = u4 * u4;
+        let x166 = -x164 - x165;
+        let x167 = x166 - x154;
+        let x168 = x132 * u1;
+        let x169 = a_ * u2;
+        let x170 = x169 * u1;
+        let x171 = d * (x139 * x145 - x144 * x139) - x170;
+        let x172 = m2 * x171;
+        let x173 = (d * (x40 * x167 + x168) + x170) * m1 + x172;
+        let x174 = x171 - x10 * x173;
+        let x175 = u2 * Iyz;
+        let x176 = u1 * Ixz;
+        let x177 = u3 * Izz - x175 - x176;
+        let x178 = Iyz * u3;
+        let x179 = Ixy * u1;
+        let x180 = u2 * Iyy - x178 - x179;
+        let x181 = u3 + u4;
+        let x182 = u2 * x40;
+        let x183 = x182 + x152;
+        let x184 = x100 * x183;
+        let x185 = J2 * u4;
+        let x186 = x181 * x184 - x185 * x183;
+        let x187 = x186 * x40;
+        let x188 = x26 * x186;
+        let x189 = u4 * J1;
+        let x190 = x133 * x40;
+        let x191 = a_ * u1;
+        let x192 = x10 * d;
+        let x193 = u2 * x131;
+        let x194 = u3 * u3;
+        let x195 = x156 + x194;
+        let x196 = a_ * x195;
+        let x197 = x135 * u3;
+        let x198 = m1 * ((x193 + x26 * (x166 - x156)) * d - x196)
+            + m2 * (x196 + (x11 * (x155 + x195) + x197) * d);
+        let x199 = 2.0 * gamma2;
+        let x200 = f64::sin(x199);
+        let x201 = u3 * x200;
+        let x202 = f64::cos(x199);
+        let x203 = x202 * u1;
+        let x204 = x194 - x154;
+        let x205 = x204 - x155;
+        let x206 = x113 * x146;
+        let x207 = x137 * x206;
+        let x208 = u3 * Ixz;
+        let x209 = u2 * Ixy;
+        let x210 = Ixx * u1 - x208 - x209;
+        let x211 = x184 * x133;
+        let x212 = u5 * J1;
+        let x213 = -(x14 * x137);
+        let x214 = x156 - x154 - u4 * (2.0 * u3 + u4);
+        let x215 = 2.0 * gamma1;
+        let x216 = f64::sin(x215);
+        let x217 = u2 * x216;
+        let x218 = f64::cos(x215);
+        let x219 = u1 * x218;
+        let x220 = x148 * u3 * x40;
+        let x221 = x131 * d;
+        let x222 = u2 * x28;
+        let x223 = x221 - x222;
+        let x224 = x223 * x183;
+        let x225 = (u5 * d + u2 * x13) * x141;
+        let x226 = x11 * x169;
+        let x227 = u5 * x226;
+        let x228 = x135 * d;
+        let x229 = x36 * u3;
+        let x230 = -x228 - x229;
+        let x231 = x230 * x137;
+        let x232 = x225 - x227 - x231;
+        let x233 = x230 * x146;
+        let x234 = u2 * x14 * x169;
+        let x235 = x233 + x234;
+        let x236 = m2 * (x11 * x232 + x14 * x235);
+        let x237 = x26 * x148;
+        let x238 = u4 * x237;
+        let x239 = x181 * (u3 * x39 + d * u4);
+        let x240 = x238 - x239;
+        let x241 = x133 * x223;
+        let x242 = x240 + x241;
+        let x243 = x220 - x224;
+        let x244 = (x26 * x242 - x243 * x40) * m1;
+        let x245 = x236 + x244;
+        let x246 = x172 + (x242 * x40 + x26 * x243) * m1;
+        let x247 = m2 * (x11 * x235 - x14 * x232);
+        let x248 = x11 * x58;
+        let x249 = x248 - x62;
+        let x250 = -x70 - x71;
+        let x251 = x68 - x67;
+        let x252 = x8 * x5;
+        let x253 = x10 * x89;
+        let x254 = x40 * x4 - x26 * x31;
+        let x255 = x4 * x14 + x11 * x19;
+        let x256 = x87 - x88;
+        let x257 = a_ * x90;
+        let x258 = x33 - x32;
+        let x259 = x11 * x13;
+        let x260 = x26 * x53;
+        let x261 = x11 * x48;
+        let x262 = u3 * ((a_ * x91 + x26 * x39) * m1 + x37);
+        let x263 = x45 - x44;
+        let x264 = x84 - x83;
+        let x265 = x26 * x40;
+        let x266 = 2.0 * J2 - 2.0 * J1;
+        let x267 = x26 * x106 + (x113 + x129) * x91;
+        let x268 = -x124;
+        let x269 = x116 * (x26 * x11);
+        let x270 = -x269;
+        let x271 = 2.0 * a_ + 2.0 * x27;
+        let x272 = 2.0 * J1 - 2.0 * J2;
+        let x273 = x26 * x101;
+        let x274 = (x10 * (x109 - x273) - a_) * x119;
+        let x275 = x10 * x51;
+        let x276 = x26 * x167 - x193;
+        let x277 = x94 - 1.0;
+        let x278 = x132 * x150 - x131 * x150;
+        let x279 = x100 * x133;
+        let x280 = x185 * (x131 - x132) + x181 * x279;
+        let x281 = (x156 + x164 + x165) * x40 + x168;
+        let x282 = x112 * x14;
+        let x283 = x279 * x133 - x184 * x183;
+        let x284 = u1 * x216;
+        let x285 = u2 * x218;
+        let x286 = d * x183;
+        let x287 = x183 * x286;
+        let x288 = u3 * x237;
+        let x289 = x287 - x288;
+        let x290 = x40 * (x239 - x238 + x289) + x26 * x133 * x286;
+        let x291 = x115 * m1;
+        let x292 = x11 * x14;
+        let x293 = x90 * x100 + x113 * x93 + x112 * ((x96 - 1.0) * x123 + x11 * x111);
+        let x294 = x11 * x112;
+        let x295 = (x10 * (x103 - x294) - a_) * x282;
+        let x296 = 2.0 * x35 + 2.0 * a_;
+        let x297 = -x118;
+        let x298 = x11 * x158 + x197;
+        let x299 = x136 * x139 + x135 * x139;
+        let x300 = x145 - x144;
+        let x301 = x113 * x137;
+        let x302 = x146 * x206 - x301 * x137;
+        let x303 = (x157 - x194) * x14 + x159;
+        let x304 = (x212 + x142) - x140;
+        let x305 = u2 * x226;
+        let x306 = x300 * d;
+        let x307 = x146 * x306;
+        let x308 = x305 - x225 + x227 + x307;
+        let x309 = x308 * x14 - x35 * x300 * x137;
+        let x310 = x14 * x137;
+        let x311 = Ixy * u3;
+        let x312 = x148 + x27 * x150;
+        let x313 = x312 * m1;
+        let x314 = m2 * (-2.0 * x228 - x229) + x313;
+        let x315 = x181 * x100;
+        let x316 = x315 - x185;
+        let x317 = -x169 - x35 * x139;
+        let x318 = m2 * x317;
+        let x319 = x318 + (x222 - 2.0 * x221) * m1;
+        let x320 = u2 * Ixz;
+        let x321 = -(d * (x51 * u3 + u2 * x49));
         let x322 = Izz - Ixx;
-        let x323 = x115 * x148;
-        let x324 = x24 * u3 + u2 * x22;
-        let x325 = x30 * x281;
-        let x326 = x114 * x178;
-        let x327 = Ixx - Iyy;
-        let x328 = x30 * x229;
-        let x329 = x21 * x288 + x328;
-        let x330 = x144 * d - x227 + x228;
-        let x331 = d * x141;
-        let x332 = x12 * x240;
+        let x323 = x11 * x301;
+        let x324 = x26 * x279;
+        let x325 = Ixx - Iyy;
+        let x326 = x113 * x183;
+        let x327 = x10 * x101;
+        let x328 = x133 * d - x221 + x222;
+        let x329 = x26 * x223;
+        let x330 = x40 * x286 + x329;
+        let x331 = d * x14 * x146;
+        let x332 = x11 * x230;
         let x333 = x332 - x331;
-        let x334 = x238 + x239 + d * x148;
-        let x335 = (x30 * x330 + x329) * x22 + x24 * (x333 + x12 * x334);
-        let x336 = x18 * x207;
-        let x337 = x22 * x153;
+        let x334 = x228 + x229 + d * x137;
+        let x335 = (x26 * x328 + x330) * x49 + x51 * (x333 + x11 * x334);
+        let x336 = x14 * x206;
+        let x337 = x49 * x150;
         let x338 = 2.0 * u5 + 2.0 * u2;
-        let x339 = x337 - x24 * x338;
-        let x340 = x307 - x192;
+        let x339 = x337 - x51 * x338;
+        let x340 = x306 - x191;
         let x341 = m2 * x340;
-        let x342 = x109 * u1 + x341;
+        let x342 = x108 * u1 + x341;
         let x343 = Iyy - Izz;
         let x344 = Iyz * u1;
-        let x345 = m2 * (x34 * x338 + 2.0 * x171) + m1 * (x227 - u2 * x273);
-        let x346 = x12 * x207;
-        let x347 = a_ * x192;
-        let x348 = 2.0 * x152 + 2.0 * x154;
-        let x349 = x30 * x179;
-        let x350 = x10 * x102;
-        let x351 = x21 * x229 - x52 * x178;
-        let x352 = x328 - x52 * x144;
-        let x353 = d * x135;
-        let x354 = x46 * x135;
-        let x355 = x45 * (u2 - u5);
-        let x356 = m2 * (x12 * (x353 + x354 + x355) + 2.0 * (x91 * x171))
-            + (x21 * x351 + x30 * x352) * m1;
-        let x357 = x192 + x288;
-        let x358 = x357 * m1;
-        let x359 = u1 * x36 + x358;
-        let x360 = 2.0 * u3 + 2.0 * u4;
-        let x361 = x24 * x133;
-        let x362 = x361 - x360 * x22;
-        let x363 = 2.0 * x139 - 2.0 * x138;
-        let x364 = m2 * (x238 + u3 * x298) + (-2.0 * x150 - x51 * x360) * m1;
-        let x365 = (-x177 * d - x177 * x43) + x42 * (u4 - u3);
-        let x366 = x332 - x35 * x148;
-        let x367 = x35 * x140;
-        let x368 = x240 * x18;
-        let x369 = -x367 - x368;
-        let x370 = (x30 * x365 - 2.0 * (x150 * x92)) * m1
-            + m2 * (x18 * x369 - x12 * x366);
-        let x371 = x179 - J2 * x178;
-        let x372 = -(x360 * x119);
-        let x373 = 2.0 * J2 - J1;
-        let x374 = x12 * x338;
+        let x345 = m2 * (x35 * x338 + 2.0 * x169) + m1 * (x221 - u2 * x271);
+        let x346 = x11 * x206;
+        let x347 = a_ * x191;
+        let x348 = 2.0 * x182 + 2.0 * x152;
+        let x349 = x26 * x184;
+        let x350 = d * x141;
+        let x351 = x13 * x141;
+        let x352 = x12 * (u2 - u5);
+        let x353 = x40 * x223 - x28 * x183;
+        let x354 = x329 - x28 * x133;
+        let x355 = m2 * (x11 * (x350 + x351 + x352) + 2.0 * (x90 * x169))
+            + (x40 * x353 + x26 * x354) * m1;
+        let x356 = 2.0 * u3 + 2.0 * u4;
+        let x357 = x51 * x139;
+        let x358 = x357 - x356 * x49;
+        let x359 = x191 + x286;
+        let x360 = x359 * m1;
+        let x361 = x360 + u1 * x37;
+        let x362 = 2.0 * x145 - 2.0 * x144;
+        let x363 = m2 * (x228 + u3 * x296) + (-2.0 * x148 - x27 * x356) * m1;
+        let x364 = (-x181 * d - x181 * x39) + x38 * (u4 - u3);
+        let x365 = x332 - x36 * x137;
+        let x366 = x36 * x146;
+        let x367 = x230 * x14;
+        let x368 = -x366 - x367;
+        let x369 = (x26 * x364 - 2.0 * (x148 * x91)) * m1
+            + m2 * (x14 * x368 - x11 * x365);
+        let x370 = x184 - J2 * x183;
+        let x371 = -(x356 * x117);
+        let x372 = x146 * (2.0 * J2 - J1);
+        let x373 = x11 * x338;
         Derivatives {
             qdot: [
                 x6,
@@ -8712,57 +8709,57 @@ pub mod reduced_volterra {
                 u1 + x9,
                 u4,
                 u5,
-                x10 * (G_X + x55),
+                x10 * (G_X + x54),
                 x10
-                    * (G_Y - x66 * u2 - x75 * u3
-                        - d * (u1 * (x77 - x76) + x11 * x65 + x33 * x70)),
-                x10 * (x90 + G_Z),
+                    * (G_Y - x65 * u2 - x74 * u3
+                        - d * (u1 * (x76 - x75) + x48 * x64 + x53 * x69)),
+                x10 * (x89 + G_Z),
             ],
             matrix: [
                 [
-                    (x91 + x92) * J2 + Ixx + (x93 + x94) * J1
-                        + (x96 * x21 * x22 + x24 * x99) * x100,
-                    x108,
-                    x116,
-                    x120,
+                    (x90 + x91) * J2 + Ixx + (x92 + x93) * J1
+                        + (x95 * x40 * x49 + x51 * x98) * x99,
+                    x107,
+                    x114,
+                    x118,
+                    x122,
+                ],
+                [
+                    x107,
+                    (a_ * (2.0 * x35 + a_) - x115 * x123 + x99) * m2 + Iyy - x28 * x29
+                        + J2 * (x92 + 1.0) - x103 * x104 + x91 * J1,
+                    x125,
+                    x124,
+                    x126,
+                ],
+                [
+                    x114,
+                    x125,
+                    J2 * (x93 + 1.0) + x90 * J1 + (a_ * (a_ + 2.0 * x27) + x99) * m1
+                        + Izz - x36 * x37 - (x119 * x119 + x109 * x109) * x10,
+                    x127,
                     x124,
                 ],
-                [
-                    x108,
-                    Iyy - x52 * x53 + m2 * (a_ * (2.0 * x34 + a_) - x91 * x125 + x100)
-                        + J2 * (x93 + 1.0) - x104 * x105 + x92 * J1,
-                    x127,
-                    x126,
-                    x128,
-                ],
-                [
-                    x116,
-                    x127,
-                    J2 * (x94 + 1.0) + x91 * J1 + (a_ * (a_ + 2.0 * x51) + x100) * m1
-                        + Izz - x35 * x36 - (x121 * x121 + x110 * x110) * x10,
-                    x129,
-                    x126,
-                ],
-                [x120, x126, x129, J2 + x131, x126],
-                [x124, x128, x126, x126, x98 * x132 + J2],
+                [x118, x124, x127, J2 + x129, x124],
+                [x122, x126, x124, x124, x97 * x130 + J2],
             ],
             force: [
-                d * (x24 * x176 - x165 * x22) - x137 * x141
-                    - (x145 * u4 + u5 * x149) * J1 + x182 - u2 * x185 + x188 * u3,
-                x164 * x105 - x189 + x185 * u1 - x190 * x191
-                    + (x150 * x192 + x18 * x193 * x199
-                        - (d * ((0.5 * x202 - x204) * u3 - 0.5 * (x157 * x201))
-                            + (x18 * x206 - 2.0 * x162) * a_) * d) * m2 + x208
-                    - x155 * x53 - x211 * u3,
-                x212 - x137 * x213 + u2 * x211 + x214 * x215
-                    + x10 * (x110 * x175 - x199 * x121) - x188 * u1
-                    - (x192 * x171
+                (x51 * x174 - x49 * x163) * d - (x134 * u4 + u5 * x138) * J1 - x147 * x14
+                    - u2 * x177 + x180 * u3 + x187,
+                x162 * x104 - x188 - x153 * x29 + x177 * u1 - x189 * x190
+                    + (x148 * x191 + x14 * x192 * x198
+                        - (d * ((0.5 * x201 - x203) * u3 - 0.5 * (x154 * x200))
+                            + (x14 * x205 - 2.0 * x159) * a_) * d) * m2 + x207
+                    - x210 * u3,
+                x211 + u2 * x210 + x212 * x213 + x10 * (x109 * x173 - x198 * x119)
+                    - x180 * u1
+                    - (x191 * x169
                         + d
-                            * (a_ * (x216 * x21 + 2.0 * x170)
-                                + (u2 * (0.5 * x219 + x221) - 0.5 * (x157 * x218)) * d))
-                        * m1 - x173 * x36,
-                x212 + x102 * (x10 * (x30 * x234 - x21 * x248) - x222 + x232),
-                (-(-x18 * x248 - x12 * (x249 + x156)) * x10 - x243 - x244) * x113 + x208,
+                            * (a_ * (x214 * x40 + 2.0 * x168)
+                                + (u2 * (0.5 * x217 + x219) - 0.5 * (x154 * x216)) * d))
+                        * m1 - x11 * x147 - x171 * x37,
+                x211 + (x224 - x220 + (x26 * x246 - x245 * x40) * x10) * x101,
+                x112 * (-x10 * (-x11 * (x247 + x161) - x245 * x14) - x233 - x234) + x207,
             ],
             checks: [x4],
             d_qdot: [
@@ -8772,43 +8769,43 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    (-u2 * (m2 * (x251 * x46 - (x18 * x58 - x61) * x50) + x59 * x53)
-                        - u3 * ((x252 * x37 + x43 * x253) * m1 - x74)
-                        - (x33 * x253 + x251 * x11 + (x59 * x22 + x76) * u1) * d) * x10,
-                    x10 * x55,
+                    (-u2 * (m2 * (x249 * x13 - (x14 * x57 - x60) * x25) + x58 * x29)
+                        - u3 * ((x250 * x42 + x39 * x251) * m1 - x73)
+                        - (x53 * x251 + x249 * x48 + (x58 * x49 + x75) * u1) * d) * x10,
+                    x10 * x54,
                     0.0,
                 ],
                 [
-                    x6 * x254,
+                    x6 * x252,
                     0.0,
-                    x9 * x254 + x3,
+                    x9 * x252 + x3,
                     0.0,
                     0.0,
-                    x16 * x255,
-                    x255 * x13,
+                    x15 * x253,
+                    x253 * x17,
                     x10
-                        * (-u2 * (m2 * (-x46 * x256 - (x48 - x47) * x50) - x15 * x53)
-                            - u3 * ((x257 * x43 - x38 * x37) * m1 - x25 * x36)
-                            - d * (x257 * x33 + x8 * x258 * u1 - x11 * x256)),
+                        * (-u3 * ((x254 * x39 - x43 * x42) * m1 - x31 * x37)
+                            - (m2 * (-x13 * x255 - (x23 - x22) * x25) - x19 * x29) * u2
+                            - d * (x254 * x53 - x255 * x48 + x8 * x256 * u1)),
                 ],
                 [
                     x5 * x7,
                     -x3,
-                    x7 * x254,
+                    x7 * x252,
                     0.0,
                     0.0,
                     x10
-                        * (-u2 * (m2 * (x260 * x261 - x259 * x28) + x260 * x53)
+                        * (-u2 * (m2 * (x258 * x259 - x257 * x34) + x258 * x29)
                             - d
-                                * (x17 * x262 + u1 * (x260 * x22 - x24 * x17) + x263 * x260)
-                            - x17 * x264),
+                                * (x20 * x260 + u1 * (x258 * x49 - x51 * x20) + x261 * x258)
+                            - x20 * x262),
                     x10
-                        * (-(u1 * (-x24 * x58 - x67 * x22) - x263 * x67 + x58 * x262) * d
-                            - u2 * (m2 * (-x259 * x67 - x67 * x261) - x67 * x53)
-                            - x58 * x264),
+                        * (-(u1 * (-x51 * x57 - x66 * x49) - x261 * x66 + x57 * x260) * d
+                            - u2 * (m2 * (-x257 * x66 - x66 * x259) - x66 * x29)
+                            - x57 * x262),
                     x10 * x4
-                        * (((x22 * x1 + x24 * x0) * u1 - x0 * x262 + x263 * x1) * d
-                            - x264 * x0 - x2 * (-m2 * (x259 + x261) - x53)),
+                        * (((x49 * x1 + x51 * x0) * u1 - x0 * x260 + x261 * x1) * d
+                            - x262 * x0 - x2 * (-m2 * (x257 + x259) - x29)),
                 ],
                 [
                     0.0,
@@ -8816,11 +8813,12 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    ((-u4 * x265 - x17 * x178) * d - (x43 * x265 + x42 * x41) * u3)
-                        * x95,
-                    ((-x58 * x178 - x252 * u4) * d - (x73 * x42 + x252 * x43) * u3)
-                        * x95,
-                    ((-u4 * x266 - x178 * x78) * d - u3 * (x42 * x86 + x43 * x266)) * x95,
+                    x94
+                        * (d * (-u4 * x263 - x20 * x183)
+                            - (x39 * x263 + x38 * x46) * u3),
+                    ((-x250 * u4 - x57 * x183) * d - (x72 * x38 + x250 * x39) * u3)
+                        * x94,
+                    ((-u4 * x264 - x77 * x183) * d - u3 * (x38 * x85 + x39 * x264)) * x94,
                 ],
                 [
                     0.0,
@@ -8828,12 +8826,12 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    ((x28 * x140 - u5 * x49) * d - u2 * (x46 * x49 - x12 * a_ * x49))
-                        * x97,
-                    (d * (x67 * x140 - x62 * u5)
-                        - u2 * (a_ * (-x62 * x12 - (x64 + x250) * x18) + x62 * x46))
-                        * x97,
-                    (d * (u5 * x80 + x82 * x140) - u2 * (x45 * x80 - x46 * x80)) * x97,
+                    ((x34 * x146 - u5 * x24) * d - u2 * (x13 * x24 - x11 * a_ * x24))
+                        * x96,
+                    (d * (x66 * x146 - x61 * u5)
+                        - u2 * (a_ * (-x61 * x11 - (x63 + x248) * x14) + x61 * x13))
+                        * x96,
+                    (d * (u5 * x79 + x81 * x146) - u2 * (x12 * x79 - x13 * x79)) * x96,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8844,32 +8842,32 @@ pub mod reduced_volterra {
                     1.0,
                     0.0,
                     0.0,
-                    x193 * (x29 - x23),
-                    (x76 - x77) * x193,
-                    x258 * x4 * x193,
+                    x192 * (x52 - x50),
+                    (x75 - x76) * x192,
+                    x256 * x4 * x192,
                 ],
                 [
                     x5 * x1,
                     x0,
-                    x5 * x25,
+                    x5 * x31,
                     0.0,
                     0.0,
-                    -(x10 * x54),
-                    -(x66 * x10),
-                    -(x10 * x81),
+                    -(x10 * x30),
+                    -(x65 * x10),
+                    -(x10 * x80),
                 ],
                 [
                     x5 * x0,
                     -x1,
-                    x15 * x5,
+                    x19 * x5,
                     0.0,
                     0.0,
-                    -(x10 * x44),
-                    -(x10 * x75),
-                    -(x10 * x87),
+                    -(x10 * x47),
+                    -(x10 * x74),
+                    -(x10 * x86),
                 ],
-                [0.0, 0.0, 0.0, 1.0, 0.0, -(x32 * x350), -(x70 * x350), -(x83 * x350)],
-                [0.0, 0.0, 0.0, 0.0, 1.0, -(x117 * x20), -(x117 * x65), -(x117 * x79)],
+                [0.0, 0.0, 0.0, 1.0, 0.0, -(x327 * x41), -(x69 * x327), -(x82 * x327)],
+                [0.0, 0.0, 0.0, 0.0, 1.0, -(x115 * x21), -(x115 * x64), -(x115 * x78)],
             ],
             d_matrix: [
                 [
@@ -8894,42 +8892,42 @@ pub mod reduced_volterra {
                     [0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x267 * (x130 * (2.0 - 2.0 * x95) + x268), x269, x270, x270, x272],
+                    [x265 * (x128 * (2.0 - 2.0 * x94) + x266), x267, x268, x268, x270],
                     [
-                        x269,
-                        x21 * (x30 * x274 - x102 * (x273 + 2.0 * x105)),
-                        x120,
-                        x120,
-                        x124,
+                        x267,
+                        x40 * (x26 * x272 - x101 * (x271 + 2.0 * x104)),
+                        x118,
+                        x118,
+                        x122,
                     ],
                     [
-                        x270,
-                        x120,
-                        (x10 * (2.0 * x109 - 2.0 * x275 + 2.0 * x36) - 2.0 * a_) * x121,
-                        x276,
-                        x120,
+                        x268,
+                        x118,
+                        (x10 * (2.0 * x108 - 2.0 * x273 + 2.0 * x37) - 2.0 * a_) * x119,
+                        x274,
+                        x118,
                     ],
-                    [x270, x120, x276, 0.0, x120],
-                    [x272, x124, x120, x120, 0.0],
+                    [x268, x118, x274, 0.0, x118],
+                    [x270, x122, x118, x118, 0.0],
                 ],
                 [
-                    [x294 * ((2.0 - 2.0 * x97) * x132 + x268), x126, x295, x271, x126],
+                    [x292 * ((2.0 - 2.0 * x96) * x130 + x266), x124, x293, x269, x124],
                     [
-                        x126,
-                        (x10 * (2.0 * x53 - 2.0 * x296 + 2.0 * x103) - 2.0 * a_) * x284,
-                        x123,
-                        x123,
-                        x297,
-                    ],
-                    [
+                        x124,
+                        (x10 * (2.0 * x29 - 2.0 * x294 + 2.0 * x102) - 2.0 * a_) * x282,
+                        x121,
+                        x121,
                         x295,
-                        x123,
-                        x18 * (x12 * x274 - x113 * (2.0 * x111 + x298)),
-                        x299,
-                        x123,
                     ],
-                    [x271, x123, x299, 0.0, x123],
-                    [x126, x297, x123, x123, 0.0],
+                    [
+                        x293,
+                        x121,
+                        x14 * (x11 * x272 - x112 * (2.0 * x110 + x296)),
+                        x297,
+                        x121,
+                    ],
+                    [x269, x121, x297, 0.0, x121],
+                    [x124, x295, x121, x121, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8993,126 +8991,130 @@ pub mod reduced_volterra {
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (d * (x279 * x280 * x21 - x277 * x278) - x30 * x165) * x102 + x189
-                        + (x30 * x178 + x191) * x190 + x282 * x21,
-                    x182 - x30 * x282 - x190 * (x145 - x21 * x178)
-                        + x102
-                            * (x10 * (x280 * x104 + x283 * x284 + x21 * x164)
-                                - x155 * x21 + x280 * x52),
-                    x102
-                        * (x10 * (x110 * x278 - x30 * x199 - x21 * (x175 + x283 * x102))
-                            - a_ * (x30 * x216 - 2.0 * x194)
-                            - d * ((x286 - 2.0 * x285) * u2 - x157 * x220)) + x287,
-                    x102
-                        * (x230 + x291
+                    x188 + (x26 * x183 + x190) * x189
+                        + x101 * (d * (x277 * x278 * x40 - x275 * x276) - x26 * x163)
+                        + x280 * x40,
+                    (x10 * (x278 * x103 + x281 * x282 + x162 * x40) + x278 * x28
+                        - x153 * x40) * x101 - x26 * x280 - x189 * (x134 - x40 * x183)
+                        + x187,
+                    x283
+                        + x101
+                            * (x10
+                                * (x109 * x276 - x26 * x198 - x40 * (x173 + x281 * x101))
+                                - a_ * (x26 * x214 - 2.0 * x193)
+                                - d * ((x285 - 2.0 * x284) * u2 - x154 * x218)),
+                    x283
+                        + x101
+                            * (x10
+                                * (x26
+                                    * (m1 * (x133 * x40 * x286 + x26 * (x240 - x287 + x288))
+                                        - x236 - x244) - (x246 + x290 * m1) * x40) + x289 + x241),
+                    (x35 * x278 + x14 * x290) * x291,
+                ],
+                [
+                    x112 * (x11 * x174 + d * (x10 * x49 * x298 + x98 * x299))
+                        + x212 * (x213 - x11 * x300) - (x11 * x146 + x213) * x143,
+                    x302
+                        + x112
+                            * (x10
+                                * (x11 * x198 + x298 * x103
+                                    + (x112 * x303 - x160 - x161) * x14)
+                                - a_ * (x11 * x205 + 2.0 * x197)
+                                - (x202 * x204 + 2.0 * (x201 * u1)) * d),
+                    x14 * (x147 + x212 * x300)
+                        + x112
+                            * (x10 * (x14 * x173 - x303 * x119 + x109 * x299)
+                                - x14 * x171 + x36 * x299) + x138 * x304,
+                    x291 * (x27 * x299 - x40 * x309),
+                    x302
+                        + (x231 - x305 - x307
                             + x10
-                                * (x30
-                                    * ((x30 * (x226 - x289 + x290) + x144 * x21 * x288) * m1
-                                        - x246 - x247) - x21 * (x234 + x292 * m1))) + x287,
-                    x293 * (x34 * x280 + x292 * x18),
-                ],
-                [
-                    x113 * (x12 * x176 + d * (x10 * x22 * x300 + x99 * x301))
-                        + x214 * (x215 - x12 * x302) - x137 * (x215 + x213),
-                    x113
-                        * (x10
-                            * (x12 * x199 + x300 * x104
-                                + x18 * (x113 * x303 - x156 - x163))
-                            - a_ * (x12 * x206 + 2.0 * x198)
-                            - (x203 * x205 + 2.0 * (x202 * u1)) * d) + x304,
-                    x18 * (x214 * x302 + x137 * x140)
-                        + x113
-                            * (x10 * (x18 * x175 - x303 * x121 + x110 * x301)
-                                - x18 * x173 + x35 * x301) + x149 * x305,
-                    x293 * (x51 * x301 - x21 * x310),
-                    (x241 - x306 - x308
-                        + x10
-                            * (x12 * (m2 * (x12 * x309 + x311 * x307) + x248)
-                                + (m2 * x310 - x249 - x156) * x18)) * x113 + x304,
+                                * (x11 * (m2 * (x11 * x308 + x310 * x306) + x245)
+                                    + (m2 * x309 - x247 - x161) * x14)) * x112,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x21 * (x30 * (x190 + x317) - x102 * (x313 - x315 * x10)) - x312
-                        + x18 * (x12 * x305 + x113 * (x318 - x10 * x320)) + x321,
-                    x322 * u3 + x323 + x92 * x190 - x53 * x313 + x315 * x105
-                        + x18 * (x125 * x324 + x207) - x183
+                    x40 * (x26 * (x189 + x316) - x101 * (x312 - x314 * x10)) - x311
+                        + x14 * (x11 * x304 + x112 * (x317 - x10 * x319)) + x320,
+                    x14 * (x206 - x115 * x321) + x322 * u3 + x91 * x189 - x29 * x312
+                        + x314 * x104 + x323 - x175
                         - m2
                             * (d
-                                * (-(2.0 * x146 + 2.0 * x147) * a_
-                                    - (u1 * x201 + x203 * u3) * d) - a_ * x150) - 2.0 * x184
-                        - x93 * x317,
-                    x325 - x94 * x137 + x21 * (x326 - x102 * x324 * x193) + x111 * x320
-                        - x91 * x214 + u2 * x327 + x186 + 2.0 * x187
-                        - (d * (a_ * (2.0 * x143 - 2.0 * x142) + d * (x286 - x285))
-                            + a_ * x171) * m1 - x318 * x36,
-                    x325
-                        + (x10
-                            * (x30 * (x319 + (x330 * x92 - x30 * x329) * m1)
-                                - x21 * x335) + x329) * x102 + x326 * x21,
+                                * (-(2.0 * x135 + 2.0 * x136) * a_
+                                    - (u1 * x200 + x202 * u3) * d) - a_ * x148) - 2.0 * x176
+                        - x92 * x316,
+                    x324 - x93 * x143 + x110 * x319 - x90 * x212 + u2 * x325 + x178
+                        + 2.0 * x179 + x40 * (x326 + x321 * x327)
+                        - (d * (a_ * (2.0 * x132 - 2.0 * x131) + d * (x285 - x284))
+                            + a_ * x169) * m1 - x317 * x37,
+                    x40 * x326 + x324
+                        + x101
+                            * (x10
+                                * (x26 * (x318 + m1 * (x328 * x91 - x26 * x330))
+                                    - x40 * x335) + x330),
                     x323 + x336
-                        + x113
-                            * (x331 - x332
+                        + x112
+                            * (x331
                                 - x10
-                                    * (-x335 * x18
-                                        - x12 * (m2 * (x12 * x333 - x91 * x334) + x314))),
+                                    * (-((x333 * x11 - x90 * x334) * m2 + x313) * x11
+                                        - x14 * x335) - x332),
                 ],
                 [
-                    x92 * x317 + 2.0 * x183
+                    x91 * x316 + 2.0 * x175 + x176
+                        + (x51 * (x340 - x10 * x342) - (x151 - x10 * x339) * x119) * d
+                        - x336 + u3 * x343 - x92 * x189,
+                    x265 * (x185 - x189 - x315) + x311 - x344
                         + d
-                            * (x24 * (x340 - x10 * x342)
-                                - (x21 * x153 - x10 * x339) * x121) + x184 - x336
-                        + u3 * x343 - x93 * x190,
-                    x267 * (x180 - x190 - x316) + x312 - x344
-                        + d
-                            * (x337 * x52 + x24 * (2.0 * (u5 * a_) + x10 * x345)
-                                + x339 * x105),
-                    x327 * u1 - x209 - x340 * x36 - x346 - 2.0 * x210
-                        - (x347 + d * (d * (x219 + x221) + a_ * x348)) * m1 + x349
-                        + x111 * x342 + x21 * (x281 - x350 * x345),
-                    (x351
-                        + x10
-                            * (x30 * (x341 + (x352 * x21 - x30 * x351) * m1)
-                                - x356 * x21)) * x102 + x281 * x21 + x349,
-                    x113
-                        * (x12 * x10
-                            * (x24 * (2.0 * x236 - x353 - x354 - x355) + x153 * x121)
-                            - (2.0 * x171 - x10 * x356) * x18),
+                            * (x337 * x28 + x51 * (2.0 * (u5 * a_) + x10 * x345)
+                                + x339 * x104),
+                    x325 * u1 - x208 - x340 * x37 - x346
+                        - (x347 + d * (x348 * a_ + d * (x217 + x219))) * m1 - 2.0 * x209
+                        + x349 + x110 * x342 + x40 * (x279 - x327 * x345),
+                    x279 * x40 + x349
+                        + (x10
+                            * (x26 * (x341 + (x354 * x40 - x26 * x353) * m1)
+                                - x40 * x355) + x353) * x101,
+                    x112
+                        * (x11 * x10
+                            * (x51 * (2.0 * x226 - x350 - x351 - x352) + x150 * x119)
+                            - (2.0 * x169 - x10 * x355) * x14),
                 ],
                 [
-                    (x284 * (x18 * x133 - x10 * x362) - x22 * (x357 - x10 * x359)) * d
-                        + u2 * x343 - 2.0 * x186 - x187 - (x136 - x134) * x91
-                        + x179 * x21 + x214 * x94,
-                    2.0 * x209 + x322 * u1 - x357 * x53 + x346 + x210
-                        - m2 * (d * ((x202 - x204) * d + a_ * x363) - x347) + x359 * x105
-                        - x349 + (x101 * x148 + x117 * x364) * x18,
-                    (x362 * x111 + x22 * (2.0 * (a_ * u4) - x10 * x364) + x35 * x361) * d
-                        - x321 + x344 - x294 * x305,
-                    x102
-                        * (x30 * x10 * (x22 * (x365 + 2.0 * x223) + x284 * x133)
-                            + x21 * (-2.0 * x150 - x10 * x370)),
-                    x101 * x311 + x346
-                        + x113
-                            * (x367 + x368
+                    u2 * x343
+                        + (x282 * (x14 * x139 - x10 * x358) - (x359 - x361 * x10) * x49)
+                            * d + x184 * x40 - 2.0 * x178 - x179 - (x142 - x140) * x90
+                        + x212 * x93,
+                    2.0 * x208 + x322 * u1 + x346 + x209 - x349 - x359 * x29
+                        - m2 * (d * ((x201 - x203) * d + a_ * x362) - x347) + x361 * x104
+                        + (x100 * x137 + x115 * x363) * x14,
+                    (x358 * x110 + x49 * (2.0 * (a_ * u4) - x10 * x363) + x36 * x357) * d
+                        - x320 + x344 - x292 * x304,
+                    x101
+                        * (x26 * x10 * (x49 * (x364 + 2.0 * x237) + x282 * x139)
+                            + x40 * (-2.0 * x148 - x10 * x369)),
+                    x100 * x310
+                        + x112
+                            * (x366 + x367
                                 - x10
-                                    * (-x18 * x370
-                                        - x12 * (m2 * (x12 * x369 + x18 * x366) + x358))),
+                                    * (-x14 * x369
+                                        - x11 * (m2 * (x11 * x368 + x14 * x365) + x360))) + x346,
                 ],
                 [
-                    x21 * (x130 * (x279 * x348 + x360 * x277) + x371) - x145 * J1,
-                    x102 * (x348 * x106 + x117 * x372) - x191 * J1 - x30 * x371,
-                    -(x360 * x276),
+                    x40 * (x370 + (x356 * x275 + x348 * x277) * x128) - x134 * J1,
+                    x101 * (x348 * x105 + x115 * x371) - x190 * J1 - x26 * x370,
+                    -(x356 * x274),
                     0.0,
-                    x118 * (x372 + x12 * x348),
+                    x116 * (x371 + x348 * x11),
                 ],
                 [
-                    x18 * (x132 * (x363 + x10 * (-m2 * x363 - x338 * x22)) - x140 * x373)
-                        - x149 * J1,
-                    x284 * (x10 * (x374 * x113 - x338 * x104) + a_ * x338),
-                    J1 * x215 - x373 * x213
-                        + (x10 * (x110 * x363 - x374 * x121) + x35 * x363) * x113,
-                    x118 * (x30 * x363 - x374 * x21),
+                    x14 * (x130 * (x362 + x10 * (-m2 * x362 - x338 * x49)) - x372)
+                        - x138 * J1,
+                    x282 * (x10 * (x373 * x112 - x338 * x103) + a_ * x338),
+                    J1 * x213 - x11 * x372
+                        + (x10 * (x109 * x362 - x373 * x119) + x36 * x362) * x112,
+                    x116 * (x26 * x362 - x373 * x40),
                     0.0,
                 ],
             ],

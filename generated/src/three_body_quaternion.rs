@@ -442,130 +442,126 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a_ = params.a_;
-    let x0 = a_ * e2;
+    let x0 = a_ * e3;
     let x1 = e1 * e1;
     let x2 = e0 * e0;
     let x3 = 4.0 * x1 + 4.0 * x2;
     let x4 = x0 * x3;
-    let x5 = f64::sin(gamma1);
-    let x6 = e3 * e0;
-    let x7 = x6 * e2;
-    let x8 = e3 * e3;
-    let x9 = e2 * e2;
-    let x10 = 2.0 * x1 + 2.0 * x2;
-    let x11 = 2.0 * x8 - 2.0 * x9 + x10;
-    let x12 = f64::cos(gamma1);
-    let x13 = x12 * e2;
-    let x14 = f64::sin(gamma2);
+    let x5 = f64::cos(gamma2);
+    let x6 = x5 * e3;
+    let x7 = f64::sin(gamma2);
+    let x8 = e2 * e0;
+    let x9 = e3 * x8;
+    let x10 = e2 * e2;
+    let x11 = 2.0 * x1 + 2.0 * x2;
+    let x12 = 2.0 * x10 + x11;
+    let x13 = e3 * e3;
+    let x14 = f64::sin(gamma1);
     let x15 = e3 * e1;
     let x16 = x15 * e2;
-    let x17 = f64::cos(gamma2);
-    let x18 = x17 * e2;
-    let x19 = 2.0 * x9 + x10;
+    let x17 = 2.0 * x13 - 2.0 * x1;
+    let x18 = f64::cos(gamma1);
+    let x19 = x18 * e3;
     let x20 = m0
-        + (x9 * (x9 + x10) + (x19 + x8) * x8 + f64::powi(e0, 4) + x1 * (x1 + 2.0 * x2))
-            * (m2 + m1);
-    let x21 = 4.0 * x8 + 4.0 * x9;
-    let x22 = x12 * e1;
-    let x23 = 2.0 * x8 - 2.0 * x1;
-    let x24 = x23 + 2.0 * x2 + 2.0 * x9;
-    let x25 = x15 * e0;
-    let x26 = a_ * e1;
-    let x27 = x26 * x21;
-    let x28 = e2 * e1;
-    let x29 = x14 * e0;
-    let x30 = a_ * e0;
-    let x31 = x30 * x21;
-    let x32 = x5 * e1;
-    let x33 = e2 * e0;
-    let x34 = x17 * e0;
-    let x35 = x12 * e3;
-    let x36 = a_ * e3;
-    let x37 = x36 * x3;
-    let x38 = x17 * e3;
-    let x39 = gamma1_dot * m1;
-    let x40 = x2 - x8;
-    let x41 = x1 + x40 - x9;
-    let x42 = m2 * gamma2_dot;
-    let x43 = x40 - x1 + x9;
-    let x44 = (2.0 * (x14 * e1) + 2.0 * x38) * d + 2.0 * x36;
-    let x45 = 2.0 * x28 + 2.0 * x6;
-    let x46 = e1 * e0;
-    let x47 = e3 * e2;
-    let x48 = 2.0 * x47 - 2.0 * x46;
-    let x49 = a_ * x14;
-    let x50 = (x17 * x45 - x14 * x48) * x49;
-    let x51 = x17 * x48 + x45 * x14;
-    let x52 = 2.0 * d + 2.0 * (x17 * a_);
-    let x53 = x51 * x52;
-    let x54 = 2.0 * x50 - x53;
-    let x55 = 2.0 * x0 - d * (2.0 * x32 - 2.0 * x13);
-    let x56 = 2.0 * (x12 * a_) + 2.0 * d;
-    let x57 = x12 * x43 - x45 * x5;
-    let x58 = x56 * x57;
-    let x59 = a_ * x5;
-    let x60 = (x43 * x5 + x12 * x45) * x59;
-    let x61 = -x58 - 2.0 * x60;
-    let x62 = (2.0 * x34 - 2.0 * (x14 * e2)) * d + 2.0 * x30;
-    let x63 = x53 - 2.0 * x50;
-    let x64 = 2.0 * x26 + d * (2.0 * x22 + 2.0 * (x5 * e2));
-    let x65 = x58 + 2.0 * x60;
-    let x66 = d * (2.0 * (x12 * e0) - 2.0 * (e3 * x5)) + 2.0 * x30;
-    let x67 = 2.0 * x26 - (2.0 * (e3 * x14) - 2.0 * (x17 * e1)) * d;
-    let x68 = 2.0 * x0 + (2.0 * x18 + 2.0 * x29) * d;
-    let x69 = 2.0 * x36 + d * (2.0 * x35 + 2.0 * (x5 * e0));
-    let x70 = 2.0 * x46 + 2.0 * x47;
-    let x71 = x8 - x1 + x2 - x9;
-    let x72 = 2.0 * x15 - 2.0 * x33;
-    let x73 = (x17 * x72 - x71 * x14) * x49;
-    let x74 = x17 * x71 + x72 * x14;
-    let x75 = x74 * x52;
+        + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
+            + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
+    let x21 = 4.0 * x13 + 4.0 * x10;
+    let x22 = x18 * e1;
+    let x23 = x17 + 2.0 * x2 + 2.0 * x10;
+    let x24 = x15 * e0;
+    let x25 = a_ * e1;
+    let x26 = x25 * x21;
+    let x27 = e2 * e1;
+    let x28 = x5 * e2;
+    let x29 = x7 * e0;
+    let x30 = a_ * e2;
+    let x31 = x30 * x3;
+    let x32 = 2.0 * x13 - 2.0 * x10 + x11;
+    let x33 = x18 * e2;
+    let x34 = gamma1_dot * m1;
+    let x35 = e3 * e0;
+    let x36 = x2 - x13;
+    let x37 = x1 + x36 - x10;
+    let x38 = m2 * gamma2_dot;
+    let x39 = a_ * e0;
+    let x40 = x39 * x21;
+    let x41 = x5 * e0;
+    let x42 = x14 * e1;
+    let x43 = e1 * e0;
+    let x44 = e3 * e2;
+    let x45 = 2.0 * x44 - 2.0 * x43;
+    let x46 = 2.0 * x35 + 2.0 * x27;
+    let x47 = x5 * x45 + x7 * x46;
+    let x48 = 2.0 * d + 2.0 * (x5 * a_);
+    let x49 = x47 * x48;
+    let x50 = a_ * x7;
+    let x51 = x50 * (x5 * x46 - x7 * x45);
+    let x52 = x49 - 2.0 * x51;
+    let x53 = x36 - x1 + x10;
+    let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
+    let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
+    let x56 = a_ * x14;
+    let x57 = (x53 * x14 + x18 * x46) * x56;
+    let x58 = 2.0 * (x18 * a_) + 2.0 * d;
+    let x59 = x18 * x53 - x14 * x46;
+    let x60 = x58 * x59;
+    let x61 = 2.0 * x57 + x60;
+    let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
+    let x63 = -2.0 * x57 - x60;
+    let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
+    let x65 = 2.0 * x51 - x49;
+    let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
+    let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
+    let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
+    let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
+    let x70 = 2.0 * x43 + 2.0 * x44;
+    let x71 = x13 - x1 + x2 - x10;
+    let x72 = 2.0 * x15 - 2.0 * x8;
+    let x73 = (x5 * x72 - x71 * x7) * x50;
+    let x74 = x5 * x71 + x72 * x7;
+    let x75 = x74 * x48;
     let x76 = 2.0 * x73 - x75;
-    let x77 = x12 * x70 - x72 * x5;
-    let x78 = x77 * x56;
-    let x79 = (x70 * x5 + x12 * x72) * x59;
+    let x77 = x18 * x70 - x72 * x14;
+    let x78 = x77 * x58;
+    let x79 = (x70 * x14 + x18 * x72) * x56;
     let x80 = x78 + 2.0 * x79;
     let x81 = x75 - 2.0 * x73;
     let x82 = -x78 - 2.0 * x79;
     [
-        (m1 * ((x5 * (4.0 * x7 + x11 * e1) - x13 * x3) * d - x4)
-            + m2 * (x4 + (x14 * (x11 * e0 - 4.0 * x16) + x18 * x3) * d)) * e2_dot
-            + X_dot * x20
-            + (m1 * (d * (x21 * x22 + (x24 * e2 + 4.0 * x25) * x5) + x27)
+        e3_dot
+            * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
+                + (d * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16) - x19 * x3)
+                    - x4) * m1) + X_dot * x20
+            + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
                 + m2
                     * (d
-                        * ((x24 * x14 - 4.0 * (x17 * x15)) * e3
-                            - x28 * (4.0 * x18 + 4.0 * x29)) - x27)) * e1_dot
-            + ((x31
-                + d
-                    * ((4.0 * x13 - 4.0 * x32) * x33
-                        + e3
-                            * (4.0 * (x12 * x6)
-                                + x5 * (2.0 * x2 - 2.0 * x1 - 2.0 * x8 - 2.0 * x9)))) * m1
-                + m2
-                    * (d
-                        * (x14
-                            * ((2.0 * x1 + 2.0 * x8 - 2.0 * x2 + 2.0 * x9) * e2
-                                - 4.0 * x25) - x34 * x21) - x31)) * e0_dot
-            + e3_dot
-                * ((d * (x5 * ((x23 - 2.0 * x2 - 2.0 * x9) * e0 - 4.0 * x16) - x35 * x3)
-                    - x37) * m1
-                    + m2
-                        * (x37
-                            + (x38 * x3 + ((x19 - 2.0 * x8) * e1 - 4.0 * x7) * x14) * d))
-            + (x39 * (x12 * (2.0 * x28 - 2.0 * x6) - x5 * x41)
-                + (x17 * (2.0 * x15 + 2.0 * x33) + x14 * x41) * x42) * d,
-        (m2 * (x43 * x44 + e2 * x54) + (x55 * x48 + x61 * e3) * m1) * e0_dot
-            + e3_dot * (m2 * (x63 * e1 - x43 * x62) + (x65 * e0 - x64 * x48) * m1)
-            + x20 * Y_dot
-            + e2_dot * ((x61 * e1 - x66 * x48) * m1 + (x63 * e0 + x43 * x67) * m2)
-            + (m2 * (e3 * x54 - x43 * x68) + m1 * (x48 * x69 + x65 * e2)) * e1_dot
-            + (x39 * x57 + x51 * x42) * d,
-        e1_dot * (m2 * (x76 * e3 - x70 * x68) + m1 * (x71 * x69 + x80 * e2))
-            + (x39 * x77 + x42 * x74) * d
-            + (m2 * (x81 * e1 - x70 * x62) + (x80 * e0 - x71 * x64) * m1) * e3_dot
-            + e2_dot * (m1 * (x82 * e1 - x71 * x66) + m2 * (x81 * e0 + x70 * x67))
-            + ((x82 * e3 + x71 * x55) * m1 + m2 * (x70 * x44 + x76 * e2)) * e0_dot
+                        * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
+                            - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
+            + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
+                + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
+            + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
+                + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
+            + (m2
+                * (d
+                    * (x7
+                        * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
+                            - 4.0 * x24) - x41 * x21) - x40)
+                + m1
+                    * (x40
+                        + ((4.0 * (x19 * e0)
+                            + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
+                            + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
+        x20 * Y_dot
+            + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
+            + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
+            + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
+            + (x38 * x47 + x34 * x59) * d
+            + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
+        e1_dot * (m2 * (x76 * e3 - x70 * x69) + m1 * (x71 * x68 + x80 * e2))
+            + (x34 * x77 + x38 * x74) * d
+            + (m2 * (x81 * e1 - x70 * x54) + (x80 * e0 - x71 * x55) * m1) * e3_dot
+            + e2_dot * (m1 * (x82 * e1 - x71 * x67) + m2 * (x81 * e0 + x70 * x66))
+            + ((x82 * e3 + x71 * x62) * m1 + m2 * (x70 * x64 + x76 * e2)) * e0_dot
             + Z_dot * x20,
     ]
 }
@@ -876,13 +872,13 @@ pub mod lagrange {
         let x161 = x95 * e1;
         let x162 = 2.0 * J2 + x98;
         let x163 = x162 * e0;
-        let x164 = x87 * e2;
-        let x165 = 2.0 * x102 + 2.0 * x103;
-        let x166 = x165 + 2.0 * x15 - 2.0 * x23;
+        let x164 = 2.0 * x102 + 2.0 * x103;
+        let x165 = x164 + 2.0 * x15 - 2.0 * x23;
+        let x166 = e3 * x68;
         let x167 = x2 * x159;
         let x168 = x73 * e2;
-        let x169 = (d * (x5 * (4.0 * x164 + x166 * e1) - x4 * x159) - x167) * m1
-            + m2 * (x167 + d * (x18 * (x166 * e0 - 4.0 * x168) + x41 * x159));
+        let x169 = (d * ((x165 * e1 + 4.0 * x166) * x5 - x4 * x159) - x167) * m1
+            + m2 * (x167 + d * (x18 * (x165 * e0 - 4.0 * x168) + x41 * x159));
         let x170 = x119 - 2.0 * x121;
         let x171 = m2 * (x170 * e0 + x112 * x70) + (x117 * e1 - x77 * x109) * m1;
         let x172 = x134 - 2.0 * x136;
@@ -891,12 +887,12 @@ pub mod lagrange {
         let x175 = x148 * e0;
         let x176 = x162 * e1;
         let x177 = x32 * x159;
-        let x178 = x165 + 2.0 * x23;
+        let x178 = x164 + 2.0 * x23;
         let x179 = m1
             * ((x5 * ((x106 - 2.0 * x102 - 2.0 * x23) * e0 - 4.0 * x168) - x45 * x159)
                 * d - x177)
             + m2
-                * (d * (((x178 - 2.0 * x15) * e1 - 4.0 * x164) * x18 + x159 * x20)
+                * (d * (((x178 - 2.0 * x15) * e1 - 4.0 * x166) * x18 + x159 * x20)
                     + x177);
         let x180 = m2 * (x170 * e1 - x112 * x84) + (x154 * e0 - x90 * x109) * m1;
         let x181 = (x156 * e0 - x90 * x132) * m1 + m2 * (x172 * e1 - x84 * x124);
@@ -915,7 +911,7 @@ pub mod lagrange {
         let x194 = m0
             + (m2 + m1)
                 * (x102 * (x102 + 2.0 * x103) + f64::powi(e0, 4) + (x178 + x15) * x15
-                    + x23 * (x165 + x23));
+                    + x23 * (x164 + x23));
         let x195 = 2.0 * (e3 * e2_dot) - 2.0 * (e3_dot * e2) - 2.0 * (e0_dot * e1)
             + 2.0 * (e1_dot * e0);
         let x196 = (2.0 * (e2 * e1_dot) - 2.0 * (e2_dot * e1))
@@ -1195,89 +1191,89 @@ pub mod lagrange {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = a_ * e2;
+        let x0 = a_ * e3;
         let x1 = e1 * e1;
         let x2 = e0 * e0;
         let x3 = 4.0 * x1 + 4.0 * x2;
         let x4 = x0 * x3;
-        let x5 = f64::sin(gamma1);
-        let x6 = e3 * e0;
-        let x7 = x6 * e2;
-        let x8 = e3 * e3;
-        let x9 = e2 * e2;
-        let x10 = 2.0 * x1 + 2.0 * x2;
-        let x11 = 2.0 * x8 - 2.0 * x9 + x10;
-        let x12 = f64::cos(gamma1);
-        let x13 = x12 * e2;
-        let x14 = f64::sin(gamma2);
+        let x5 = f64::cos(gamma2);
+        let x6 = x5 * e3;
+        let x7 = f64::sin(gamma2);
+        let x8 = e2 * e0;
+        let x9 = e3 * x8;
+        let x10 = e2 * e2;
+        let x11 = 2.0 * x1 + 2.0 * x2;
+        let x12 = 2.0 * x10 + x11;
+        let x13 = e3 * e3;
+        let x14 = f64::sin(gamma1);
         let x15 = e3 * e1;
         let x16 = x15 * e2;
-        let x17 = f64::cos(gamma2);
-        let x18 = x17 * e2;
-        let x19 = 2.0 * x9 + x10;
+        let x17 = 2.0 * x13 - 2.0 * x1;
+        let x18 = f64::cos(gamma1);
+        let x19 = x18 * e3;
         let x20 = m0
-            + (x9 * (x9 + x10) + (x19 + x8) * x8 + f64::powi(e0, 4)
+            + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
                 + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
-        let x21 = 4.0 * x8 + 4.0 * x9;
-        let x22 = x12 * e1;
-        let x23 = 2.0 * x8 - 2.0 * x1;
-        let x24 = x23 + 2.0 * x2 + 2.0 * x9;
-        let x25 = x15 * e0;
-        let x26 = a_ * e1;
-        let x27 = x26 * x21;
-        let x28 = e2 * e1;
-        let x29 = x14 * e0;
-        let x30 = a_ * e0;
-        let x31 = x30 * x21;
-        let x32 = x5 * e1;
-        let x33 = e2 * e0;
-        let x34 = x17 * e0;
-        let x35 = x12 * e3;
-        let x36 = a_ * e3;
-        let x37 = x36 * x3;
-        let x38 = x17 * e3;
-        let x39 = gamma1_dot * m1;
-        let x40 = x2 - x8;
-        let x41 = x1 + x40 - x9;
-        let x42 = m2 * gamma2_dot;
-        let x43 = x40 - x1 + x9;
-        let x44 = (2.0 * (x14 * e1) + 2.0 * x38) * d + 2.0 * x36;
-        let x45 = 2.0 * x28 + 2.0 * x6;
-        let x46 = e1 * e0;
-        let x47 = e3 * e2;
-        let x48 = 2.0 * x47 - 2.0 * x46;
-        let x49 = a_ * x14;
-        let x50 = (x17 * x45 - x14 * x48) * x49;
-        let x51 = x17 * x48 + x45 * x14;
-        let x52 = 2.0 * d + 2.0 * (x17 * a_);
-        let x53 = x51 * x52;
-        let x54 = 2.0 * x50 - x53;
-        let x55 = 2.0 * x0 - d * (2.0 * x32 - 2.0 * x13);
-        let x56 = 2.0 * (x12 * a_) + 2.0 * d;
-        let x57 = x12 * x43 - x45 * x5;
-        let x58 = x56 * x57;
-        let x59 = a_ * x5;
-        let x60 = (x43 * x5 + x12 * x45) * x59;
-        let x61 = -x58 - 2.0 * x60;
-        let x62 = (2.0 * x34 - 2.0 * (x14 * e2)) * d + 2.0 * x30;
-        let x63 = x53 - 2.0 * x50;
-        let x64 = 2.0 * x26 + d * (2.0 * x22 + 2.0 * (x5 * e2));
-        let x65 = x58 + 2.0 * x60;
-        let x66 = d * (2.0 * (x12 * e0) - 2.0 * (e3 * x5)) + 2.0 * x30;
-        let x67 = 2.0 * x26 - (2.0 * (e3 * x14) - 2.0 * (x17 * e1)) * d;
-        let x68 = 2.0 * x0 + (2.0 * x18 + 2.0 * x29) * d;
-        let x69 = 2.0 * x36 + d * (2.0 * x35 + 2.0 * (x5 * e0));
-        let x70 = 2.0 * x46 + 2.0 * x47;
-        let x71 = 2.0 * x15 - 2.0 * x33;
-        let x72 = x8 + x2;
-        let x73 = x72 - x1 - x9;
-        let x74 = x71 * x14 + x17 * x73;
-        let x75 = x74 * x52;
-        let x76 = (x17 * x71 - x73 * x14) * x49;
+        let x21 = 4.0 * x13 + 4.0 * x10;
+        let x22 = x18 * e1;
+        let x23 = x17 + 2.0 * x2 + 2.0 * x10;
+        let x24 = x15 * e0;
+        let x25 = a_ * e1;
+        let x26 = x25 * x21;
+        let x27 = e2 * e1;
+        let x28 = x5 * e2;
+        let x29 = x7 * e0;
+        let x30 = a_ * e2;
+        let x31 = x30 * x3;
+        let x32 = 2.0 * x13 - 2.0 * x10 + x11;
+        let x33 = x18 * e2;
+        let x34 = gamma1_dot * m1;
+        let x35 = e3 * e0;
+        let x36 = x2 - x13;
+        let x37 = x1 + x36 - x10;
+        let x38 = m2 * gamma2_dot;
+        let x39 = a_ * e0;
+        let x40 = x39 * x21;
+        let x41 = x5 * e0;
+        let x42 = x14 * e1;
+        let x43 = e1 * e0;
+        let x44 = e3 * e2;
+        let x45 = 2.0 * x44 - 2.0 * x43;
+        let x46 = 2.0 * x35 + 2.0 * x27;
+        let x47 = x5 * x45 + x7 * x46;
+        let x48 = 2.0 * d + 2.0 * (x5 * a_);
+        let x49 = x47 * x48;
+        let x50 = a_ * x7;
+        let x51 = x50 * (x5 * x46 - x7 * x45);
+        let x52 = x49 - 2.0 * x51;
+        let x53 = x36 - x1 + x10;
+        let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
+        let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
+        let x56 = a_ * x14;
+        let x57 = (x53 * x14 + x18 * x46) * x56;
+        let x58 = 2.0 * (x18 * a_) + 2.0 * d;
+        let x59 = x18 * x53 - x14 * x46;
+        let x60 = x58 * x59;
+        let x61 = 2.0 * x57 + x60;
+        let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
+        let x63 = -2.0 * x57 - x60;
+        let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
+        let x65 = 2.0 * x51 - x49;
+        let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
+        let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
+        let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
+        let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
+        let x70 = 2.0 * x43 + 2.0 * x44;
+        let x71 = 2.0 * x15 - 2.0 * x8;
+        let x72 = x13 + x2;
+        let x73 = x72 - x1 - x10;
+        let x74 = x71 * x7 + x5 * x73;
+        let x75 = x74 * x48;
+        let x76 = (x5 * x71 - x73 * x7) * x50;
         let x77 = 2.0 * x76 - x75;
-        let x78 = x12 * x70 - x71 * x5;
-        let x79 = x78 * x56;
-        let x80 = (x70 * x5 + x12 * x71) * x59;
+        let x78 = x18 * x70 - x71 * x14;
+        let x79 = x78 * x58;
+        let x80 = (x70 * x14 + x18 * x71) * x56;
         let x81 = -x79 - 2.0 * x80;
         let x82 = x79 + 2.0 * x80;
         let x83 = x75 - 2.0 * x76;
@@ -1297,7 +1293,7 @@ pub mod lagrange {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x1 + x72 + x9 - 1.0,
+                x1 + x72 + x10 - 1.0,
                 x85 * x85 + x84 * x84 + x87 * x87 + x86 * x86 + 1.0,
             ),
         ];
@@ -1332,47 +1328,42 @@ pub mod lagrange {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (m1 * ((x5 * (4.0 * x7 + x11 * e1) - x13 * x3) * d - x4)
-                + m2 * (x4 + (x14 * (x11 * e0 - 4.0 * x16) + x18 * x3) * d)) * e2_dot
-                + X_dot * x20
-                + (m1 * (d * (x21 * x22 + (x24 * e2 + 4.0 * x25) * x5) + x27)
+            e3_dot
+                * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
+                    + (d
+                        * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16)
+                            - x19 * x3) - x4) * m1) + X_dot * x20
+                + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
                     + m2
                         * (d
-                            * ((x24 * x14 - 4.0 * (x17 * x15)) * e3
-                                - x28 * (4.0 * x18 + 4.0 * x29)) - x27)) * e1_dot
-                + ((x31
-                    + d
-                        * ((4.0 * x13 - 4.0 * x32) * x33
-                            + e3
-                                * (4.0 * (x12 * x6)
-                                    + x5 * (2.0 * x2 - 2.0 * x1 - 2.0 * x8 - 2.0 * x9)))) * m1
-                    + m2
-                        * (d
-                            * (x14
-                                * ((2.0 * x1 + 2.0 * x8 - 2.0 * x2 + 2.0 * x9) * e2
-                                    - 4.0 * x25) - x34 * x21) - x31)) * e0_dot
-                + e3_dot
-                    * ((d
-                        * (x5 * ((x23 - 2.0 * x2 - 2.0 * x9) * e0 - 4.0 * x16)
-                            - x35 * x3) - x37) * m1
-                        + m2
-                            * (x37
-                                + (x38 * x3 + ((x19 - 2.0 * x8) * e1 - 4.0 * x7) * x14)
-                                    * d))
-                + (x39 * (x12 * (2.0 * x28 - 2.0 * x6) - x5 * x41)
-                    + (x17 * (2.0 * x15 + 2.0 * x33) + x14 * x41) * x42) * d,
-            (m2 * (x43 * x44 + e2 * x54) + (x55 * x48 + x61 * e3) * m1) * e0_dot
-                + e3_dot * (m2 * (x63 * e1 - x43 * x62) + (x65 * e0 - x64 * x48) * m1)
-                + x20 * Y_dot
-                + e2_dot * ((x61 * e1 - x66 * x48) * m1 + (x63 * e0 + x43 * x67) * m2)
-                + (m2 * (e3 * x54 - x43 * x68) + m1 * (x48 * x69 + x65 * e2)) * e1_dot
-                + (x39 * x57 + x51 * x42) * d,
-            (m2 * (x70 * x44 + x77 * e2) + (x81 * e3 + x55 * x73) * m1) * e0_dot
-                + ((x73 * x69 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x68)) * e1_dot
-                + d * (x39 * x78 + x42 * x74)
-                + e3_dot * (m1 * (x82 * e0 - x64 * x73) + m2 * (x83 * e1 - x70 * x62))
+                            * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
+                                - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
+                + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
+                    + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
+                + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
+                    + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
+                + (m2
+                    * (d
+                        * (x7
+                            * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
+                                - 4.0 * x24) - x41 * x21) - x40)
+                    + m1
+                        * (x40
+                            + ((4.0 * (x19 * e0)
+                                + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
+                                + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
+            x20 * Y_dot
+                + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
+                + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
+                + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
+                + (x38 * x47 + x34 * x59) * d
+                + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
+            (m2 * (x70 * x64 + x77 * e2) + (x81 * e3 + x62 * x73) * m1) * e0_dot
+                + ((x73 * x68 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x69)) * e1_dot
+                + d * (x34 * x78 + x38 * x74)
+                + e3_dot * (m1 * (x82 * e0 - x55 * x73) + m2 * (x83 * e1 - x70 * x54))
                 + Z_dot * x20
-                + e2_dot * ((x81 * e1 - x73 * x66) * m1 + m2 * (x83 * e0 + x70 * x67)),
+                + e2_dot * ((x81 * e1 - x73 * x67) * m1 + m2 * (x83 * e0 + x70 * x66)),
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1487,1339 +1478,1329 @@ pub mod lagrange {
         let x1 = Iyz * e2;
         let x2 = 2.0 * x0 - 2.0 * (e3 * Izz) + 2.0 * x1;
         let x3 = f64::sin(gamma2);
-        let x4 = e3 * x3;
-        let x5 = f64::cos(gamma2);
-        let x6 = x5 * e1;
-        let x7 = 2.0 * x4 - 2.0 * x6;
-        let x8 = x7 * x7;
-        let x9 = f64::sin(gamma1);
-        let x10 = x9 * e2;
-        let x11 = f64::cos(gamma1);
-        let x12 = x11 * e1;
-        let x13 = 2.0 * x10 + 2.0 * x12;
-        let x14 = x13 * x13;
-        let x15 = x11 * a_;
-        let x16 = 2.0 * x15 + 2.0 * d;
-        let x17 = x16 * x16;
-        let x18 = a_ * x9;
-        let x19 = x18 * x18;
-        let x20 = x17 + 4.0 * x19;
-        let x21 = e3 * e3;
-        let x22 = a_ * e2;
-        let x23 = x9 * e1;
-        let x24 = x11 * e2;
-        let x25 = 2.0 * x23 - 2.0 * x24;
-        let x26 = d * x25;
-        let x27 = 2.0 * x22 - x26;
-        let x28 = Ixy * e1;
-        let x29 = Iyz * e3;
-        let x30 = 2.0 * x28 + 2.0 * x29 - 2.0 * (Iyy * e2);
-        let x31 = a_ * e3;
-        let x32 = x3 * e1;
-        let x33 = 2.0 * (x5 * e3) + 2.0 * x32;
-        let x34 = x33 * d;
-        let x35 = 2.0 * x31 + x34;
-        let x36 = a_ * x3;
+        let x4 = f64::cos(gamma2);
+        let x5 = 2.0 * (x3 * e1) + 2.0 * (x4 * e3);
+        let x6 = x5 * x5;
+        let x7 = e3 * e3;
+        let x8 = e2 * e2;
+        let x9 = 4.0 * x7 + 4.0 * x8;
+        let x10 = f64::cos(gamma1);
+        let x11 = x10 * e2;
+        let x12 = f64::sin(gamma1);
+        let x13 = x12 * e1;
+        let x14 = 2.0 * x13 - 2.0 * x11;
+        let x15 = x14 * x14;
+        let x16 = a_ * e2;
+        let x17 = d * x14;
+        let x18 = 2.0 * x16 - x17;
+        let x19 = x10 * a_;
+        let x20 = 2.0 * x19 + 2.0 * d;
+        let x21 = x20 * x20;
+        let x22 = a_ * x12;
+        let x23 = x22 * x22;
+        let x24 = x21 + 4.0 * x23;
+        let x25 = d * x5;
+        let x26 = a_ * e3;
+        let x27 = x25 + 2.0 * x26;
+        let x28 = a_ * x3;
+        let x29 = x28 * x28;
+        let x30 = x4 * a_;
+        let x31 = 2.0 * x30 + 2.0 * d;
+        let x32 = x31 * x31;
+        let x33 = 4.0 * x29 + x32;
+        let x34 = x12 * e2;
+        let x35 = x10 * e1;
+        let x36 = 2.0 * x34 + 2.0 * x35;
         let x37 = x36 * x36;
-        let x38 = x5 * a_;
-        let x39 = 2.0 * x38 + 2.0 * d;
-        let x40 = x39 * x39;
-        let x41 = 4.0 * x37 + x40;
-        let x42 = e2 * e2;
-        let x43 = Ixy * e2;
-        let x44 = e3 * Ixz;
-        let x45 = Ixx * e1;
-        let x46 = 2.0 * x43 + 2.0 * x44 - 2.0 * x45;
-        let x47 = 4.0 * x21 + 4.0 * x42;
-        let x48 = x33 * x33;
-        let x49 = x25 * x25;
-        let x50 = x11 * e0;
-        let x51 = e3 * x9;
-        let x52 = 2.0 * x50 - 2.0 * x51;
-        let x53 = x13 * x52;
-        let x54 = x5 * e0;
-        let x55 = x3 * e2;
-        let x56 = 2.0 * x54 - 2.0 * x55;
-        let x57 = x56 * x7;
-        let x58 = x9 * e0;
-        let x59 = 2.0 * (x11 * e3) + 2.0 * x58;
-        let x60 = x25 * x59;
-        let x61 = x5 * e2;
-        let x62 = x3 * e0;
-        let x63 = 2.0 * x61 + 2.0 * x62;
-        let x64 = x63 * x33;
-        let x65 = -(d * x59);
-        let x66 = 2.0 * x31 - x65;
-        let x67 = -x17 - 4.0 * x19;
-        let x68 = e3 * e2;
-        let x69 = x63 * d;
-        let x70 = 2.0 * x22 + x69;
-        let x71 = Ixy * e3;
-        let x72 = Ixx * e0;
-        let x73 = Ixz * e2;
-        let x74 = 2.0 * x71 + 2.0 * x72 - 2.0 * x73;
-        let x75 = Ixz * e0;
-        let x76 = 2.0 * (Izz * e2) - 2.0 * x75 + 2.0 * x29;
-        let x77 = Ixy * e0;
-        let x78 = 2.0 * x77 + 2.0 * (Iyy * e3) + 2.0 * x1;
-        let x79 = (x57 - x53) * J1 + (-x60 - x64) * J2 + m1 * (x27 * x66 + x67 * x68)
-            + m2 * (x41 * x68 - x35 * x70) - 2.0 * (x74 * e1) - 2.0 * (e3 * x76)
-            + 2.0 * (e2 * x78);
-        let x80 = d * x52;
-        let x81 = a_ * e0;
-        let x82 = x80 + 2.0 * x81;
-        let x83 = e3 * e1;
-        let x84 = Iyz * e0;
-        let x85 = 2.0 * (Izz * e1) + 2.0 * x44 + 2.0 * x84;
-        let x86 = Iyz * e1;
-        let x87 = 2.0 * (Iyy * e0) - 2.0 * x71 + 2.0 * x86;
-        let x88 = x13 * x59;
-        let x89 = x33 * x7;
-        let x90 = x89;
-        let x91 = -4.0 * x37 - x40;
-        let x92 = e2 * e0;
-        let x93 = a_ * e1;
-        let x94 = x7 * d;
-        let x95 = 2.0 * x93 - x94;
-        let x96 = x52 * x25;
-        let x97 = e3 * Ixx;
-        let x98 = 2.0 * x0 - 2.0 * x77 + 2.0 * x97;
-        let x99 = (x83 * x20 - x82 * x27) * m1 + 2.0 * (e3 * x85) - 2.0 * (x87 * e2)
-            + (x90 - x88) * J1 + m2 * (x91 * x92 + x35 * x95)
-            + J2 * (4.0 * x83 + x96 - 4.0 * x92 - x89) - 2.0 * (x98 * e1);
-        let x100 = 2.0 * x43 - 2.0 * x84 + 2.0 * (Iyy * e1);
+        let x38 = e3 * x3;
+        let x39 = x4 * e1;
+        let x40 = 2.0 * x38 - 2.0 * x39;
+        let x41 = x40 * x40;
+        let x42 = Ixy * e1;
+        let x43 = Iyz * e3;
+        let x44 = 2.0 * x42 + 2.0 * x43 - 2.0 * (Iyy * e2);
+        let x45 = Ixy * e2;
+        let x46 = e3 * Ixz;
+        let x47 = Ixx * e1;
+        let x48 = 2.0 * x45 + 2.0 * x46 - 2.0 * x47;
+        let x49 = -x21 - 4.0 * x23;
+        let x50 = e3 * e2;
+        let x51 = 2.0 * (x10 * e3) + 2.0 * (x12 * e0);
+        let x52 = -(x51 * d);
+        let x53 = 2.0 * x26 - x52;
+        let x54 = x4 * e2;
+        let x55 = x3 * e0;
+        let x56 = 2.0 * x54 + 2.0 * x55;
+        let x57 = x56 * d;
+        let x58 = x57 + 2.0 * x16;
+        let x59 = x10 * e0;
+        let x60 = e3 * x12;
+        let x61 = 2.0 * x59 - 2.0 * x60;
+        let x62 = x36 * x61;
+        let x63 = x4 * e0;
+        let x64 = x3 * e2;
+        let x65 = 2.0 * x63 - 2.0 * x64;
+        let x66 = x40 * x65;
+        let x67 = x51 * x14;
+        let x68 = x56 * x5;
+        let x69 = Ixy * e3;
+        let x70 = Ixx * e0;
+        let x71 = Ixz * e2;
+        let x72 = 2.0 * x69 + 2.0 * x70 - 2.0 * x71;
+        let x73 = Ixz * e0;
+        let x74 = 2.0 * (Izz * e2) - 2.0 * x73 + 2.0 * x43;
+        let x75 = Ixy * e0;
+        let x76 = 2.0 * x75 + 2.0 * (Iyy * e3) + 2.0 * x1;
+        let x77 = m1 * (x49 * x50 + x18 * x53) + m2 * (x33 * x50 - x27 * x58)
+            + (x66 - x62) * J1 + J2 * (-x67 - x68) - 2.0 * (x72 * e1) - 2.0 * (e3 * x74)
+            + 2.0 * (e2 * x76);
+        let x78 = -4.0 * x29 - x32;
+        let x79 = e2 * e0;
+        let x80 = a_ * e1;
+        let x81 = x40 * d;
+        let x82 = 2.0 * x80 - x81;
+        let x83 = Iyz * e0;
+        let x84 = 2.0 * (Izz * e1) + 2.0 * x46 + 2.0 * x83;
+        let x85 = Iyz * e1;
+        let x86 = 2.0 * (Iyy * e0) - 2.0 * x69 + 2.0 * x85;
+        let x87 = x40 * x5;
+        let x88 = x87;
+        let x89 = x36 * x51;
+        let x90 = e3 * e1;
+        let x91 = x61 * x14;
+        let x92 = d * x61;
+        let x93 = a_ * e0;
+        let x94 = x92 + 2.0 * x93;
+        let x95 = e3 * Ixx;
+        let x96 = 2.0 * x0 - 2.0 * x75 + 2.0 * x95;
+        let x97 = m2 * (x78 * x79 + x27 * x82) + 2.0 * (e3 * x84) - 2.0 * (x86 * e2)
+            + (x88 - x89) * J1 + (4.0 * x90 - x87 + x91 - 4.0 * x79) * J2
+            + (x90 * x24 - x18 * x94) * m1 - 2.0 * (x96 * e1);
+        let x98 = x65 * x5;
+        let x99 = x36 * x14;
+        let x100 = e2 * e1;
         let x101 = e3 * e0;
-        let x102 = d * x13;
-        let x103 = 2.0 * x93 + x102;
-        let x104 = 2.0 * x73 - 2.0 * x86 + 2.0 * (Izz * e0);
-        let x105 = x13 * x25;
-        let x106 = x63 * x7;
-        let x107 = x56 * d;
-        let x108 = 2.0 * x81 + x107;
-        let x109 = e2 * e1;
+        let x102 = -4.0 * x100 - 4.0 * x101;
+        let x103 = 2.0 * x45 - 2.0 * x83 + 2.0 * (Iyy * e1);
+        let x104 = 2.0 * x71 - 2.0 * x85 + 2.0 * (Izz * e0);
+        let x105 = x36 * d;
+        let x106 = 2.0 * x80 + x105;
+        let x107 = x65 * d;
+        let x108 = 2.0 * x93 + x107;
+        let x109 = x40 * x56;
         let x110 = Ixx * e2;
-        let x111 = 2.0 * x75 + 2.0 * x110 + 2.0 * x28;
-        let x112 = -4.0 * x109 - 4.0 * x101;
-        let x113 = x33 * x56;
-        let x114 = (x67 * x101 - x27 * x103) * m1 - 2.0 * (x100 * e2) - 2.0 * (e3 * x104)
-            + (-x105 - x106) * J1 + m2 * (x91 * x109 - x35 * x108) + 2.0 * (x111 * e1)
-            + J2 * (x112 + x105 - x113);
-        let x115 = d * m1;
-        let x116 = x115 * x16;
-        let x117 = -x116 - 2.0 * J2;
-        let x118 = e3 * x117;
-        let x119 = m2 * d;
-        let x120 = x119 * x39;
-        let x121 = -2.0 * J2 - x120;
-        let x122 = x121 * e2;
-        let x123 = x81 * x47;
-        let x124 = x83 * e0;
-        let x125 = e1 * e1;
-        let x126 = e0 * e0;
-        let x127 = 2.0 * x125 + (2.0 * x21 - 2.0 * x126);
-        let x128 = e2 * (x127 + 2.0 * x42) - 4.0 * x124;
-        let x129 = x11 * x101;
-        let x130 = 2.0 * x126 - 2.0 * x125;
-        let x131 = x130 - 2.0 * x42;
-        let x132 = x131 - 2.0 * x21;
-        let x133 = m2 * ((x128 * x3 - x54 * x47) * d - x123)
-            + (x123
-                + d * ((4.0 * x129 + x9 * x132) * e3 + (4.0 * x24 - 4.0 * x23) * x92))
+        let x111 = 2.0 * x73 + 2.0 * x110 + 2.0 * x42;
+        let x112 = J2 * (x99 - x98 + x102) - 2.0 * (x103 * e2) - 2.0 * (e3 * x104)
+            + m1 * (x49 * x101 - x106 * x18) + (x78 * x100 - x27 * x108) * m2
+            + (-x99 - x109) * J1 + 2.0 * (x111 * e1);
+        let x113 = d * m1;
+        let x114 = x113 * x20;
+        let x115 = -x114 - 2.0 * J2;
+        let x116 = e3 * x115;
+        let x117 = m2 * d;
+        let x118 = x117 * x31;
+        let x119 = -2.0 * J2 - x118;
+        let x120 = x119 * e2;
+        let x121 = x93 * x9;
+        let x122 = e1 * e1;
+        let x123 = e0 * e0;
+        let x124 = 2.0 * x122 - 2.0 * x123;
+        let x125 = e1 * e0;
+        let x126 = e3 * x125;
+        let x127 = (2.0 * x7 + x124 + 2.0 * x8) * e2 - 4.0 * x126;
+        let x128 = -(x4 * x9);
+        let x129 = x10 * x101;
+        let x130 = 2.0 * x123 - 2.0 * x122;
+        let x131 = x130 - 2.0 * x8;
+        let x132 = x131 - 2.0 * x7;
+        let x133 = m2 * (d * (x127 * x3 + x128 * e0) - x121)
+            + (x121
+                + ((4.0 * x129 + x12 * x132) * e3 + (4.0 * x11 - 4.0 * x13) * x79) * d)
                 * m1;
-        let x134 = 2.0 * x109 + 2.0 * x101;
-        let x135 = x126 - x21;
-        let x136 = x135 - x125 + x42;
-        let x137 = x11 * x136 - x134 * x9;
-        let x138 = x137 * x16;
-        let x139 = x136 * x9;
-        let x140 = x11 * x134;
+        let x134 = 2.0 * x100 + 2.0 * x101;
+        let x135 = x123 - x7;
+        let x136 = x135 - x122 + x8;
+        let x137 = x10 * x136 - x134 * x12;
+        let x138 = x137 * x20;
+        let x139 = x136 * x12;
+        let x140 = x10 * x134;
         let x141 = x139 + x140;
-        let x142 = x141 * x18;
+        let x142 = x141 * x22;
         let x143 = -x138 - 2.0 * x142;
-        let x144 = e1 * e0;
-        let x145 = 2.0 * x68 - 2.0 * x144;
-        let x146 = x5 * x145 + x134 * x3;
-        let x147 = x146 * x39;
-        let x148 = x5 * x134 - x3 * x145;
-        let x149 = x148 * x36;
-        let x150 = 2.0 * x149 - x147;
-        let x151 = (e3 * x143 + x27 * x145) * m1 + m2 * (x150 * e2 + x35 * x136);
-        let x152 = x21 - x125 + x126 - x42;
-        let x153 = x3 * x152;
-        let x154 = 2.0 * x83 - 2.0 * x92;
-        let x155 = x5 * x154;
-        let x156 = x155 - x153;
-        let x157 = x156 * x36;
-        let x158 = x5 * x152 + x154 * x3;
-        let x159 = x158 * x39;
-        let x160 = 2.0 * x157 - x159;
-        let x161 = 2.0 * x68 + 2.0 * x144;
-        let x162 = x9 * x161 + x11 * x154;
-        let x163 = x162 * x18;
-        let x164 = x11 * x161 - x154 * x9;
-        let x165 = x164 * x16;
-        let x166 = -2.0 * x163 - x165;
-        let x167 = (x160 * e2 + x35 * x161) * m2 + (x166 * e3 + x27 * x152) * m1;
-        let x168 = 2.0 * e0;
-        let x169 = x59 * x59;
-        let x170 = x63 * x63;
-        let x171 = x52 * x52;
-        let x172 = x56 * x56;
-        let x173 = x52 * x59;
-        let x174 = (x112 - x173 + x106) * J2 - 2.0 * (e3 * x87)
-            + m2 * (x91 * x101 - x70 * x95) + (x173 + x113) * J1
-            + (x67 * x109 - x82 * x66) * m1 - 2.0 * (x85 * e2) + 2.0 * (x98 * e0);
-        let x175 = x63 * x56;
-        let x176 = (x96 - x175) * J1 + 2.0 * (x104 * e2) + (x20 * x92 - x103 * x66) * m1
-            + J2 * (x175 - 4.0 * x83 - x88 + 4.0 * x92) + m2 * (x83 * x91 + x108 * x70)
-            - 2.0 * (x111 * e0) - 2.0 * (x100 * e3);
-        let x177 = x116 + 2.0 * J2;
-        let x178 = x177 * e2;
-        let x179 = e3 * x121;
-        let x180 = x93 * x47;
-        let x181 = 2.0 * x126 + 2.0 * x42;
-        let x182 = x181 - 2.0 * x125;
-        let x183 = 2.0 * x21 + x182;
-        let x184 = x5 * x83;
-        let x185 = e2 * x183 + 4.0 * x124;
+        let x144 = 2.0 * x50 - 2.0 * x125;
+        let x145 = x4 * x144 + x134 * x3;
+        let x146 = x145 * x31;
+        let x147 = x4 * x134 - x3 * x144;
+        let x148 = x147 * x28;
+        let x149 = 2.0 * x148 - x146;
+        let x150 = (e3 * x143 + x18 * x144) * m1 + m2 * (x149 * e2 + x136 * x27);
+        let x151 = 2.0 * x50 + 2.0 * x125;
+        let x152 = 2.0 * x90 - 2.0 * x79;
+        let x153 = x12 * x151 + x10 * x152;
+        let x154 = x153 * x22;
+        let x155 = x10 * x151 - x152 * x12;
+        let x156 = x155 * x20;
+        let x157 = -2.0 * x154 - x156;
+        let x158 = x7 - x122 + x123 - x8;
+        let x159 = x3 * x158;
+        let x160 = x4 * x152;
+        let x161 = x160 - x159;
+        let x162 = x161 * x28;
+        let x163 = x4 * x158 + x152 * x3;
+        let x164 = x163 * x31;
+        let x165 = 2.0 * x162 - x164;
+        let x166 = (x157 * e3 + x18 * x158) * m1 + m2 * (x165 * e2 + x27 * x151);
+        let x167 = 2.0 * e0;
+        let x168 = x56 * x56;
+        let x169 = x51 * x51;
+        let x170 = x65 * x65;
+        let x171 = x61 * x61;
+        let x172 = x51 * x61;
+        let x173 = m2 * (x78 * x101 - x58 * x82) - 2.0 * (e3 * x86) + (x98 + x172) * J1
+            + m1 * (x49 * x100 - x53 * x94) + (x102 - x172 + x109) * J2
+            - 2.0 * (x84 * e2) + 2.0 * (x96 * e0);
+        let x174 = x56 * x65;
+        let x175 = 2.0 * (x104 * e2) + (x24 * x79 - x106 * x53) * m1
+            + (x174 - 4.0 * x90 - x89 + 4.0 * x79) * J2 + m2 * (x108 * x58 + x90 * x78)
+            + (x91 - x174) * J1 - 2.0 * (x111 * e0) - 2.0 * (x103 * e3);
+        let x176 = x114 + 2.0 * J2;
+        let x177 = x176 * e2;
+        let x178 = e3 * x119;
+        let x179 = x80 * x9;
+        let x180 = 2.0 * x123 + 2.0 * x8;
+        let x181 = x180 - 2.0 * x122;
+        let x182 = 2.0 * x7 + x181;
+        let x183 = x4 * x90;
+        let x184 = 4.0 * x126 + e2 * x182;
+        let x185 = x10 * x9;
         let x186 = m2
-            * (d * (e3 * (x3 * x183 - 4.0 * x184) - (4.0 * x61 + 4.0 * x62) * x109)
-                - x180) + (x180 + d * (x185 * x9 + x47 * x12)) * m1;
+            * ((e3 * (x3 * x182 - 4.0 * x183) - x100 * (4.0 * x54 + 4.0 * x55)) * d
+                - x179) + (x179 + (x12 * x184 + x185 * e1) * d) * m1;
         let x187 = x138 + 2.0 * x142;
-        let x188 = m2 * (e3 * x150 - x136 * x70) + (e2 * x187 + x66 * x145) * m1;
-        let x189 = 2.0 * x163 + x165;
-        let x190 = m2 * (x160 * e3 - x70 * x161) + (x189 * e2 + x66 * x152) * m1;
+        let x188 = m2 * (e3 * x149 - x136 * x58) + (x53 * x144 + e2 * x187) * m1;
+        let x189 = 2.0 * x154 + x156;
+        let x190 = m1 * (x189 * e2 + x53 * x158) + m2 * (x165 * e3 - x151 * x58);
         let x191 = 2.0 * e1;
-        let x192 = 4.0 * x125 + 4.0 * x126;
-        let x193 = 2.0 * (x100 * e0) - 2.0 * (e3 * x111) - 2.0 * (x104 * e1)
-            + J2 * (x53 + x57) + (x82 * x103 + x67 * x144) * m1 + (x60 - x64) * J1
-            + m2 * (x41 * x144 - x108 * x95);
-        let x194 = x117 * e1;
-        let x195 = 2.0 * J2 + x120;
+        let x192 = 4.0 * x122 + 4.0 * x123;
+        let x193 = m2 * (x33 * x125 - x108 * x82) + 2.0 * (x103 * e0) - 2.0 * (e3 * x111)
+            + (x67 - x68) * J1 - 2.0 * (x104 * e1) + (x106 * x94 + x49 * x125) * m1
+            + J2 * (x62 + x66);
+        let x194 = x115 * e1;
+        let x195 = 2.0 * J2 + x118;
         let x196 = x195 * e0;
-        let x197 = -(x11 * x192);
-        let x198 = 2.0 * x125 + 2.0 * x126;
-        let x199 = 2.0 * x21 - 2.0 * x42;
-        let x200 = x198 + x199;
-        let x201 = e3 * x92;
-        let x202 = x200 * e1 + 4.0 * x201;
-        let x203 = x22 * x192;
-        let x204 = e3 * x109;
-        let x205 = x200 * e0 - 4.0 * x204;
-        let x206 = x5 * x192;
-        let x207 = (d * (x197 * e2 + x9 * x202) - x203) * m1
-            + m2 * (d * (x3 * x205 + x206 * e2) + x203);
-        let x208 = x147 - 2.0 * x149;
-        let x209 = m2 * (x136 * x95 + x208 * e0) + (e1 * x143 - x82 * x145) * m1;
-        let x210 = x159 - 2.0 * x157;
-        let x211 = m2 * (x210 * e0 + x95 * x161) + (x166 * e1 - x82 * x152) * m1;
-        let x212 = 2.0 * e2;
-        let x213 = x177 * e0;
-        let x214 = x195 * e1;
-        let x215 = x199 - 2.0 * x125;
-        let x216 = (x215 - 2.0 * x126) * e0 - 4.0 * x204;
-        let x217 = x31 * x192;
-        let x218 = 2.0 * x125 + x181;
-        let x219 = (x218 - 2.0 * x21) * e1 - 4.0 * x201;
-        let x220 = ((e3 * x197 + x9 * x216) * d - x217) * m1
-            + m2 * ((x3 * x219 + e3 * x206) * d + x217);
-        let x221 = (x187 * e0 - x103 * x145) * m1 + (x208 * e1 - x136 * x108) * m2;
-        let x222 = m2 * (e1 * x210 - x108 * x161) + (x189 * e0 - x103 * x152) * m1;
-        let x223 = 2.0 * e3;
-        let x224 = x125 + x135 - x42;
-        let x225 = 2.0 * x109 - 2.0 * x101;
-        let x226 = x11 * x225 - x9 * x224;
-        let x227 = x115 * x226;
-        let x228 = x137 * x115;
-        let x229 = x115 * x164;
-        let x230 = 2.0 * x83 + 2.0 * x92;
-        let x231 = x3 * x224 + x5 * x230;
-        let x232 = x119 * x231;
-        let x233 = x119 * x146;
-        let x234 = x158 * x119;
-        let x235 = m2 + m1;
-        let x236 = m0
-            + (x21 * (x21 + x218) + x125 * (x125 + 2.0 * x126) + f64::powi(e0, 4)
-                + x42 * (x198 + x42)) * x235;
-        let x237 = 2.0 * (e3 * e2_dot) - 2.0 * (e3_dot * e2) - 2.0 * (e0_dot * e1)
+        let x197 = e3 * x79;
+        let x198 = 2.0 * x7 - 2.0 * x8;
+        let x199 = 2.0 * x122 + x198;
+        let x200 = x199 + 2.0 * x123;
+        let x201 = 4.0 * x197 + x200 * e1;
+        let x202 = x16 * x192;
+        let x203 = e3 * x100;
+        let x204 = x200 * e0 - 4.0 * x203;
+        let x205 = ((x12 * x201 - x11 * x192) * d - x202) * m1
+            + (x202 + d * (x54 * x192 + x204 * x3)) * m2;
+        let x206 = x146 - 2.0 * x148;
+        let x207 = m2 * (x136 * x82 + x206 * e0) + (e1 * x143 - x94 * x144) * m1;
+        let x208 = x164 - 2.0 * x162;
+        let x209 = (x157 * e1 - x94 * x158) * m1 + m2 * (x208 * e0 + x151 * x82);
+        let x210 = 2.0 * e2;
+        let x211 = x176 * e0;
+        let x212 = x195 * e1;
+        let x213 = e3 * x192;
+        let x214 = 2.0 * x122 + x180;
+        let x215 = (x214 - 2.0 * x7) * e1 - 4.0 * x197;
+        let x216 = -(e3 * x192);
+        let x217 = x198 - 2.0 * x122;
+        let x218 = (x217 - 2.0 * x123) * e0 - 4.0 * x203;
+        let x219 = m2 * (a_ * x213 + d * (x4 * x213 + x3 * x215))
+            + ((x10 * x216 + x12 * x218) * d + a_ * x216) * m1;
+        let x220 = (x206 * e1 - x136 * x108) * m2 + (x187 * e0 - x106 * x144) * m1;
+        let x221 = (x189 * e0 - x106 * x158) * m1 + m2 * (e1 * x208 - x108 * x151);
+        let x222 = 2.0 * e3;
+        let x223 = x122 + x135 - x8;
+        let x224 = 2.0 * x100 - 2.0 * x101;
+        let x225 = x10 * x224 - x12 * x223;
+        let x226 = x113 * x225;
+        let x227 = x137 * x113;
+        let x228 = x113 * x155;
+        let x229 = 2.0 * x90 + 2.0 * x79;
+        let x230 = x3 * x223 + x4 * x229;
+        let x231 = x117 * x230;
+        let x232 = x117 * x145;
+        let x233 = x163 * x117;
+        let x234 = m2 + m1;
+        let x235 = m0
+            + (x7 * (x7 + x214) + x122 * (x122 + 2.0 * x123)
+                + (2.0 * x122 + 2.0 * x123 + x8) * x8 + f64::powi(e0, 4)) * x234;
+        let x236 = 2.0 * (e3 * e2_dot) - 2.0 * (e3_dot * e2) - 2.0 * (e0_dot * e1)
             + 2.0 * (e1_dot * e0);
-        let x238 = e2_dot * e1;
-        let x239 = e2 * e1_dot;
-        let x240 = e3 * e0_dot;
-        let x241 = e3_dot * e0;
-        let x242 = (2.0 * x239 - 2.0 * x238) + (2.0 * x241 - 2.0 * x240);
-        let x243 = e3 * e1_dot;
-        let x244 = e2_dot * e0;
-        let x245 = e3_dot * e1;
-        let x246 = e0_dot * e2;
-        let x247 = (2.0 * x244 - 2.0 * x243) + (2.0 * x245 - 2.0 * x246);
-        let x248 = Iyy * x247 - Ixy * x237 - Iyz * x242;
-        let x249 = x237 * x248;
-        let x250 = x237 * Ixx - Ixy * x247 - x242 * Ixz;
-        let x251 = x250 * x247;
-        let x252 = x249 - x251;
-        let x253 = x9 * x247;
-        let x254 = x11 * x237;
-        let x255 = x253 + x254;
-        let x256 = J2 * gamma1_dot;
-        let x257 = gamma1_dot + x242;
-        let x258 = J1 - J2;
-        let x259 = x258 * x255;
-        let x260 = x257 * x259 - x255 * x256;
-        let x261 = x237 * x3 + x5 * x242;
-        let x262 = gamma2_dot * J1;
-        let x263 = -(x261 * x262);
-        let x264 = x242 * Izz - x237 * Ixz - Iyz * x247;
-        let x265 = x237 * x264;
-        let x266 = x250 * x242;
-        let x267 = x266 - x265;
-        let x268 = x247 * x264;
-        let x269 = x242 * x248;
-        let x270 = x268 - x269;
-        let x271 = x247 * x36;
-        let x272 = x5 * x237;
-        let x273 = x3 * x242;
-        let x274 = x272 - x273;
-        let x275 = x38 * x247;
-        let x276 = gamma2_dot + x247;
-        let x277 = x276 * d;
-        let x278 = x275 + x277;
-        let x279 = x278 + gamma2_dot * d;
-        let x280 = -x261 * x271 - x274 * x279;
-        let x281 = x271 * x247;
-        let x282 = a_ * x242;
-        let x283 = x261 * d;
-        let x284 = x282 + x283;
-        let x285 = x274 * x284;
-        let x286 = x281 - x285;
-        let x287 = x286 * x39;
-        let x288 = x278 * x276;
-        let x289 = x261 * x284;
-        let x290 = gamma2_dot * x275;
-        let x291 = x288 + x289 - x290;
-        let x292 = x291 * x36;
-        let x293 = 2.0 * x292 - x287;
-        let x294 = J2 - J1;
-        let x295 = x294 * x255;
-        let x296 = gamma1_dot * J1;
-        let x297 = x13 * x296;
-        let x298 = x237 * x9;
-        let x299 = x11 * x247;
-        let x300 = x299 - x298;
-        let x301 = x242 * x18;
-        let x302 = d * gamma1_dot;
-        let x303 = x15 * x242;
-        let x304 = x257 * d;
-        let x305 = x303 + x304;
-        let x306 = x255 * x302 - x300 * x301 + x255 * x305;
-        let x307 = a_ * x247;
-        let x308 = d * x300;
-        let x309 = x307 + x308;
-        let x310 = x300 * x309;
-        let x311 = x303 * gamma1_dot;
-        let x312 = x257 * x305;
-        let x313 = x311 - x312;
-        let x314 = x313 - x310;
-        let x315 = x18 * x314;
-        let x316 = x242 * x301;
-        let x317 = x255 * x309;
-        let x318 = x316 + x317;
-        let x319 = x318 * x16;
-        let x320 = -2.0 * x315 - x319;
-        let x321 = 2.0 * gamma2_dot + x247;
-        let x322 = x321 * J2 - x276 * J1;
-        let x323 = x261 * x258;
-        let x324 = 2.0 * x315 + x319;
-        let x325 = x260 * x59;
-        let x326 = 2.0 * x266 - 2.0 * x265;
-        let x327 = x274 * x322;
-        let x328 = x296 * x59;
-        let x329 = x287 - 2.0 * x292;
-        let x330 = x7 * x322;
-        let x331 = x13 * x260;
-        let x332 = x56 * x322;
-        let x333 = x296 * x25;
-        let x334 = x294 * x261;
-        let x335 = x5 * x224 - x3 * x230;
-        let x336 = x9 * x225 + x11 * x224;
-        let x337 = x33 * x3;
-        let x338 = x9 * x25;
-        let x339 = -2.0 * x337 - 2.0 * x338;
-        let x340 = x11 * x13;
-        let x341 = x5 * x7;
-        let x342 = 2.0 * x341 - 2.0 * x340;
-        let x343 = x9 * m1;
-        let x344 = x27 * x343;
-        let x345 = m2 * x3;
-        let x346 = x345 * x35;
-        let x347 = 4.0 * x43 + 4.0 * x44 - 4.0 * x45 + J2 * x339 + x342 * J1
-            + d * (2.0 * x344 - 2.0 * x346);
-        let x348 = m2 * x91 - 4.0 * Iyy - 4.0 * J2;
-        let x349 = x9 * J1;
-        let x350 = x349 * x13;
-        let x351 = x11 * J2;
-        let x352 = x351 * x25;
-        let x353 = 2.0 * a_ + 2.0 * (x11 * d);
-        let x354 = -(x353 * m1);
-        let x355 = x348 * e2 - 2.0 * x350 + 4.0 * x28 + 4.0 * x29 + 2.0 * x352
-            + x27 * x354;
-        let x356 = x5 * J2;
-        let x357 = x33 * x356;
-        let x358 = x3 * J1;
-        let x359 = x7 * x358;
-        let x360 = x67 * m1 - 4.0 * J2 - 4.0 * Izz;
-        let x361 = 2.0 * a_ + 2.0 * (x5 * d);
-        let x362 = -(m2 * x361);
-        let x363 = 4.0 * x0 - 2.0 * x357 - 2.0 * x359 + e3 * x360 + x35 * x362
+        let x237 = e2_dot * e1;
+        let x238 = e2 * e1_dot;
+        let x239 = e3 * e0_dot;
+        let x240 = e3_dot * e0;
+        let x241 = (2.0 * x238 - 2.0 * x237) + (2.0 * x240 - 2.0 * x239);
+        let x242 = e3 * e1_dot;
+        let x243 = e2_dot * e0;
+        let x244 = e3_dot * e1;
+        let x245 = e0_dot * e2;
+        let x246 = (2.0 * x243 - 2.0 * x242) + (2.0 * x244 - 2.0 * x245);
+        let x247 = Iyy * x246 - Ixy * x236 - Iyz * x241;
+        let x248 = x236 * x247;
+        let x249 = x236 * Ixx - Ixy * x246 - x241 * Ixz;
+        let x250 = x249 * x246;
+        let x251 = x248 - x250;
+        let x252 = x236 * x12;
+        let x253 = x10 * x246;
+        let x254 = x253 - x252;
+        let x255 = a_ * x246;
+        let x256 = d * x254;
+        let x257 = x255 + x256;
+        let x258 = x254 * x257;
+        let x259 = x19 * x241;
+        let x260 = x259 * gamma1_dot;
+        let x261 = gamma1_dot + x241;
+        let x262 = x261 * d;
+        let x263 = x259 + x262;
+        let x264 = x261 * x263;
+        let x265 = x260 - x264;
+        let x266 = x265 - x258;
+        let x267 = x22 * x266;
+        let x268 = x241 * x22;
+        let x269 = x241 * x268;
+        let x270 = x12 * x246;
+        let x271 = x10 * x236;
+        let x272 = x270 + x271;
+        let x273 = x272 * x257;
+        let x274 = x269 + x273;
+        let x275 = x274 * x20;
+        let x276 = -2.0 * x267 - x275;
+        let x277 = d * gamma1_dot;
+        let x278 = x272 * x277 - x254 * x268 + x272 * x263;
+        let x279 = gamma2_dot + x246;
+        let x280 = 2.0 * gamma2_dot + x246;
+        let x281 = x280 * J2 - x279 * J1;
+        let x282 = x236 * x3 + x4 * x241;
+        let x283 = J1 - J2;
+        let x284 = x282 * x283;
+        let x285 = x4 * x236;
+        let x286 = x3 * x241;
+        let x287 = x285 - x286;
+        let x288 = gamma1_dot * J1;
+        let x289 = x36 * x288;
+        let x290 = J2 - J1;
+        let x291 = x290 * x272;
+        let x292 = x246 * x28;
+        let x293 = x30 * x246;
+        let x294 = x279 * d;
+        let x295 = x293 + x294;
+        let x296 = x295 + gamma2_dot * d;
+        let x297 = -x282 * x292 - x287 * x296;
+        let x298 = x292 * x246;
+        let x299 = a_ * x241;
+        let x300 = x282 * d;
+        let x301 = x299 + x300;
+        let x302 = x287 * x301;
+        let x303 = x298 - x302;
+        let x304 = x303 * x31;
+        let x305 = x295 * x279;
+        let x306 = x282 * x301;
+        let x307 = gamma2_dot * x293;
+        let x308 = x305 + x306 - x307;
+        let x309 = x308 * x28;
+        let x310 = 2.0 * x309 - x304;
+        let x311 = x241 * Izz - x236 * Ixz - Iyz * x246;
+        let x312 = x236 * x311;
+        let x313 = x249 * x241;
+        let x314 = x313 - x312;
+        let x315 = x246 * x311;
+        let x316 = x241 * x247;
+        let x317 = x315 - x316;
+        let x318 = J2 * gamma1_dot;
+        let x319 = x283 * x272;
+        let x320 = x261 * x319 - x272 * x318;
+        let x321 = gamma2_dot * J1;
+        let x322 = -(x282 * x321);
+        let x323 = x51 * x320;
+        let x324 = 2.0 * x313 - 2.0 * x312;
+        let x325 = x287 * x281;
+        let x326 = 2.0 * x267 + x275;
+        let x327 = x304 - 2.0 * x309;
+        let x328 = x51 * x288;
+        let x329 = x40 * x281;
+        let x330 = x36 * x320;
+        let x331 = x288 * x14;
+        let x332 = x65 * x281;
+        let x333 = x290 * x282;
+        let x334 = x4 * x223 - x3 * x229;
+        let x335 = x12 * x224 + x10 * x223;
+        let x336 = x3 * x5;
+        let x337 = x12 * x14;
+        let x338 = -2.0 * x336 - 2.0 * x337;
+        let x339 = x4 * x40;
+        let x340 = x10 * x36;
+        let x341 = 2.0 * x339 - 2.0 * x340;
+        let x342 = m2 * x3;
+        let x343 = x342 * x27;
+        let x344 = x12 * m1;
+        let x345 = x18 * x344;
+        let x346 = J2 * x338 + x341 * J1 + 4.0 * x45 + 4.0 * x46 - 4.0 * x47
+            + d * (2.0 * x345 - 2.0 * x343);
+        let x347 = 2.0 * a_ + 2.0 * (x10 * d);
+        let x348 = -(x347 * m1);
+        let x349 = m2 * x78 - 4.0 * Iyy - 4.0 * J2;
+        let x350 = x10 * J2;
+        let x351 = x350 * x14;
+        let x352 = x12 * J1;
+        let x353 = x352 * x36;
+        let x354 = x18 * x348 + x349 * e2 + 2.0 * x351 + 4.0 * x42 + 4.0 * x43
+            - 2.0 * x353;
+        let x355 = x4 * J2;
+        let x356 = x5 * x355;
+        let x357 = 2.0 * a_ + 2.0 * (x4 * d);
+        let x358 = -(m2 * x357);
+        let x359 = x3 * J1;
+        let x360 = x40 * x359;
+        let x361 = x49 * m1 - 4.0 * J2 - 4.0 * Izz;
+        let x362 = 4.0 * x0 - 2.0 * x356 + x27 * x358 - 2.0 * x360 + e3 * x361
             + 4.0 * x1;
-        let x364 = 4.0 * x83 + 4.0 * x92;
-        let x365 = x3 * x364;
-        let x366 = a_ * x47;
-        let x367 = 4.0 * x101 - 4.0 * x109;
-        let x368 = x9 * x367;
-        let x369 = m2 * ((-x5 * x47 - x365) * d - x366)
-            + (x366 + (x11 * x47 + x368) * d) * m1;
-        let x370 = x35 * e0;
-        let x371 = x33 * x36;
-        let x372 = x7 * x39;
-        let x373 = 2.0 * x371 - x372;
-        let x374 = x52 * x16;
-        let x375 = x18 * x59;
-        let x376 = -x374 - 2.0 * x375;
-        let x377 = e3 * x376 - 2.0 * (x27 * e1);
-        let x378 = m2 * (2.0 * x370 + x373 * e2) + m1 * x377;
-        let x379 = x18 * x25;
-        let x380 = x13 * x16;
-        let x381 = -2.0 * x379 - x380;
-        let x382 = x27 * e0;
-        let x383 = x35 * e1;
-        let x384 = x63 * x36;
-        let x385 = x56 * x39;
-        let x386 = -2.0 * x384 - x385;
-        let x387 = (x381 * e3 + 2.0 * x382) * m1 + m2 * (2.0 * x383 + e2 * x386);
-        let x388 = x343 * x66;
-        let x389 = x345 * x70;
-        let x390 = x9 * x59;
-        let x391 = x63 * x3;
-        let x392 = x11 * x52;
-        let x393 = x5 * x56;
-        let x394 = x9 * x52;
-        let x395 = x11 * x59;
-        let x396 = x5 * x33;
-        let x397 = 2.0 * x395 + 2.0 * x396;
-        let x398 = d * x3;
-        let x399 = x95 * x398;
-        let x400 = x9 * d;
-        let x401 = x400 * x82;
-        let x402 = x353 * x66;
+        let x363 = a_ * x9;
+        let x364 = 4.0 * x101 - 4.0 * x100;
+        let x365 = x12 * x364;
+        let x366 = 4.0 * x90 + 4.0 * x79;
+        let x367 = x3 * x366;
+        let x368 = (x363 + (x185 + x365) * d) * m1 + m2 * (d * (x128 - x367) - x363);
+        let x369 = x61 * x20;
+        let x370 = x51 * x22;
+        let x371 = -x369 - 2.0 * x370;
+        let x372 = e3 * x371 - 2.0 * (x18 * e1);
+        let x373 = x27 * e0;
+        let x374 = x5 * x28;
+        let x375 = x40 * x31;
+        let x376 = 2.0 * x374 - x375;
+        let x377 = x372 * m1 + m2 * (2.0 * x373 + x376 * e2);
+        let x378 = x22 * x14;
+        let x379 = x36 * x20;
+        let x380 = -2.0 * x378 - x379;
+        let x381 = x18 * e0;
+        let x382 = x27 * e1;
+        let x383 = x65 * x31;
+        let x384 = x56 * x28;
+        let x385 = -x383 - 2.0 * x384;
+        let x386 = (x380 * e3 + 2.0 * x381) * m1 + m2 * (2.0 * x382 + x385 * e2);
+        let x387 = x10 * x61;
+        let x388 = x4 * x65;
+        let x389 = x342 * x58;
+        let x390 = x344 * x53;
+        let x391 = x56 * x3;
+        let x392 = x51 * x12;
+        let x393 = x12 * x61;
+        let x394 = x10 * x51;
+        let x395 = x40 * x3;
+        let x396 = x4 * x5;
+        let x397 = 2.0 * x396 + 2.0 * x394;
+        let x398 = x53 * x347;
+        let x399 = x12 * d;
+        let x400 = x399 * x94;
+        let x401 = d * x3;
+        let x402 = x82 * x401;
         let x403 = 4.0 * Ixx - 4.0 * Iyy;
-        let x404 = x7 * x3;
-        let x405 = (2.0 * x394 + x397) * J1 - 8.0 * x77 + m2 * (e3 * x91 - 2.0 * x399)
-            + m1 * (-2.0 * x401 - x402) + 4.0 * x0 + e3 * x403 - 4.0 * x1
-            + J2 * (2.0 * x404 - 2.0 * x394 - 4.0 * e3 - 2.0 * x395);
-        let x406 = e2 * x16;
-        let x407 = 4.0 * Izz - 4.0 * Ixx;
-        let x408 = x63 * x5;
-        let x409 = x56 * x3;
-        let x410 = x9 * x13;
-        let x411 = 2.0 * x409 - 2.0 * x410;
-        let x412 = x70 * x361;
-        let x413 = x11 * x25;
-        let x414 = 2.0 * x413 - 2.0 * x408;
-        let x415 = m1 * (x9 * (4.0 * (x22 * x18) - 2.0 * (d * x103)) + x406 * x16)
-            - 8.0 * x75 + x407 * e2 + (2.0 * x408 + x411 + 4.0 * e2) * J2
-            + m2 * (x412 + 2.0 * (x108 * x398)) - 4.0 * x28 + 4.0 * x29
-            + (x414 - 2.0 * x409) * J1;
-        let x416 = x343 * x364;
-        let x417 = d * (x416 + x345 * x367);
-        let x418 = e3 * x373 - 2.0 * (x70 * e0);
-        let x419 = d * x145;
-        let x420 = x66 * e1;
-        let x421 = m2 * (x418 - 2.0 * (x136 * x398))
-            + (x9 * (2.0 * (x22 * x59) + 2.0 * x419) + x406 * x52 - 2.0 * x420) * m1;
-        let x422 = d * x152;
-        let x423 = x66 * e0;
-        let x424 = x70 * e1;
-        let x425 = m1 * (x9 * (2.0 * x422 + 2.0 * (x22 * x25)) + x13 * x406 + 2.0 * x423)
-            + m2 * (e3 * x386 - 2.0 * x424 - 2.0 * (x161 * x398));
-        let x426 = x349 * x59;
-        let x427 = m2 * (8.0 * x37 + 2.0 * x40) + (8.0 * Iyy + 8.0 * J2);
-        let x428 = x351 * x52;
+        let x404 = J2 * (2.0 * x395 - 2.0 * x393 - 4.0 * e3 - 2.0 * x394) - 8.0 * x75
+            + (2.0 * x393 + x397) * J1 + 4.0 * x0 + (-x398 - 2.0 * x400) * m1
+            + m2 * (e3 * x78 - 2.0 * x402) + e3 * x403 - 4.0 * x1;
+        let x405 = x65 * x3;
+        let x406 = x4 * x56;
+        let x407 = x10 * x14;
+        let x408 = 2.0 * x407 - 2.0 * x406;
+        let x409 = 4.0 * Izz - 4.0 * Ixx;
+        let x410 = x58 * x357;
+        let x411 = x36 * x12;
+        let x412 = 2.0 * x405 - 2.0 * x411;
+        let x413 = e2 * x20;
+        let x414 = J1 * (x408 - 2.0 * x405) - 8.0 * x73 + x409 * e2
+            + m2 * (2.0 * (x108 * x401) + x410) - 4.0 * x42 + 4.0 * x43
+            + J2 * (2.0 * x406 + x412 + 4.0 * e2)
+            + (x413 * x20 + x12 * (4.0 * (x16 * x22) - 2.0 * (x106 * d))) * m1;
+        let x415 = x344 * x366;
+        let x416 = d * (x415 + x342 * x364);
+        let x417 = x376 * e3 - 2.0 * (x58 * e0);
+        let x418 = d * x144;
+        let x419 = x53 * e1;
+        let x420 = m2 * (x417 - 2.0 * (x136 * x401))
+            + (x413 * x61 + x12 * (2.0 * x418 + 2.0 * (x16 * x51)) - 2.0 * x419) * m1;
+        let x421 = d * x158;
+        let x422 = x53 * e0;
+        let x423 = x58 * e1;
+        let x424 = m1
+            * (x36 * x413 + (2.0 * x421 + 2.0 * (x16 * x14)) * x12 + 2.0 * x422)
+            + m2 * (x385 * e3 - 2.0 * x423 - 2.0 * (x151 * x401));
+        let x425 = m2 * (8.0 * x29 + 2.0 * x32) + (8.0 * Iyy + 8.0 * J2);
+        let x426 = x352 * x51;
+        let x427 = x350 * x61;
+        let x428 = x106 * x347;
         let x429 = 4.0 * Iyy - 4.0 * Izz;
-        let x430 = x103 * x353;
-        let x431 = x95 * x361;
-        let x432 = J2 * (2.0 * x340 + 2.0 * x341) + 4.0 * x43 - 4.0 * x44
-            + (2.0 * x338 - 2.0 * x337) * J1 - 8.0 * x84 + x429 * e1
-            + (x430 + x67 * e1) * m1 + m2 * (x41 * e1 - x431);
-        let x433 = x81 * e2;
-        let x434 = x9 * (4.0 * x68 + 4.0 * x144);
-        let x435 = x11 * x92;
-        let x436 = x5 * x92;
-        let x437 = ((x434 - 8.0 * x435) * d - 8.0 * x433) * m1
-            + (d * (x3 * (2.0 * x125 + 6.0 * x126 + x199) + 8.0 * x436) + 8.0 * x433)
-                * m2;
-        let x438 = x353 * x145;
-        let x439 = (2.0 * x80 + 4.0 * x81 + x376) * e1;
-        let x440 = x372 - 2.0 * x371;
-        let x441 = (4.0 * x93 + x440 - 2.0 * x94) * e0;
-        let x442 = (x439 - x438) * m1 + (x441 + x208) * m2;
-        let x443 = x353 * x152;
-        let x444 = x82 * e0;
-        let x445 = x95 * e1;
-        let x446 = 2.0 * x153 - 2.0 * x155;
-        let x447 = (x381 * e1 - x443 - 2.0 * x444) * m1
+        let x430 = x357 * x82;
+        let x431 = (2.0 * x339 + 2.0 * x340) * J2 + 4.0 * x45 - 4.0 * x46
+            + (x428 + x49 * e1) * m1 + (2.0 * x337 - 2.0 * x336) * J1 - 8.0 * x83
+            + x429 * e1 + (x33 * e1 - x430) * m2;
+        let x432 = x16 * e0;
+        let x433 = x4 * x79;
+        let x434 = x12 * (4.0 * x50 + 4.0 * x125);
+        let x435 = x10 * x79;
+        let x436 = (8.0 * x432 + (x3 * (x199 + 6.0 * x123) + 8.0 * x433) * d) * m2
+            + ((x434 - 8.0 * x435) * d - 8.0 * x432) * m1;
+        let x437 = x347 * x144;
+        let x438 = (2.0 * x92 + 4.0 * x93 + x371) * e1;
+        let x439 = x375 - 2.0 * x374;
+        let x440 = (4.0 * x80 + x439 - 2.0 * x81) * e0;
+        let x441 = (x438 - x437) * m1 + m2 * (x206 + x440);
+        let x442 = x94 * e0;
+        let x443 = x347 * x158;
+        let x444 = x82 * e1;
+        let x445 = 2.0 * x159 - 2.0 * x160;
+        let x446 = m1 * (x380 * e1 - 2.0 * x442 - x443)
             + m2
-                * (2.0 * x445 + (x158 + x56 * e0) * x39
-                    + (2.0 * (x63 * e0) + x446) * x36);
-        let x448 = x63 * x358;
-        let x449 = x56 * x356;
-        let x450 = m1 * (2.0 * x17 + 8.0 * x19) + (8.0 * J2 + 8.0 * Izz);
-        let x451 = e3 * x81;
-        let x452 = d * e0;
-        let x453 = x32 * x452;
-        let x454 = ((x9 * (x215 - 6.0 * x126) - 8.0 * x129) * d - 8.0 * x451) * m1
-            + m2 * ((d * (8.0 * x54 - 4.0 * x55) + 8.0 * x81) * e3 + 4.0 * x453);
-        let x455 = x108 * e0;
-        let x456 = x136 * x361;
-        let x457 = x103 * e1;
-        let x458 = 2.0 * x139 + 2.0 * x140;
-        let x459 = (e1 * x440 - 2.0 * x455 - x456) * m2
-            + ((x137 + x52 * e0) * x16 + 2.0 * x457 + (x458 + 2.0 * (x59 * e0)) * x18)
+                * ((x163 + x65 * e0) * x31 + 2.0 * x444
+                    + (2.0 * (x56 * e0) + x445) * x28);
+        let x447 = x65 * x355;
+        let x448 = x56 * x359;
+        let x449 = m1 * (2.0 * x21 + 8.0 * x23) + (8.0 * J2 + 8.0 * Izz);
+        let x450 = e3 * x93;
+        let x451 = x125 * x401;
+        let x452 = ((x12 * (x217 - 6.0 * x123) - 8.0 * x129) * d - 8.0 * x450) * m1
+            + m2 * (4.0 * x451 + e3 * (8.0 * x93 + d * (8.0 * x63 - 4.0 * x64)));
+        let x453 = 2.0 * x139 + 2.0 * x140;
+        let x454 = x106 * e1;
+        let x455 = x136 * x357;
+        let x456 = x108 * e0;
+        let x457 = ((x453 + 2.0 * (x51 * e0)) * x22 + 2.0 * x454
+            + (x137 + x61 * e0) * x20) * m1 + m2 * (x439 * e1 - x455 - 2.0 * x456);
+        let x458 = x151 * x357;
+        let x459 = ((2.0 * x378 - 4.0 * x80 - 2.0 * x105 + x379) * e0 + x189) * m1
+            + m2 * ((x383 + 2.0 * x384 - 4.0 * x93 - 2.0 * x107) * e1 - x458);
+        let x460 = -(x51 * x113);
+        let x461 = x113 * x61;
+        let x462 = x36 * x113;
+        let x463 = x56 * x117;
+        let x464 = x40 * x117;
+        let x465 = x117 * x65;
+        let x466 = (x192 + x9) * x234;
+        let x467 = x466 * e0;
+        let x468 = x4 * e1_dot;
+        let x469 = x3 * e3_dot;
+        let x470 = 2.0 * x468 - 2.0 * x469;
+        let x471 = x470 * x284;
+        let x472 = e1_dot * x311;
+        let x473 = x249 * e3_dot;
+        let x474 = Iyz * e2_dot;
+        let x475 = Ixz * e1_dot;
+        let x476 = 2.0 * (e3_dot * Izz) - 2.0 * x474 - 2.0 * x475;
+        let x477 = x236 * x476;
+        let x478 = 2.0 * (x4 * e3_dot) + 2.0 * (x3 * e1_dot);
+        let x479 = x287 * x283;
+        let x480 = x478 * x479;
+        let x481 = Ixy * e2_dot;
+        let x482 = e3_dot * Ixz;
+        let x483 = 2.0 * (Ixx * e1_dot) - 2.0 * x481 - 2.0 * x482;
+        let x484 = x483 * x241;
+        let x485 = 2.0 * x471 - 4.0 * x472 + 4.0 * x473 - 2.0 * x477 + 2.0 * x480
+            + 2.0 * x484;
+        let x486 = x287 * e2_dot;
+        let x487 = J2 * (2.0 * x486 + x280 * x470) - (x279 * x470 + 2.0 * x486) * J1;
+        let x488 = (8.0 * x240 - 8.0 * x239 - 8.0 * x237 + 8.0 * x238) * x22;
+        let x489 = a_ * e2_dot;
+        let x490 = x10 * e2_dot;
+        let x491 = x12 * e1_dot;
+        let x492 = 2.0 * x490 - 2.0 * x491;
+        let x493 = 2.0 * x489 + d * x492;
+        let x494 = 2.0 * (x12 * e2_dot) + 2.0 * (x10 * e1_dot);
+        let x495 = x494 * x257;
+        let x496 = x488 * e3_dot + x493 * x272 + x495;
+        let x497 = x257 * x492;
+        let x498 = x19 * gamma1_dot;
+        let x499 = x261 * x20;
+        let x500 = 2.0 * x498 - 2.0 * x259 - 2.0 * x262 - x499;
+        let x501 = e3_dot * x500 - x493 * x254 - x497;
+        let x502 = -x496 * x20 - 2.0 * (x22 * x501);
+        let x503 = e3_dot * x272;
+        let x504 = x503 * x20 + x494 * x263 - (x241 * x492 + 2.0 * (e3_dot * x254)) * x22
+            + x494 * x277;
+        let x505 = x291 * x492;
+        let x506 = x290 * x254;
+        let x507 = x506 * x494;
+        let x508 = x247 * e1_dot;
+        let x509 = x249 * e2_dot;
+        let x510 = Ixy * e1_dot;
+        let x511 = Iyz * e3_dot;
+        let x512 = 2.0 * (Iyy * e2_dot) - 2.0 * x510 - 2.0 * x511;
+        let x513 = x236 * x512;
+        let x514 = x483 * x246;
+        let x515 = 2.0 * x505 + 2.0 * x507 + 4.0 * x508 - 4.0 * x509 + 2.0 * x513
+            - 2.0 * x514;
+        let x516 = -(2.0 * (x282 * e2_dot) + x478 * x246) * x28 - x486 * x31
+            - x470 * x296;
+        let x517 = gamma2_dot * x30;
+        let x518 = x279 * x31;
+        let x519 = 2.0 * x293 - 2.0 * x517 + x518 + 2.0 * x294;
+        let x520 = a_ * e3_dot;
+        let x521 = 2.0 * x520 + x478 * d;
+        let x522 = x478 * x301;
+        let x523 = e2_dot * x519 + x282 * x521 + x522;
+        let x524 = x523 * x28;
+        let x525 = (8.0 * x243 - 8.0 * x242 + 8.0 * x244 - 8.0 * x245) * x28;
+        let x526 = x301 * x470;
+        let x527 = x525 * e2_dot - x287 * x521 - x526;
+        let x528 = x527 * x31;
+        let x529 = 2.0 * x524 - x528;
+        let x530 = x494 * x261;
+        let x531 = (x530 + 2.0 * x503) * J1
+            + J2 * (-x530 - x494 * gamma1_dot - 2.0 * x503);
+        let x532 = -(x36 * gamma1_dot);
+        let x533 = gamma2_dot * x40;
+        let x534 = e2_dot * x311;
+        let x535 = e3_dot * x247;
+        let x536 = 2.0 * x534 - 2.0 * x535 + x476 * x246 - x512 * x241;
+        let x537 = x10 * x254;
+        let x538 = x4 * x282;
+        let x539 = 4.0 * x509 - 2.0 * x505 - 2.0 * x507 - 4.0 * x508 - 2.0 * x513
+            + 2.0 * x514;
+        let x540 = d * x278;
+        let x541 = x12 * x320;
+        let x542 = x3 * x325;
+        let x543 = (2.0 * x316 + 2.0 * x541) + (-2.0 * x315 - 2.0 * x542);
+        let x544 = x12 * x254;
+        let x545 = x282 * x287;
+        let x546 = gamma2_dot * x5;
+        let x547 = (-2.0 * x305 - 2.0 * x306) + 2.0 * x307;
+        let x548 = 4.0 * x472 - 2.0 * x471 - 4.0 * x473 + 2.0 * x477 - 2.0 * x480
+            - 2.0 * x484;
+        let x549 = x347 * x278;
+        let x550 = x10 * x320;
+        let x551 = J2 * x545;
+        let x552 = (2.0 * x551 - 2.0 * x550) + (2.0 * x312 - 2.0 * x313);
+        let x553 = (-2.0 * x258 - 2.0 * x264) + 2.0 * x260;
+        let x554 = x4 * x325;
+        let x555 = x272 * x254;
+        let x556 = x555 * J2;
+        let x557 = (-2.0 * x554 - 2.0 * x248) + (2.0 * x250 - 2.0 * x556);
+        let x558 = x357 * x297;
+        let x559 = x282 * x3;
+        let x560 = gamma1_dot * x14;
+        let x561 = x283 * x254;
+        let x562 = x290 * x287;
+        let x563 = e3 * x297;
+        let x564 = x56 * x303;
+        let x565 = (x308 * x65 - 2.0 * x563) + x564;
+        let x566 = e2 * x278;
+        let x567 = x274 * x51;
+        let x568 = (2.0 * x566 - x567) + x61 * x266;
+        let x569 = x308 * x5;
+        let x570 = x297 * e0;
+        let x571 = (x40 * x303 + x569) + 2.0 * x570;
+        let x572 = x51 * x266;
+        let x573 = e1 * x278;
+        let x574 = x572 + (x274 * x61 - 2.0 * x573);
+        let x575 = x278 * e0;
+        let x576 = x36 * x274;
+        let x577 = (2.0 * x575 + x576) + x266 * x14;
+        let x578 = x308 * x56;
+        let x579 = e1 * x297;
+        let x580 = (x65 * x303 - x578) + 2.0 * x579;
+        let x581 = 2.0 * x387 + 2.0 * x388;
+        let x582 = -2.0 * x391 - 2.0 * x392;
+        let x583 = (-2.0 * x389 - 2.0 * x390) * d - 4.0 * x69 - x581 * J1 + x582 * J2
+            - 4.0 * x70 + 4.0 * x71;
+        let x584 = 2.0 * x393 - 2.0 * x395;
+        let x585 = x27 * x357;
+        let x586 = 4.0 * x75 + e3 * x409 - 8.0 * x0 + m1 * (2.0 * x400 + x24 * e3)
+            + J2 * (x584 + 2.0 * x396 + 4.0 * e3)
+            + J1 * (2.0 * x395 - 2.0 * x396 - 2.0 * x394) + m2 * (2.0 * x402 + x585)
+            - 4.0 * x1;
+        let x587 = x18 * x347;
+        let x588 = -(e2 * x31);
+        let x589 = (2.0 * (x106 * x399) - x587) * m1 + 4.0 * x73 + 8.0 * x42 + x403 * e2
+            + (2.0 * x406 - 2.0 * x411 - 2.0 * x407) * J1 + 4.0 * x43
+            + J2 * (2.0 * x411 + 2.0 * x407 - 2.0 * x405 - 4.0 * e2)
+            + (x3 * (-4.0 * (x16 * x28) - 2.0 * (d * x108)) + x588 * x31) * m2;
+        let x590 = d * (x342 * (4.0 * x100 - 4.0 * x101) - x415);
+        let x591 = 2.0 * x11 - 2.0 * x13;
+        let x592 = x591 * x22;
+        let x593 = 2.0 * x64 - 2.0 * x63;
+        let x594 = x136 * d;
+        let x595 = ((x379 - 2.0 * x592) * e3 - 2.0 * x381 - 2.0 * (x399 * x144)) * m1
+            + m2 * (x588 * x593 - 2.0 * x382 + x3 * (2.0 * x594 + 2.0 * (x16 * x56)));
+        let x596 = d * x151;
+        let x597 = m1 * (x372 - 2.0 * (x399 * x158))
+            + m2 * (2.0 * x373 + x3 * (2.0 * (x16 * x5) + 2.0 * x596) + x40 * x588);
+        let x598 = x65 * x359;
+        let x599 = x56 * x355;
+        let x600 = m2 * x357;
+        let x601 = 2.0 * x598 + 4.0 * x73 + x361 * e2 - 2.0 * x599 - 4.0 * x43
+            - x600 * x58;
+        let x602 = x352 * x61;
+        let x603 = x350 * x51;
+        let x604 = x53 * x348 - 4.0 * x75 + 2.0 * x602 - 2.0 * x603 - 4.0 * x1
+            + e3 * x349;
+        let x605 = 2.0 * x592 - x379;
+        let x606 = x593 * x31;
+        let x607 = m1 * (x605 * e2 - 2.0 * x422)
+            + (2.0 * x423 + (2.0 * x384 - x606) * e3) * m2;
+        let x608 = x369 + 2.0 * x370;
+        let x609 = m2 * x417 + (x608 * e2 - 2.0 * x419) * m1;
+        let x610 = x40 * x355;
+        let x611 = x5 * x359;
+        let x612 = x94 * x347;
+        let x613 = x108 * x357;
+        let x614 = m1 * (x49 * e0 + x612) - 4.0 * x69 + x429 * e0 - 4.0 * x71
+            + m2 * (x33 * e0 - x613) + 8.0 * x85 + (2.0 * x387 - 2.0 * x388) * J2
+            + (2.0 * x392 - 2.0 * x391) * J1;
+        let x615 = x16 * e1;
+        let x616 = x4 * x100;
+        let x617 = x10 * x100;
+        let x618 = (8.0 * x615 + d * (8.0 * x616 + (4.0 * x125 - 4.0 * x50) * x3)) * m2
+            + ((x12 * (6.0 * x122 + 2.0 * x123 + x198) - 8.0 * x617) * d - 8.0 * x615)
                 * m1;
-        let x460 = x161 * x361;
-        let x461 = ((2.0 * x379 - 4.0 * x93 - 2.0 * x102 + x380) * e0 + x189) * m1
-            + m2 * ((2.0 * x384 - 4.0 * x81 + x385 - 2.0 * x107) * e1 - x460);
-        let x462 = -(x115 * x59);
-        let x463 = x115 * x52;
-        let x464 = x115 * x13;
-        let x465 = x63 * x119;
-        let x466 = x7 * x119;
-        let x467 = x56 * x119;
-        let x468 = (x192 + x47) * x235;
-        let x469 = x468 * e0;
-        let x470 = x5 * e1_dot;
-        let x471 = x3 * e3_dot;
-        let x472 = 2.0 * x470 - 2.0 * x471;
-        let x473 = x472 * x323;
-        let x474 = e1_dot * x264;
-        let x475 = x250 * e3_dot;
-        let x476 = Iyz * e2_dot;
-        let x477 = Ixz * e1_dot;
-        let x478 = 2.0 * (e3_dot * Izz) - 2.0 * x476 - 2.0 * x477;
-        let x479 = x237 * x478;
-        let x480 = 2.0 * (x5 * e3_dot) + 2.0 * (x3 * e1_dot);
-        let x481 = x274 * x258;
-        let x482 = x480 * x481;
-        let x483 = Ixy * e2_dot;
-        let x484 = e3_dot * Ixz;
-        let x485 = 2.0 * (Ixx * e1_dot) - 2.0 * x483 - 2.0 * x484;
-        let x486 = x485 * x242;
-        let x487 = 2.0 * x473 - 4.0 * x474 + 4.0 * x475 - 2.0 * x479 + 2.0 * x482
-            + 2.0 * x486;
-        let x488 = x11 * e2_dot;
-        let x489 = x9 * e1_dot;
-        let x490 = 2.0 * x488 - 2.0 * x489;
-        let x491 = x295 * x490;
-        let x492 = x294 * x300;
-        let x493 = 2.0 * (x9 * e2_dot) + 2.0 * (x11 * e1_dot);
-        let x494 = x492 * x493;
-        let x495 = x248 * e1_dot;
-        let x496 = x250 * e2_dot;
-        let x497 = Ixy * e1_dot;
-        let x498 = Iyz * e3_dot;
-        let x499 = 2.0 * (Iyy * e2_dot) - 2.0 * x497 - 2.0 * x498;
-        let x500 = x237 * x499;
-        let x501 = x485 * x247;
-        let x502 = 2.0 * x491 + 2.0 * x494 + 4.0 * x495 - 4.0 * x496 + 2.0 * x500
-            - 2.0 * x501;
-        let x503 = x274 * e2_dot;
-        let x504 = J2 * (2.0 * x503 + x321 * x472) - (2.0 * x503 + x276 * x472) * J1;
-        let x505 = x255 * x16;
-        let x506 = x493 * x305 + e3_dot * x505
-            - (x242 * x490 + 2.0 * (e3_dot * x300)) * x18 + x493 * x302;
-        let x507 = 8.0 * x241 - 8.0 * x240 - 8.0 * x238 + 8.0 * x239;
-        let x508 = x507 * x18;
-        let x509 = a_ * e2_dot;
-        let x510 = 2.0 * x509 + d * x490;
-        let x511 = x493 * x309;
-        let x512 = x508 * e3_dot + x510 * x255 + x511;
-        let x513 = x309 * x490;
-        let x514 = x15 * gamma1_dot;
-        let x515 = x257 * x16;
-        let x516 = 2.0 * x514 - 2.0 * x303 - 2.0 * x304 - x515;
-        let x517 = e3_dot * x516 - x510 * x300 - x513;
-        let x518 = -x512 * x16 - 2.0 * (x18 * x517);
-        let x519 = x493 * x257;
-        let x520 = e3_dot * x255;
-        let x521 = (x519 + 2.0 * x520) * J1
-            + J2 * (-x519 - x493 * gamma1_dot - 2.0 * x520);
-        let x522 = gamma2_dot * x7;
-        let x523 = -(gamma1_dot * x13);
-        let x524 = e2_dot * x264;
-        let x525 = e3_dot * x248;
-        let x526 = 2.0 * x524 - 2.0 * x525 + x478 * x247 - x499 * x242;
-        let x527 = gamma2_dot * x38;
-        let x528 = x276 * x39;
-        let x529 = 2.0 * x275 - 2.0 * x527 + x528 + 2.0 * x277;
-        let x530 = a_ * e3_dot;
-        let x531 = 2.0 * x530 + x480 * d;
-        let x532 = x480 * x284;
-        let x533 = e2_dot * x529 + x261 * x531 + x532;
-        let x534 = x533 * x36;
-        let x535 = 8.0 * x244 - 8.0 * x243 + 8.0 * x245 - 8.0 * x246;
-        let x536 = x535 * x36;
-        let x537 = x284 * x472;
-        let x538 = x536 * e2_dot - x274 * x531 - x537;
-        let x539 = x538 * x39;
-        let x540 = 2.0 * x534 - x539;
-        let x541 = x274 * x39;
-        let x542 = -e2_dot * x541 - (2.0 * (x261 * e2_dot) + x480 * x247) * x36
-            - x472 * x279;
-        let x543 = d * x306;
-        let x544 = 4.0 * x496 - 2.0 * x491 - 2.0 * x494 - 4.0 * x495 - 2.0 * x500
-            + 2.0 * x501;
-        let x545 = x5 * x261;
-        let x546 = x11 * x300;
-        let x547 = x9 * x260;
-        let x548 = x3 * x327;
-        let x549 = (2.0 * x269 + 2.0 * x547) + (-2.0 * x268 - 2.0 * x548);
-        let x550 = x9 * x300;
-        let x551 = x261 * x274;
-        let x552 = gamma2_dot * x33;
-        let x553 = x353 * x306;
-        let x554 = (-2.0 * x288 - 2.0 * x289) + 2.0 * x290;
-        let x555 = 4.0 * x474 - 2.0 * x473 - 4.0 * x475 + 2.0 * x479 - 2.0 * x482
-            - 2.0 * x486;
-        let x556 = x11 * x260;
-        let x557 = J2 * x551;
-        let x558 = (2.0 * x557 - 2.0 * x556) + (2.0 * x265 - 2.0 * x266);
-        let x559 = (-2.0 * x310 - 2.0 * x312) + 2.0 * x311;
-        let x560 = x5 * x327;
-        let x561 = x255 * x300;
-        let x562 = x561 * J2;
-        let x563 = (-2.0 * x560 - 2.0 * x249) + (2.0 * x251 - 2.0 * x562);
-        let x564 = x361 * x280;
-        let x565 = gamma1_dot * x25;
-        let x566 = x261 * x3;
-        let x567 = x258 * x300;
-        let x568 = x294 * x274;
-        let x569 = e2 * x306;
-        let x570 = x318 * x59;
-        let x571 = x52 * x314 + (2.0 * x569 - x570);
-        let x572 = x63 * x286;
-        let x573 = e3 * x280;
-        let x574 = x572 + (x291 * x56 - 2.0 * x573);
-        let x575 = x291 * x33;
-        let x576 = x280 * e0;
-        let x577 = (x7 * x286 + x575) + 2.0 * x576;
-        let x578 = x314 * x59;
-        let x579 = e1 * x306;
-        let x580 = x578 + (x318 * x52 - 2.0 * x579);
-        let x581 = x63 * x291;
-        let x582 = e1 * x280;
-        let x583 = (x56 * x286 - x581) + 2.0 * x582;
-        let x584 = x318 * x13;
-        let x585 = x306 * e0;
-        let x586 = x314 * x25 + (x584 + 2.0 * x585);
-        let x587 = 2.0 * x392 + 2.0 * x393;
-        let x588 = -2.0 * x390 - 2.0 * x391;
-        let x589 = (-2.0 * x388 - 2.0 * x389) * d - 4.0 * x71 - x587 * J1 - 4.0 * x72
-            + 4.0 * x73 + J2 * x588;
-        let x590 = 2.0 * x394 - 2.0 * x404;
-        let x591 = x35 * x361;
-        let x592 = 4.0 * x77 + e3 * x407 - 8.0 * x0 + (4.0 * e3 + x590 + 2.0 * x396) * J2
-            + (2.0 * x404 - 2.0 * x395 - 2.0 * x396) * J1 + (2.0 * x401 + x20 * e3) * m1
-            + m2 * (x591 + 2.0 * x399) - 4.0 * x1;
-        let x593 = x27 * x353;
-        let x594 = -(e2 * x39);
-        let x595 = (2.0 * (x400 * x103) - x593) * m1 + 4.0 * x75
-            + m2 * ((-4.0 * (x22 * x36) - 2.0 * (x108 * d)) * x3 + x594 * x39)
-            + (2.0 * x408 - 2.0 * x413 - 2.0 * x410) * J1
-            + (2.0 * x413 - 4.0 * e2 - 2.0 * x409 + 2.0 * x410) * J2 + 8.0 * x28
-            + x403 * e2 + 4.0 * x29;
-        let x596 = d * (x345 * (4.0 * x109 - 4.0 * x101) - x416);
-        let x597 = 2.0 * x24 - 2.0 * x23;
-        let x598 = x597 * x18;
-        let x599 = 2.0 * x55 - 2.0 * x54;
-        let x600 = x136 * d;
-        let x601 = ((x380 - 2.0 * x598) * e3 - 2.0 * (x400 * x145) - 2.0 * x382) * m1
-            + m2 * (x599 * x594 - 2.0 * x383 + x3 * (2.0 * (x63 * x22) + 2.0 * x600));
-        let x602 = d * x161;
-        let x603 = (x377 - 2.0 * (x400 * x152)) * m1
-            + (2.0 * x370 + x7 * x594 + x3 * (2.0 * (x22 * x33) + 2.0 * x602)) * m2;
-        let x604 = x56 * x358;
-        let x605 = x63 * x356;
-        let x606 = m2 * x361;
-        let x607 = 4.0 * x75 + x360 * e2 + 2.0 * x604 - 2.0 * x605 - 4.0 * x29
-            - x606 * x70;
-        let x608 = x349 * x52;
-        let x609 = x351 * x59;
-        let x610 = 2.0 * x608 - 4.0 * x77 - 2.0 * x609 + x66 * x354 - 4.0 * x1
-            + e3 * x348;
-        let x611 = 2.0 * x598 - x380;
-        let x612 = x599 * x39;
-        let x613 = (x611 * e2 - 2.0 * x423) * m1
-            + m2 * (2.0 * x424 + e3 * (2.0 * x384 - x612));
-        let x614 = x374 + 2.0 * x375;
-        let x615 = (x614 * e2 - 2.0 * x420) * m1 + m2 * x418;
-        let x616 = x7 * x356;
-        let x617 = x33 * x358;
-        let x618 = x108 * x361;
-        let x619 = x82 * x353;
-        let x620 = (2.0 * x392 - 2.0 * x393) * J2 - 4.0 * x71
-            + (2.0 * x390 - 2.0 * x391) * J1 + x429 * e0 - 4.0 * x73 + 8.0 * x86
-            + m2 * (x41 * e0 - x618) + (x67 * e0 + x619) * m1;
-        let x621 = x5 * x109;
-        let x622 = x93 * e2;
-        let x623 = x11 * x109;
-        let x624 = m2 * (d * (8.0 * x621 + (4.0 * x144 - 4.0 * x68) * x3) + 8.0 * x622)
-            + ((x9 * (6.0 * x125 + 2.0 * x126 + x199) - 8.0 * x623) * d - 8.0 * x622)
-                * m1;
-        let x625 = x612 - 2.0 * x384;
-        let x626 = m2 * (x456 - 2.0 * x445 + x625 * e0)
+        let x619 = x606 - 2.0 * x384;
+        let x620 = m2 * (x619 * e0 + x455 - 2.0 * x444)
             + m1
-                * (2.0 * x444 - (x137 - x13 * e1) * x16
-                    - (x458 + 2.0 * (x597 * e1)) * x18);
-        let x627 = (x166 + x439) * m1 + m2 * (x441 + x460);
-        let x628 = x351 * x13;
-        let x629 = x349 * x25;
-        let x630 = x93 * e3;
-        let x631 = d * (4.0 * x10 + 8.0 * x12);
-        let x632 = x23 * x452;
-        let x633 = m2
-            * (((6.0 * x125 - 2.0 * x21 + x181) * x3 + 8.0 * x184) * d + 8.0 * x630)
-            + (e3 * (-8.0 * x93 - x631) - 4.0 * x632) * m1;
-        let x634 = m2 * ((x625 + 4.0 * x81 + 2.0 * x107) * e1 + x208)
-            + (e0 * (4.0 * x93 + x611 + 2.0 * x102) - x438) * m1;
-        let x635 = m2
-            * ((x158 + x7 * e1) * x39 - 2.0 * x455 + (x446 - 2.0 * (x33 * e1)) * x36)
-            + (x614 * e0 - x443 + 2.0 * x457) * m1;
-        let x636 = x597 * x115;
-        let x637 = -(x115 * x13);
-        let x638 = x33 * x119;
-        let x639 = x119 * x599;
-        let x640 = x468 * e1;
-        let x641 = 2.0 * (x3 * e0_dot) + 2.0 * (x5 * e2_dot);
-        let x642 = 2.0 * (x11 * e3_dot) + 2.0 * (x9 * e0_dot);
-        let x643 = -(x255 * x16);
-        let x644 = x9 * e3_dot;
-        let x645 = x11 * e0_dot;
-        let x646 = 2.0 * x645 - 2.0 * x644;
-        let x647 = 2.0 * x644 - 2.0 * x645;
-        let x648 = e2_dot * x643 + (2.0 * (e2_dot * x300) - x642 * x242) * x18
-            - x646 * x302 + x647 * x305;
-        let x649 = 2.0 * x303 + 2.0 * x304 - 2.0 * x514 + x515;
-        let x650 = 2.0 * x530 + d * x642;
-        let x651 = x642 * x309;
-        let x652 = e2_dot * x649 - x650 * x300 - x651;
-        let x653 = x652 * x18;
-        let x654 = x309 * x647;
-        let x655 = 8.0 * x240 - 8.0 * x241 + 8.0 * x238 - 8.0 * x239;
-        let x656 = x18 * x655;
-        let x657 = x654 + e2_dot * x656 + x650 * x255;
-        let x658 = x657 * x16;
-        let x659 = (-2.0 * x269 - 2.0 * x547) + (2.0 * x268 + 2.0 * x548);
-        let x660 = x5 * e0_dot;
-        let x661 = e2_dot * x3;
-        let x662 = 2.0 * x661 - 2.0 * x660;
-        let x663 = (2.0 * J2 - 2.0 * J1) * x274 * e3_dot + x662 * x322;
-        let x664 = x257 * x647;
-        let x665 = e2_dot * x255;
-        let x666 = (x664 - 2.0 * x665) * J1
-            + J2 * (2.0 * x665 - x664 + x646 * gamma1_dot);
-        let x667 = Ixy * e3_dot;
-        let x668 = e2_dot * Ixz;
-        let x669 = 2.0 * x668 - 2.0 * (Ixx * e0_dot) - 2.0 * x667;
-        let x670 = x669 * x242;
-        let x671 = x662 * x323;
-        let x672 = x641 * x481;
-        let x673 = Ixz * e0_dot;
-        let x674 = 2.0 * x673 - 2.0 * (e2_dot * Izz) - 2.0 * x498;
-        let x675 = x237 * x674;
-        let x676 = e0_dot * x264;
-        let x677 = 2.0 * x670 - 4.0 * x496 + 2.0 * x671 - 2.0 * x672 - 2.0 * x675
-            + 4.0 * x676;
-        let x678 = x492 * x647;
-        let x679 = e0_dot * x248;
-        let x680 = x295 * x642;
-        let x681 = x669 * x247;
-        let x682 = Ixy * e0_dot;
-        let x683 = 2.0 * x476 + 2.0 * x682 + 2.0 * (Iyy * e3_dot);
-        let x684 = x683 * x237;
-        let x685 = 2.0 * x678 - 4.0 * x475 - 4.0 * x679 + 2.0 * x680 - 2.0 * x681
-            + 2.0 * x684;
-        let x686 = e3_dot * x264;
-        let x687 = e2_dot * x248;
-        let x688 = x674 * x247 - x683 * x242 + 2.0 * x686 + 2.0 * x687;
-        let x689 = d * x641 + 2.0 * x509;
-        let x690 = x662 * x284;
-        let x691 = x536 * e3_dot + x689 * x274 - x690;
-        let x692 = x641 * x284;
-        let x693 = e3_dot * x529 - x689 * x261 - x692;
-        let x694 = d * x280;
-        let x695 = -(2.0 * (x261 * e3_dot) - x641 * x247) * x36 - e3_dot * x541
-            - x662 * x279;
-        let x696 = 4.0 * x475 - 2.0 * x678 + 4.0 * x679 - 2.0 * x680 + 2.0 * x681
-            - 2.0 * x684;
-        let x697 = 2.0 * x653 + x658;
-        let x698 = x691 * x39;
-        let x699 = x693 * x36;
-        let x700 = gamma1_dot * x52;
-        let x701 = gamma2_dot * x56;
-        let x702 = gamma1_dot * x59;
-        let x703 = x702;
-        let x704 = (2.0 * x310 + 2.0 * x312) - 2.0 * x311;
-        let x705 = 4.0 * x496 - 2.0 * x670 - 2.0 * x671 + 2.0 * x672 + 2.0 * x675
-            - 4.0 * x676;
-        let x706 = (2.0 * x560 + 2.0 * x249) + (2.0 * x562 - 2.0 * x251);
-        let x707 = -(x63 * gamma2_dot);
-        let x708 = 2.0 * x6 - 2.0 * x4;
-        let x709 = 2.0 * (e2 * x280) + (x291 * x708 + x33 * x286);
-        let x710 = (x597 * x318 + 2.0 * (e3 * x306)) + x13 * x314;
-        let x711 = x353 * m1;
-        let x712 = 4.0 * x77 + 4.0 * x0 + (x41 * e3 - x591) * m2 + e3 * x429
-            - (2.0 * x394 + 2.0 * x404) * J1 + m1 * (x402 + e3 * x67) + 8.0 * x1
-            + J2 * (2.0 * x395 - 2.0 * x396);
-        let x713 = 4.0 * x71 - x82 * x711 - 2.0 * x426 + x348 * e0 - 4.0 * x86
-            - 2.0 * x428;
-        let x714 = e1 * x39;
-        let x715 = (-x430 - 2.0 * (x400 * x27)) * m1 - 8.0 * x43 - 4.0 * x44
-            + m2 * (x3 * (2.0 * (x35 * d) - 4.0 * (x93 * x36)) - x39 * x714) + 4.0 * x84
-            - (2.0 * x338 + x342) * J1 + x403 * e1
-            + (2.0 * x337 - 2.0 * x340 + 2.0 * x338 - 4.0 * e1) * J2;
-        let x716 = m2 * (((x127 + 6.0 * x42) * x3 - 8.0 * x436) * d - 8.0 * x433)
-            + (8.0 * x433 + (8.0 * x435 - x434) * d) * m1;
-        let x717 = x33 * x39;
-        let x718 = x708 * x36;
-        let x719 = 2.0 * x718 - x717;
-        let x720 = (4.0 * x31 + 2.0 * x34 + x719) * e2;
-        let x721 = x13 * x18;
-        let x722 = x597 * x16;
-        let x723 = -2.0 * x721 - x722;
-        let x724 = e3 * (x723 + 4.0 * x22 - 2.0 * x26);
-        let x725 = m2 * (x150 + x720) + m1 * (x438 + x724);
-        let x726 = x27 * e2;
-        let x727 = 2.0 * x51 - 2.0 * x50;
-        let x728 = x727 * x18;
-        let x729 = x59 * x16;
-        let x730 = -2.0 * x728 - x729;
-        let x731 = x35 * e3;
-        let x732 = 2.0 * x155 - 2.0 * x153;
-        let x733 = (e3 * x730 - 2.0 * x726 + x443) * m1
-            + m2
-                * (2.0 * x731 - (x158 - x63 * e2) * x39
-                    + (2.0 * (x599 * e2) + x732) * x36);
-        let x734 = x95 * x362 - 4.0 * x44 + x360 * e1 - 4.0 * x84 + 2.0 * x616
-            - 2.0 * x617;
-        let x735 = x16 * e0;
-        let x736 = J2 * (x588 + 4.0 * e0 + 2.0 * x393) - 4.0 * x71
-            - (x587 - 2.0 * x391) * J1 + 8.0 * x73
-            + (x735 * x16 + x9 * (4.0 * (x81 * x18) - 2.0 * (d * x66))) * m1 - 4.0 * x86
-            + x407 * e0 + m2 * (x618 - 2.0 * (x70 * x398));
-        let x737 = m2 * (d * ((4.0 * x68 - 4.0 * x144) * x3 - 8.0 * x621) - 8.0 * x622)
-            + m1 * (d * (x9 * (x130 + 2.0 * x21 + 6.0 * x42) + 8.0 * x623) + 8.0 * x622);
-        let x738 = x70 * e2;
-        let x739 = e3 * x66;
-        let x740 = m2 * (e3 * x719 - x456 - 2.0 * x738)
-            + (2.0 * x739 + x18 * (2.0 * (x13 * e2) + x458) + x16 * (x137 + x597 * e2))
+                * (2.0 * x442 - (x453 + 2.0 * (x591 * e1)) * x22
+                    - (x137 - x36 * e1) * x20);
+        let x621 = m1 * (x157 + x438) + m2 * (x458 + x440);
+        let x622 = x350 * x36;
+        let x623 = x352 * x14;
+        let x624 = x80 * e3;
+        let x625 = (4.0 * x34 + 8.0 * x35) * d;
+        let x626 = x399 * x125;
+        let x627 = m2
+            * (((6.0 * x122 - 2.0 * x7 + x180) * x3 + 8.0 * x183) * d + 8.0 * x624)
+            + m1 * (e3 * (-8.0 * x80 - x625) - 4.0 * x626);
+        let x628 = ((4.0 * x80 + 2.0 * x105 + x605) * e0 - x437) * m1
+            + m2 * (x206 + (4.0 * x93 + x619 + 2.0 * x107) * e1);
+        let x629 = m2
+            * ((x445 - 2.0 * (x5 * e1)) * x28 - 2.0 * x456 + (x163 + x40 * e1) * x31)
+            + (2.0 * x454 - x443 + x608 * e0) * m1;
+        let x630 = x591 * x113;
+        let x631 = -(x36 * x113);
+        let x632 = x117 * x5;
+        let x633 = x117 * x593;
+        let x634 = x466 * e1;
+        let x635 = x4 * e0_dot;
+        let x636 = e2_dot * x3;
+        let x637 = 2.0 * x636 - 2.0 * x635;
+        let x638 = x287 * e3_dot;
+        let x639 = x637 * x281 + (2.0 * J2 - 2.0 * J1) * x638;
+        let x640 = 2.0 * (x3 * e0_dot) + 2.0 * (x4 * e2_dot);
+        let x641 = d * x640 + 2.0 * x489;
+        let x642 = x637 * x301;
+        let x643 = x525 * e3_dot + x641 * x287 - x642;
+        let x644 = x640 * x301;
+        let x645 = e3_dot * x519 - x641 * x282 - x644;
+        let x646 = d * x297;
+        let x647 = -(2.0 * (x282 * e3_dot) - x640 * x246) * x28 - x637 * x296
+            - x638 * x31;
+        let x648 = 2.0 * (x10 * e3_dot) + 2.0 * (x12 * e0_dot);
+        let x649 = (-2.0 * x316 - 2.0 * x541) + (2.0 * x315 + 2.0 * x542);
+        let x650 = x12 * e3_dot;
+        let x651 = x10 * e0_dot;
+        let x652 = 2.0 * x650 - 2.0 * x651;
+        let x653 = x261 * x652;
+        let x654 = e2_dot * x272;
+        let x655 = 2.0 * x651 - 2.0 * x650;
+        let x656 = (x653 - 2.0 * x654) * J1
+            + J2 * (2.0 * x654 - x653 + x655 * gamma1_dot);
+        let x657 = -(x272 * x20);
+        let x658 = e2_dot * x657 + (2.0 * (e2_dot * x254) - x648 * x241) * x22
+            - x655 * x277 + x652 * x263;
+        let x659 = 2.0 * x259 + 2.0 * x262 - 2.0 * x498 + x499;
+        let x660 = 2.0 * x520 + d * x648;
+        let x661 = x648 * x257;
+        let x662 = e2_dot * x659 - x660 * x254 - x661;
+        let x663 = x662 * x22;
+        let x664 = x257 * x652;
+        let x665 = x22 * (8.0 * x239 - 8.0 * x240 + 8.0 * x237 - 8.0 * x238);
+        let x666 = x664 + e2_dot * x665 + x660 * x272;
+        let x667 = x666 * x20;
+        let x668 = Ixy * e3_dot;
+        let x669 = e2_dot * Ixz;
+        let x670 = 2.0 * x669 - 2.0 * (Ixx * e0_dot) - 2.0 * x668;
+        let x671 = x670 * x241;
+        let x672 = x637 * x284;
+        let x673 = x640 * x479;
+        let x674 = Ixz * e0_dot;
+        let x675 = 2.0 * x674 - 2.0 * (e2_dot * Izz) - 2.0 * x511;
+        let x676 = x236 * x675;
+        let x677 = e0_dot * x311;
+        let x678 = 2.0 * x671 - 4.0 * x509 + 2.0 * x672 - 2.0 * x673 - 2.0 * x676
+            + 4.0 * x677;
+        let x679 = x506 * x652;
+        let x680 = e0_dot * x247;
+        let x681 = x291 * x648;
+        let x682 = x670 * x246;
+        let x683 = Ixy * e0_dot;
+        let x684 = 2.0 * x474 + 2.0 * x683 + 2.0 * (Iyy * e3_dot);
+        let x685 = x684 * x236;
+        let x686 = 2.0 * x679 - 4.0 * x473 - 4.0 * x680 + 2.0 * x681 - 2.0 * x682
+            + 2.0 * x685;
+        let x687 = e3_dot * x311;
+        let x688 = e2_dot * x247;
+        let x689 = x675 * x246 - x684 * x241 + 2.0 * x687 + 2.0 * x688;
+        let x690 = 4.0 * x473 - 2.0 * x679 + 4.0 * x680 - 2.0 * x681 + 2.0 * x682
+            - 2.0 * x685;
+        let x691 = x643 * x31;
+        let x692 = x645 * x28;
+        let x693 = 2.0 * x663 + x667;
+        let x694 = gamma1_dot * x61;
+        let x695 = gamma2_dot * x65;
+        let x696 = (2.0 * x258 + 2.0 * x264) - 2.0 * x260;
+        let x697 = x51 * gamma1_dot;
+        let x698 = x697;
+        let x699 = 4.0 * x509 - 2.0 * x671 - 2.0 * x672 + 2.0 * x673 + 2.0 * x676
+            - 4.0 * x677;
+        let x700 = (2.0 * x554 + 2.0 * x248) + (2.0 * x556 - 2.0 * x250);
+        let x701 = -(gamma2_dot * x56);
+        let x702 = 2.0 * x39 - 2.0 * x38;
+        let x703 = (x702 * x308 + x5 * x303) + 2.0 * (e2 * x297);
+        let x704 = x36 * x266 + (x591 * x274 + 2.0 * (e3 * x278));
+        let x705 = x347 * m1;
+        let x706 = 4.0 * x75 + 4.0 * x0 - (2.0 * x393 + 2.0 * x395) * J1
+            + (x33 * e3 - x585) * m2 + e3 * x429 + J2 * (2.0 * x394 - 2.0 * x396)
+            + (x398 + e3 * x49) * m1 + 8.0 * x1;
+        let x707 = 4.0 * x69 - x94 * x705 + x349 * e0 - 2.0 * x426 - 4.0 * x85
+            - 2.0 * x427;
+        let x708 = e1 * x31;
+        let x709 = (2.0 * x336 - 2.0 * x340 - 4.0 * e1 + 2.0 * x337) * J2 - 8.0 * x45
+            - 4.0 * x46 + (-x428 - 2.0 * (x18 * x399)) * m1 - (x341 + 2.0 * x337) * J1
+            + m2 * (x3 * (2.0 * (x27 * d) - 4.0 * (x80 * x28)) - x31 * x708) + 4.0 * x83
+            + x403 * e1;
+        let x710 = 2.0 * x7 + 6.0 * x8;
+        let x711 = m2 * (d * (x3 * (x124 + x710) - 8.0 * x433) - 8.0 * x432)
+            + m1 * (8.0 * x432 + (8.0 * x435 - x434) * d);
+        let x712 = x36 * x22;
+        let x713 = x591 * x20;
+        let x714 = -2.0 * x712 - x713;
+        let x715 = e3 * (4.0 * x16 + x714 - 2.0 * x17);
+        let x716 = x702 * x28;
+        let x717 = x5 * x31;
+        let x718 = 2.0 * x716 - x717;
+        let x719 = (x718 + 2.0 * x25 + 4.0 * x26) * e2;
+        let x720 = (x437 + x715) * m1 + (x149 + x719) * m2;
+        let x721 = 2.0 * x160 - 2.0 * x159;
+        let x722 = e3 * x27;
+        let x723 = 2.0 * x60 - 2.0 * x59;
+        let x724 = x22 * x723;
+        let x725 = x51 * x20;
+        let x726 = -2.0 * x724 - x725;
+        let x727 = x18 * e2;
+        let x728 = m2
+            * ((x721 + 2.0 * (x593 * e2)) * x28 - (x163 - x56 * e2) * x31 + 2.0 * x722)
+            + (x443 + e3 * x726 - 2.0 * x727) * m1;
+        let x729 = 2.0 * x610 - 4.0 * x46 + x361 * e1 - 4.0 * x83 - 2.0 * x611
+            + x82 * x358;
+        let x730 = x20 * e0;
+        let x731 = 8.0 * x71 - 4.0 * x69 + J2 * (x582 + 2.0 * x388 + 4.0 * e0)
+            + m2 * (x613 - 2.0 * (x58 * x401)) - 4.0 * x85 + x409 * e0
+            + (x730 * x20 + (4.0 * (x93 * x22) - 2.0 * (d * x53)) * x12) * m1
+            - (x581 - 2.0 * x391) * J1;
+        let x732 = (8.0 * x615 + (8.0 * x617 + (x130 + x710) * x12) * d) * m1
+            + m2 * (d * ((4.0 * x50 - 4.0 * x125) * x3 - 8.0 * x616) - 8.0 * x615);
+        let x733 = x58 * e2;
+        let x734 = e3 * x53;
+        let x735 = m2 * (x718 * e3 - x455 - 2.0 * x733)
+            + (2.0 * x734 + (x137 + x591 * e2) * x20 + (2.0 * (x36 * e2) + x453) * x22)
                 * m1;
-        let x741 = x599 * x36;
-        let x742 = x63 * x39;
-        let x743 = m2 * (e3 * (2.0 * x741 - 4.0 * x22 - 2.0 * x69 + x742) - x460)
-            + ((2.0 * x728 - 4.0 * x31 + x729 + 2.0 * x65) * e2 + x189) * m1;
-        let x744 = x82 * x343;
-        let x745 = x345 * x95;
-        let x746 = 4.0 * x77 - 4.0 * x0 + J2 * x590 - 4.0 * x97
-            + d * (2.0 * x744 + 2.0 * x745) - x397 * J1;
-        let x747 = a_ * x192;
-        let x748 = m1 * (d * (x197 + x368) - x747) + m2 * (x747 + d * (x206 - x365));
-        let x749 = e3 * x82;
-        let x750 = x95 * e2;
-        let x751 = x717 - 2.0 * x718;
-        let x752 = (x723 * e1 - 2.0 * x749) * m1 + m2 * (2.0 * x750 + x751 * e0);
-        let x753 = x82 * e2;
-        let x754 = e3 * x95;
-        let x755 = (x730 * e1 + 2.0 * x753) * m1
-            + m2 * ((-2.0 * x741 - x742) * e0 + 2.0 * x754);
-        let x756 = x345 * x108;
-        let x757 = x103 * x343;
-        let x758 = x108 * e2;
-        let x759 = e3 * x103;
-        let x760 = m2
-            * ((2.0 * x600 - 2.0 * (x93 * x708)) * x3 + x33 * x714 - 2.0 * x758)
-            + (x597 * x735 - 2.0 * x759 + (2.0 * (x81 * x13) - 2.0 * x419) * x9) * m1;
-        let x761 = e3 * x108;
-        let x762 = x103 * e2;
-        let x763 = m2
-            * ((2.0 * x602 - 2.0 * (x93 * x599)) * x3 - x63 * x714 - 2.0 * x761)
-            + ((2.0 * (x727 * x81) - 2.0 * x422) * x9 + x735 * x59 + 2.0 * x762) * m1;
-        let x764 = x115 * x59;
-        let x765 = -(x63 * x119);
-        let x766 = x468 * e2;
-        let x767 = x257 * x642;
-        let x768 = x255 * e1_dot;
-        let x769 = J1 * (2.0 * x768 - x767)
-            + J2 * (x767 - 2.0 * x768 + gamma1_dot * x642);
-        let x770 = x472 * x481;
-        let x771 = x480 * x323;
-        let x772 = 2.0 * x682 - 2.0 * (Ixx * e3_dot) - 2.0 * x477;
-        let x773 = x772 * x242;
-        let x774 = Iyz * e0_dot;
-        let x775 = 2.0 * (Izz * e1_dot) + 2.0 * x774 + 2.0 * x484;
-        let x776 = x237 * x775;
-        let x777 = x250 * e1_dot;
-        let x778 = 2.0 * x770 - 2.0 * x771 + 2.0 * x773 + 4.0 * x686 - 2.0 * x776
-            + 4.0 * x777;
-        let x779 = -(x274 * x39);
-        let x780 = x480 * x279 - x779 * e0_dot
-            + (2.0 * (x261 * e0_dot) - x472 * x247) * x36;
-        let x781 = a_ * e1_dot;
-        let x782 = d * x472 + 2.0 * x781;
-        let x783 = 8.0 * x243 - 8.0 * x244 - 8.0 * x245 + 8.0 * x246;
-        let x784 = x783 * x36;
-        let x785 = x784 * e0_dot - x274 * x782 + x532;
-        let x786 = 2.0 * x527 - 2.0 * x275 - x528 - 2.0 * x277;
-        let x787 = x261 * x782 + x786 * e0_dot + x537;
-        let x788 = (2.0 * x288 + 2.0 * x289) - 2.0 * x290;
-        let x789 = x772 * x247;
-        let x790 = Iyz * e1_dot;
-        let x791 = 2.0 * x667 - 2.0 * x790 - 2.0 * (Iyy * e0_dot);
-        let x792 = x237 * x791;
-        let x793 = x295 * x647;
-        let x794 = x492 * x642;
-        let x795 = x250 * e0_dot;
-        let x796 = 2.0 * x792 - 2.0 * x789 + 2.0 * x793 - 4.0 * x525 - 2.0 * x794
-            + 4.0 * x795;
-        let x797 = (2.0 * x556 - 2.0 * x557) + x326;
-        let x798 = x247 * x775 - 2.0 * x495 - x242 * x791 - 2.0 * x676;
-        let x799 = 2.0 * x471 - 2.0 * x470;
-        let x800 = (2.0 * J1 - 2.0 * J2) * x274;
-        let x801 = x800 * e0_dot - x480 * x322;
-        let x802 = e1_dot * x505 - x642 * x305 - x642 * x302
-            - (x242 * x647 + 2.0 * (x300 * e1_dot)) * x18;
-        let x803 = a_ * e0_dot;
-        let x804 = 2.0 * x803 - d * x647;
-        let x805 = x508 * e1_dot - x651 - x804 * x255;
-        let x806 = x516 * e1_dot - x654 + x804 * x300;
-        let x807 = -x805 * x16 - 2.0 * (x806 * x18);
-        let x808 = 2.0 * x789 - 2.0 * x792 - 2.0 * x793 + 4.0 * x525 + 2.0 * x794
-            - 4.0 * x795;
-        let x809 = x785 * x39;
-        let x810 = x36 * x787;
-        let x811 = 2.0 * x771 - 2.0 * x770 - 2.0 * x773 - 4.0 * x686 + 2.0 * x776
-            - 4.0 * x777;
-        let x812 = m1 * (x67 * e2 + x593) + 4.0 * x75 - J2 * (2.0 * x408 + 2.0 * x413)
-            - 4.0 * x28 + m2 * (x41 * e2 - x412) - 8.0 * x29 + x429 * e2
-            + (2.0 * x409 + 2.0 * x410) * J1;
-        let x813 = -(e1 * x16);
-        let x814 = 4.0 * x43 + 8.0 * x44 + (2.0 * x337 + x342) * J1 + 4.0 * x84
-            + J2 * (4.0 * e1 - 2.0 * x341 + x339) + m2 * (x431 - 2.0 * (x35 * x398))
-            + x407 * e1 + m1 * ((4.0 * (x93 * x18) + 2.0 * (d * x27)) * x9 - x813 * x16);
-        let x815 = x360 * e0 - 4.0 * x73 - 2.0 * x448 + 4.0 * x86 - 2.0 * x449
-            - x108 * x606;
-        let x816 = ((8.0 * x129 + (x131 - 6.0 * x21) * x9) * d + 8.0 * x451) * m1
-            + (((4.0 * x55 - 8.0 * x54) * d - 8.0 * x81) * e3 - 4.0 * x453) * m2;
-        let x817 = x56 * x36;
-        let x818 = 2.0 * x817 - x742;
-        let x819 = (2.0 * x726 - (x137 - e3 * x59) * x16
-            - (x458 + 2.0 * (e3 * x52)) * x18) * m1
-            + (x456 - 2.0 * x731 + x818 * e2) * m2;
-        let x820 = (x166 + x724) * m1 + (x720 + x460) * m2;
-        let x821 = x39 * e0;
-        let x822 = 8.0 * x71 + x403 * e0 - 4.0 * x73 + m1 * (2.0 * (x400 * x66) - x619)
-            + (2.0 * x390 + 2.0 * x391 - 2.0 * x392 - 4.0 * e0) * J2
-            + m2 * (-x821 * x39 - (4.0 * (x81 * x36) - 2.0 * (d * x70)) * x3) - 4.0 * x86
-            + (x587 - 2.0 * x390) * J1;
-        let x823 = x348 * e1 - 4.0 * x43 - 2.0 * x628 + 4.0 * x84 - x103 * x711
-            - 2.0 * x629;
-        let x824 = m2 * (d * ((6.0 * x21 + x182) * x3 - 8.0 * x184) - 8.0 * x630)
-            + (e3 * (8.0 * x93 + x631) + 4.0 * x632) * m1;
-        let x825 = 2.0 * (x18 * x52) - x729;
-        let x826 = m2 * (x150 + e3 * (4.0 * x22 + x818 + 2.0 * x69))
-            + (x438 + (4.0 * x31 + x825 - 2.0 * x65) * e2) * m1;
-        let x827 = 2.0 * x721 + x722;
-        let x828 = m2
-            * ((2.0 * (e3 * x708) + x732) * x36 - (x158 + x33 * e3) * x39 - 2.0 * x738)
-            + m1 * (x443 + 2.0 * x739 + x827 * e2);
-        let x829 = d * (2.0 * x756 - 2.0 * x757) - 4.0 * x75 - 4.0 * x110 - 4.0 * x28
-            + J2 * x411 + x414 * J1;
-        let x830 = (x9 * (2.0 * x419 - 2.0 * (x93 * x52)) - x813 * x59 - 2.0 * x753) * m1
-            + m2 * (x63 * x821 - x3 * (2.0 * (x56 * x81) + 2.0 * x600) - 2.0 * x754);
-        let x831 = (x597 * x813 + (2.0 * x422 - 2.0 * (x93 * x13)) * x9 - 2.0 * x749)
-            * m1
-            + m2 * (2.0 * x750 - (2.0 * (x708 * x81) + 2.0 * x602) * x3 + x33 * x821);
-        let x832 = (x825 * e0 - 2.0 * x762) * m1
-            + ((x742 - 2.0 * x817) * e1 + 2.0 * x761) * m2;
-        let x833 = (x827 * e0 - 2.0 * x759) * m1 + (e1 * x751 - 2.0 * x758) * m2;
-        let x834 = x727 * x115;
-        let x835 = x119 * x708;
-        let x836 = e3 * x468;
-        let x837 = 2.0 * x660 - 2.0 * x661;
-        let x838 = 2.0 * x790 - 2.0 * x668 - 2.0 * (Izz * e0_dot);
-        let x839 = 2.0 * x774 - 2.0 * x483 - 2.0 * (Iyy * e1_dot);
-        let x840 = x838 * x247 - 2.0 * x474 + 2.0 * x679 - x839 * x242;
-        let x841 = x662 * x481;
-        let x842 = 2.0 * x673 + 2.0 * x497 + 2.0 * (Ixx * e2_dot);
-        let x843 = x842 * x242;
-        let x844 = x641 * x323;
-        let x845 = x237 * x838;
-        let x846 = 2.0 * x841 - 4.0 * x524 + 2.0 * x843 - 4.0 * x795 + 2.0 * x844
-            - 2.0 * x845;
-        let x847 = x295 * x493;
-        let x848 = x842 * x247;
-        let x849 = x492 * x490;
-        let x850 = x237 * x839;
-        let x851 = 2.0 * x849 - 2.0 * x847 - 2.0 * x848 + 2.0 * x850 + 4.0 * x687
-            + 4.0 * x777;
-        let x852 = x493 * d + 2.0 * x781;
-        let x853 = x513 - x255 * x852 + e0_dot * x656;
-        let x854 = 2.0 * x489 - 2.0 * x488;
-        let x855 = x18 * (x493 * x242 + 2.0 * (x300 * e0_dot)) + x643 * e0_dot
-            + x490 * x305 - x854 * x302;
-        let x856 = x649 * e0_dot + x300 * x852 + x511;
-        let x857 = x257 * x490;
-        let x858 = x255 * e0_dot;
-        let x859 = (x857 - 2.0 * x858) * J1
-            + J2 * (2.0 * x858 - x857 + gamma1_dot * x854);
-        let x860 = x274 * e1_dot;
-        let x861 = (x321 * x641 - 2.0 * x860) * J2 + (2.0 * x860 - x276 * x641) * J1;
-        let x862 = 2.0 * x803 - x662 * d;
-        let x863 = x786 * e1_dot - x261 * x862 + x690;
-        let x864 = x863 * x36;
-        let x865 = x274 * x862 - x692 + x784 * e1_dot;
-        let x866 = x865 * x39;
-        let x867 = (2.0 * (x261 * e1_dot) - x662 * x247) * x36 - x641 * x279
-            - x779 * e1_dot;
-        let x868 = x853 * x16 + 2.0 * (x856 * x18);
-        let x869 = 2.0 * x847 + 2.0 * x848 - 2.0 * x849 - 2.0 * x850 - 4.0 * x687
-            - 4.0 * x777;
-        let x870 = 4.0 * x524 - 2.0 * x841 - 2.0 * x843 + 4.0 * x795 - 2.0 * x844
-            + 2.0 * x845;
-        let x871 = d * x18;
-        let x872 = x13 * J1;
-        let x873 = J2 * x13;
-        let x874 = J2 * x727;
-        let x875 = x52 * J1;
-        let x876 = x873 - x872;
-        let x877 = (x874 + x875) * x25 - x876 * x59
-            + (8.0 * (x871 * x68) - (x13 * x66 + x727 * x27) * d) * m1;
-        let x878 = J2 * x59;
-        let x879 = x59 * J1;
-        let x880 = (-d * (-x27 * x59 - x82 * x13) - 8.0 * (x83 * x871)) * m1 + x52 * x876
-            + (x879 - x878) * x25;
-        let x881 = x597 * J2;
-        let x882 = x25 * J1;
-        let x883 = e3 * x18;
-        let x884 = x25 * (x881 + x882) + x13 * x876
-            + (8.0 * (x883 * x452) - (x597 * x27 - x13 * x103) * d) * m1;
-        let x885 = 2.0 * x115 * x883;
-        let x886 = x109 * e0;
-        let x887 = x115 * (x11 * (e3 * x132 - 4.0 * x886) - x47 * x58);
-        let x888 = x141 * x16;
-        let x889 = x141 * x15;
-        let x890 = x888 - 2.0 * x889;
-        let x891 = m1 * (e3 * x890 - x102 * x145);
-        let x892 = x162 * x16;
-        let x893 = x15 * x162;
-        let x894 = x892 - 2.0 * x893;
-        let x895 = m1 * (x894 * e3 - x102 * x152);
-        let x896 = x727 * d;
-        let x897 = J2 * (x727 * x52 + x169) + (x171 - x169) * J1
-            + m1 * (8.0 * (x871 * x109) - d * (-x727 * x82 - x66 * x59));
-        let x898 = x18 * e2;
-        let x899 = (x53 - x60) * J1
-            + (-(x597 * x66 - x727 * x103) * d - 8.0 * (x898 * x452)) * m1
-            + J2 * (x727 * x13 - x597 * x59);
-        let x900 = -(2.0 * x115 * x898);
-        let x901 = x115 * (x11 * x185 - x23 * x47);
-        let x902 = 2.0 * x889 - x888;
-        let x903 = m1 * (e2 * x902 - x145 * x896);
-        let x904 = 2.0 * x893 - x892;
-        let x905 = (x904 * e2 - x152 * x896) * m1;
-        let x906 = x18 * e1;
-        let x907 = m1 * (8.0 * (x452 * x906) - (x103 * x59 - x597 * x82) * d)
-            + (x88 + x96) * J1 + J2 * (x597 * x52 - x88);
-        let x908 = 2.0 * x115 * x906;
-        let x909 = x115 * (x11 * x202 + x10 * x192);
-        let x910 = (x890 * e1 - x145 * x65) * m1;
-        let x911 = (x894 * e1 - x152 * x65) * m1;
-        let x912 = x18 * e0;
-        let x913 = x597 * d;
-        let x914 = -(2.0 * x115 * x912);
-        let x915 = (x11 * x216 + x192 * x51) * x115;
-        let x916 = (x902 * e0 - x913 * x145) * m1;
-        let x917 = m1 * (x904 * e0 - x913 * x152);
-        let x918 = -(x115 * x336);
-        let x919 = -(x141 * x115);
-        let x920 = -(x115 * x162);
-        let x921 = x303 * x242 - d * x255 * x255;
-        let x922 = x921 + x310;
-        let x923 = x922 * x16;
-        let x924 = x11 * x314;
-        let x925 = (x307 + 2.0 * x308) * x255;
-        let x926 = (2.0 * x925 - 2.0 * x317) * x9;
-        let x927 = a_ * (-2.0 * x924 - x926) - x923;
-        let x928 = x298 - x299;
-        let x929 = x300 * x305 - x303 * x300 - x928 * x302;
-        let x930 = x928 * x256 + x257 * x567;
-        let x931 = x492 * x300 - x295 * x255;
-        let x932 = x923 + a_ * (2.0 * x924 + x926);
-        let x933 = x921 + x313;
-        let x934 = x316 + x925;
-        let x935 = d * x36;
-        let x936 = x33 * J1;
-        let x937 = x33 * J2;
-        let x938 = x936 - x937;
-        let x939 = x63 * J2;
-        let x940 = x63 * J1;
-        let x941 = x939 - x940;
-        let x942 = x56 * x938 + m2 * (-(x35 * x56 - x7 * x70) * d - 8.0 * (x935 * x68))
-            + x7 * x941;
-        let x943 = x708 * J1;
-        let x944 = x7 * J2;
-        let x945 = x943 + x944;
-        let x946 = e2 * x36;
-        let x947 = x7 * x945 + m2 * (8.0 * (x946 * x452) - (x33 * x35 + x7 * x95) * d)
-            + x33 * x938;
-        let x948 = x56 * J2;
-        let x949 = x599 * J1;
-        let x950 = x948 + x949;
-        let x951 = x950 * x7 - x63 * x938
-            + m2 * (8.0 * (x935 * x109) - (-x63 * x35 - x7 * x108) * d);
-        let x952 = 2.0 * x946 * x119;
-        let x953 = x119 * (x47 * x62 + x5 * x128);
-        let x954 = x39 * x148;
-        let x955 = x38 * x148;
-        let x956 = 2.0 * x955 - x954;
-        let x957 = m2 * (x956 * e2 - x136 * x94);
-        let x958 = x156 * x38;
-        let x959 = x156 * x39;
-        let x960 = 2.0 * x958 - x959;
-        let x961 = m2 * (e2 * x960 - x161 * x94);
-        let x962 = e3 * x36;
-        let x963 = (8.0 * (x452 * x962) - d * (x56 * x95 - x33 * x70)) * m2 + x33 * x941
-            + x56 * x945;
-        let x964 = x950 * x56 + m2 * (8.0 * (x83 * x935) - d * (x63 * x70 - x56 * x108))
-            - x63 * x941;
-        let x965 = 2.0 * x119 * x962;
-        let x966 = x119 * (x47 * x32 + x5 * (e3 * x183 - 4.0 * x886));
-        let x967 = m2 * (e3 * x956 - x136 * x107);
-        let x968 = m2 * (e3 * x960 - x161 * x107);
-        let x969 = e0 * x36;
-        let x970 = x34;
-        let x971 = e1 * x36;
-        let x972 = J2 * (x113 - x106) + (x33 * x599 - x63 * x708) * J1
-            + m2 * (-d * (-x63 * x95 - x33 * x108) - 8.0 * (x971 * x452));
-        let x973 = -(2.0 * x119 * x969);
-        let x974 = x119 * (x5 * x205 - x192 * x55);
-        let x975 = x954 - 2.0 * x955;
-        let x976 = m2 * (x975 * e0 - x136 * x970);
-        let x977 = x959 - 2.0 * x958;
-        let x978 = m2 * (x977 * e0 - x161 * x970);
-        let x979 = -(x63 * d);
-        let x980 = -(2.0 * x971 * x119);
-        let x981 = x119 * (x5 * x219 - x192 * x4);
-        let x982 = m2 * (x975 * e1 - x979 * x136);
-        let x983 = m2 * (x977 * e1 - x979 * x161);
-        let x984 = x119 * x335;
-        let x985 = x119 * x148;
-        let x986 = x156 * x119;
-        let x987 = x33 * x261;
-        let x988 = x273 - x272;
-        let x989 = x274 * x481 - x261 * x323;
-        let x990 = (2.0 * x243 - 2.0 * x244 - 2.0 * x245 + 2.0 * x246) * x271;
-        let x991 = x274 * (x282 + 2.0 * x283);
-        let x992 = x3 * ((2.0 * x281 + 2.0 * x990) + (2.0 * x991 - 2.0 * x285));
-        let x993 = x5 * x291;
-        let x994 = x275 * x247 - x274 * x274 * d + x289;
-        let x995 = x994 * x39;
-        let x996 = a_ * (x992 + 2.0 * x993) - x995;
-        let x997 = x261 * x279 - x261 * x275;
-        let x998 = x63 * x261;
-        let x999 = a_ * (-x992 - 2.0 * x993) + x995;
-        let x1000 = x286 + x990 + x991;
-        let x1001 = x330 + x800 * e2;
-        let x1002 = e2 * x264;
-        let x1003 = e3 * x248;
-        let x1004 = x2 * x247 - x30 * x242 - 2.0 * x1002 + 2.0 * x1003;
-        let x1005 = x46 * x247;
-        let x1006 = x237 * x30;
-        let x1007 = x295 * x25;
-        let x1008 = x248 * e1;
-        let x1009 = x492 * x13;
-        let x1010 = x250 * e2;
-        let x1011 = 2.0 * x1006 - 2.0 * x1005 + 2.0 * x1007 - 4.0 * x1008 - 2.0 * x1009
-            + 4.0 * x1010;
-        let x1012 = x35 * x274;
-        let x1013 = x7 * x284;
-        let x1014 = x1012 - x1013 + x946 * x783;
-        let x1015 = x1014 * x39;
-        let x1016 = x33 * x284;
-        let x1017 = x786 * e2 - x1016 - x35 * x261;
-        let x1018 = x1017 * x36;
-        let x1019 = 2.0 * x1018 - x1015;
-        let x1020 = (x33 * x247 + 2.0 * (x261 * e2)) * x36 - x7 * x279 - x274 * x594;
-        let x1021 = e3 * x643 - x13 * x305 + x18 * (2.0 * (e3 * x300) - x242 * x25)
-            - x13 * x302;
-        let x1022 = x13 * x309;
-        let x1023 = x883 * x655 - x1022 - x27 * x255;
-        let x1024 = x1023 * x16;
-        let x1025 = x309 * x25;
-        let x1026 = x27 * x300 - x1025 + e3 * x649;
-        let x1027 = x18 * x1026;
-        let x1028 = -x1024 - 2.0 * x1027;
-        let x1029 = x237 * x2;
-        let x1030 = x250 * e3;
-        let x1031 = x46 * x242;
-        let x1032 = x7 * x323;
-        let x1033 = e1 * x264;
-        let x1034 = x33 * x481;
-        let x1035 = 2.0 * x1031 - 2.0 * x1029 - 4.0 * x1030 + 2.0 * x1032 + 4.0 * x1033
-            - 2.0 * x1034;
-        let x1036 = e3 * x255;
-        let x1037 = x257 * x13;
-        let x1038 = (-2.0 * x1036 - x1037) * J1
-            + (2.0 * x1036 + x1037 + gamma1_dot * x13) * J2;
-        let x1039 = x1024 + 2.0 * x1027;
-        let x1040 = 2.0 * x1005 - 2.0 * x1006 - 2.0 * x1007 + 4.0 * x1008 + 2.0 * x1009
-            - 4.0 * x1010;
-        let x1041 = x25 * x700;
-        let x1042 = 2.0 * x1029 + 4.0 * x1030 - 2.0 * x1031 - 2.0 * x1032 - 4.0 * x1033
-            + 2.0 * x1034;
-        let x1043 = x59 * x565;
-        let x1044 = x1015 - 2.0 * x1018;
-        let x1045 = x33 * x707;
-        let x1046 = e3 * x264;
-        let x1047 = e2 * x248;
-        let x1048 = x242 * x78 + x76 * x247 - 2.0 * x1046 - 2.0 * x1047;
-        let x1049 = (2.0 * (x261 * e3) - x63 * x247) * x36 - x779 * e3 - x56 * x279;
-        let x1050 = x56 * x284;
-        let x1051 = x274 * x70;
-        let x1052 = x783 * x962 - x1050 - x1051;
-        let x1053 = x1052 * x39;
-        let x1054 = x63 * x284;
-        let x1055 = x261 * x70 + x1054 + e3 * x786;
-        let x1056 = x1055 * x36;
-        let x1057 = 2.0 * x1056 - x1053;
-        let x1058 = x52 * x305 - (2.0 * (x300 * e2) - x242 * x59) * x18 - x727 * x302
-            + x406 * x255;
-        let x1059 = x309 * x52;
-        let x1060 = x1059 - x255 * x66 + x898 * x507;
-        let x1061 = x1060 * x16;
-        let x1062 = x309 * x59;
-        let x1063 = x300 * x66 + x1062 + x516 * e2;
-        let x1064 = x1063 * x18;
-        let x1065 = -x1061 - 2.0 * x1064;
-        let x1066 = x332 + x800 * e3;
-        let x1067 = x492 * x52;
-        let x1068 = x295 * x59;
-        let x1069 = x248 * e0;
-        let x1070 = x74 * x247;
-        let x1071 = x237 * x78;
-        let x1072 = 2.0 * x1067 - 2.0 * x1068 + 4.0 * x1030 + 4.0 * x1069 - 2.0 * x1070
-            - 2.0 * x1071;
-        let x1073 = x255 * e2;
-        let x1074 = x257 * x52;
-        let x1075 = (2.0 * x1073 + x1074) * J1
-            + (x727 * gamma1_dot - 2.0 * x1073 - x1074) * J2;
-        let x1076 = x63 * x481;
-        let x1077 = x56 * x323;
-        let x1078 = x237 * x76;
-        let x1079 = x264 * e0;
-        let x1080 = x74 * x242;
-        let x1081 = 2.0 * x1076 + 2.0 * x1077 - 2.0 * x1078 - 4.0 * x1079 + 4.0 * x1010
-            + 2.0 * x1080;
-        let x1082 = x1061 + 2.0 * x1064;
-        let x1083 = 2.0 * x1068 - 2.0 * x1067 - 4.0 * x1030 - 4.0 * x1069 + 2.0 * x1070
-            + 2.0 * x1071;
-        let x1084 = 2.0 * x1078 - 2.0 * x1076 - 2.0 * x1077 + 4.0 * x1079 - 4.0 * x1010
-            - 2.0 * x1080;
-        let x1085 = x1053 - 2.0 * x1056;
-        let x1086 = x13 * x700;
-        let x1087 = x33 * x323;
-        let x1088 = x7 * x481;
-        let x1089 = x98 * x242;
-        let x1090 = x237 * x85;
-        let x1091 = x250 * e1;
-        let x1092 = 2.0 * x1087 + 2.0 * x1088 + 2.0 * x1089 - 4.0 * x1046 + 2.0 * x1090
-            - 4.0 * x1091;
-        let x1093 = x649 * e1 - x1059 - x82 * x300;
-        let x1094 = x1093 * x18;
-        let x1095 = x82 * x255 + x1062 + x655 * x906;
-        let x1096 = x1095 * x16;
-        let x1097 = -2.0 * x1094 - x1096;
-        let x1098 = x302 * x59 + x305 * x59 + (2.0 * (x300 * e1) - x242 * x52) * x18
-            + x255 * x813;
-        let x1099 = x255 * e1;
-        let x1100 = x257 * x59;
-        let x1101 = J2 * (2.0 * x1099 - x1100 - x702) + (x1100 - 2.0 * x1099) * J1;
-        let x1102 = x274 * x95;
-        let x1103 = x535 * x969 - x1016 + x1102;
-        let x1104 = x1103 * x39;
-        let x1105 = x529 * e0 - x261 * x95 + x1013;
-        let x1106 = x1105 * x36;
-        let x1107 = 2.0 * x1106 - x1104;
-        let x1108 = -x33 * x279 - x274 * x821 - (2.0 * (x261 * e0) + x7 * x247) * x36;
-        let x1109 = 2.0 * x1008 - x85 * x247 - x87 * x242 + 2.0 * x1079;
-        let x1110 = x492 * x59;
-        let x1111 = x98 * x247;
-        let x1112 = x250 * e0;
-        let x1113 = x295 * x52;
-        let x1114 = x237 * x87;
-        let x1115 = 2.0 * x1110 - 2.0 * x1111 - 4.0 * x1112 + 2.0 * x1113 + 4.0 * x1003
-            + 2.0 * x1114;
-        let x1116 = x274 * e0;
-        let x1117 = J2 * (x33 * x321 + 2.0 * x1116) - (x276 * x33 + 2.0 * x1116) * J1;
-        let x1118 = 2.0 * x1094 + x1096;
-        let x1119 = 2.0 * x1111 - 2.0 * x1110 + 4.0 * x1112 - 2.0 * x1113 - 4.0 * x1003
-            - 2.0 * x1114;
-        let x1120 = x1104 - 2.0 * x1106;
-        let x1121 = 4.0 * x1046 - 2.0 * x1087 - 2.0 * x1088 - 2.0 * x1089 - 2.0 * x1090
-            + 4.0 * x1091;
-        let x1122 = x63 * x279 - (2.0 * (x261 * e1) + x56 * x247) * x36 - x274 * x714;
-        let x1123 = x1050 + x261 * x108 + x529 * e1;
-        let x1124 = x1123 * x36;
-        let x1125 = x274 * x108;
-        let x1126 = x1054 + x971 * x535 - x1125;
-        let x1127 = x1126 * x39;
-        let x1128 = 2.0 * x1124 - x1127;
-        let x1129 = x56 * x481;
-        let x1130 = x63 * x323;
-        let x1131 = x237 * x104;
-        let x1132 = x242 * x111;
-        let x1133 = 4.0 * x1112 + 2.0 * x1129 - 2.0 * x1130 - 2.0 * x1131 + 4.0 * x1002
-            - 2.0 * x1132;
-        let x1134 = x735 * x255 - x597 * x302 - (2.0 * (x300 * e0) + x13 * x242) * x18
-            + x25 * x305;
-        let x1135 = x912 * x507 + x103 * x255 + x1025;
-        let x1136 = x16 * x1135;
-        let x1137 = x516 * e0 - x1022 - x103 * x300;
-        let x1138 = x18 * x1137;
-        let x1139 = -x1136 - 2.0 * x1138;
-        let x1140 = x257 * x25;
-        let x1141 = x255 * e0;
-        let x1142 = (x1140 + 2.0 * x1141) * J1
-            + J2 * (x597 * gamma1_dot - x1140 - 2.0 * x1141);
-        let x1143 = x295 * x13;
-        let x1144 = x492 * x25;
-        let x1145 = x100 * x237;
-        let x1146 = x111 * x247;
-        let x1147 = 2.0 * x1143 + 2.0 * x1144 - 4.0 * x1091 + 2.0 * x1145 - 4.0 * x1047
-            + 2.0 * x1146;
-        let x1148 = x104 * x247 - 2.0 * x1069 + 2.0 * x1033 - x100 * x242;
-        let x1149 = x274 * e1;
-        let x1150 = J2 * (2.0 * x1149 - x63 * x321) - (2.0 * x1149 - x63 * x276) * J1;
-        let x1151 = 4.0 * x1091 - 2.0 * x1143 - 2.0 * x1144 - 2.0 * x1145 + 4.0 * x1047
-            - 2.0 * x1146;
-        let x1152 = x1136 + 2.0 * x1138;
-        let x1153 = 2.0 * x1130 - 4.0 * x1112 - 2.0 * x1129 + 2.0 * x1131 - 4.0 * x1002
-            + 2.0 * x1132;
-        let x1154 = x1127 - 2.0 * x1124;
-        let x1155 = x300 * J1;
-        let x1156 = 2.0 * x253 + 2.0 * x254;
-        let x1157 = x255 * J1 - J2 * x1156;
-        let x1158 = x274 * (2.0 * J2 - J1);
-        let x1159 = -(x261 * J1);
+        let x736 = x56 * x31;
+        let x737 = x593 * x28;
+        let x738 = m1 * ((2.0 * x724 + x725 - 4.0 * x26 + 2.0 * x52) * e2 + x189)
+            + m2 * (e3 * (x736 - 2.0 * x57 - 4.0 * x16 + 2.0 * x737) - x458);
+        let x739 = x344 * x94;
+        let x740 = x342 * x82;
+        let x741 = 4.0 * x75 - 4.0 * x0 - x397 * J1 + d * (2.0 * x739 + 2.0 * x740)
+            + x584 * J2 - 4.0 * x95;
+        let x742 = a_ * x192;
+        let x743 = ((x365 - x10 * x192) * d - x742) * m1
+            + m2 * (x742 + (x4 * x192 - x367) * d);
+        let x744 = e3 * x94;
+        let x745 = x717 - 2.0 * x716;
+        let x746 = x82 * e2;
+        let x747 = m1 * (e1 * x714 - 2.0 * x744) + m2 * (x745 * e0 + 2.0 * x746);
+        let x748 = e3 * x82;
+        let x749 = x94 * e2;
+        let x750 = m2 * (2.0 * x748 + (-x736 - 2.0 * x737) * e0)
+            + (2.0 * x749 + x726 * e1) * m1;
+        let x751 = x106 * x344;
+        let x752 = x342 * x108;
+        let x753 = x108 * e2;
+        let x754 = x106 * e3;
+        let x755 = m2 * ((2.0 * x594 - 2.0 * (x80 * x702)) * x3 - 2.0 * x753 + x5 * x708)
+            + ((2.0 * (x36 * x93) - 2.0 * x418) * x12 - 2.0 * x754 + x591 * x730) * m1;
+        let x756 = x106 * e2;
+        let x757 = e3 * x108;
+        let x758 = m1
+            * (2.0 * x756 + x51 * x730 + x12 * (2.0 * (x93 * x723) - 2.0 * x421))
+            + m2 * (x3 * (2.0 * x596 - 2.0 * (x80 * x593)) - x56 * x708 - 2.0 * x757);
+        let x759 = x51 * x113;
+        let x760 = -(x56 * x117);
+        let x761 = x466 * e2;
+        let x762 = -(x287 * x31);
+        let x763 = x478 * x296 - x762 * e0_dot
+            + (2.0 * (x282 * e0_dot) - x470 * x246) * x28;
+        let x764 = a_ * e1_dot;
+        let x765 = d * x470 + 2.0 * x764;
+        let x766 = (8.0 * x242 - 8.0 * x243 - 8.0 * x244 + 8.0 * x245) * x28;
+        let x767 = x766 * e0_dot - x287 * x765 + x522;
+        let x768 = 2.0 * x517 - 2.0 * x293 - x518 - 2.0 * x294;
+        let x769 = x282 * x765 + x768 * e0_dot + x526;
+        let x770 = (2.0 * x305 + 2.0 * x306) - 2.0 * x307;
+        let x771 = 2.0 * x469 - 2.0 * x468;
+        let x772 = x470 * x479;
+        let x773 = x478 * x284;
+        let x774 = 2.0 * x683 - 2.0 * (Ixx * e3_dot) - 2.0 * x475;
+        let x775 = x774 * x241;
+        let x776 = Iyz * e0_dot;
+        let x777 = 2.0 * (Izz * e1_dot) + 2.0 * x776 + 2.0 * x482;
+        let x778 = x236 * x777;
+        let x779 = x249 * e1_dot;
+        let x780 = 2.0 * x772 - 2.0 * x773 + 2.0 * x775 + 4.0 * x687 - 2.0 * x778
+            + 4.0 * x779;
+        let x781 = x774 * x246;
+        let x782 = Iyz * e1_dot;
+        let x783 = 2.0 * x668 - 2.0 * x782 - 2.0 * (Iyy * e0_dot);
+        let x784 = x236 * x783;
+        let x785 = x291 * x652;
+        let x786 = x506 * x648;
+        let x787 = x249 * e0_dot;
+        let x788 = 2.0 * x784 - 2.0 * x781 + 2.0 * x785 - 4.0 * x535 - 2.0 * x786
+            + 4.0 * x787;
+        let x789 = (2.0 * x550 - 2.0 * x551) + x324;
+        let x790 = x261 * x648;
+        let x791 = x272 * e1_dot;
+        let x792 = J2 * (x790 + gamma1_dot * x648 - 2.0 * x791)
+            + (2.0 * x791 - x790) * J1;
+        let x793 = x246 * x777 - 2.0 * x508 - x241 * x783 - 2.0 * x677;
+        let x794 = x791 * x20 - x648 * x263 - x648 * x277
+            - (x241 * x652 + 2.0 * (x254 * e1_dot)) * x22;
+        let x795 = a_ * e0_dot;
+        let x796 = 2.0 * x795 - d * x652;
+        let x797 = x488 * e1_dot - x661 - x796 * x272;
+        let x798 = x500 * e1_dot - x664 + x796 * x254;
+        let x799 = -x797 * x20 - 2.0 * (x798 * x22);
+        let x800 = (2.0 * J1 - 2.0 * J2) * x287;
+        let x801 = x800 * e0_dot - x478 * x281;
+        let x802 = x767 * x31;
+        let x803 = x28 * x769;
+        let x804 = 2.0 * x781 - 2.0 * x784 - 2.0 * x785 + 4.0 * x535 + 2.0 * x786
+            - 4.0 * x787;
+        let x805 = 2.0 * x773 - 2.0 * x772 - 2.0 * x775 - 4.0 * x687 + 2.0 * x778
+            - 4.0 * x779;
+        let x806 = m2 * (x33 * e2 - x410) - J2 * (2.0 * x406 + 2.0 * x407) + 4.0 * x73
+            + (2.0 * x411 + 2.0 * x405) * J1 + (x587 + x49 * e2) * m1 - 4.0 * x42
+            - 8.0 * x43 + x429 * e2;
+        let x807 = -(e1 * x20);
+        let x808 = 4.0 * x45 + 8.0 * x46 + m2 * (x430 - 2.0 * (x27 * x401)) + 4.0 * x83
+            + J1 * (x341 + 2.0 * x336) + x409 * e1 + J2 * (x338 - 2.0 * x339 + 4.0 * e1)
+            + m1 * ((2.0 * (x18 * d) + 4.0 * (x80 * x22)) * x12 - x807 * x20);
+        let x809 = x361 * e0 - 2.0 * x447 - x600 * x108 - 4.0 * x71 - 2.0 * x448
+            + 4.0 * x85;
+        let x810 = m2 * (((4.0 * x64 - 8.0 * x63) * d - 8.0 * x93) * e3 - 4.0 * x451)
+            + ((8.0 * x129 + (x131 - 6.0 * x7) * x12) * d + 8.0 * x450) * m1;
+        let x811 = x65 * x28;
+        let x812 = 2.0 * x811 - x736;
+        let x813 = m2 * (x455 + x812 * e2 - 2.0 * x722)
+            + (2.0 * x727 - (x137 - e3 * x51) * x20 - (x453 + 2.0 * (e3 * x61)) * x22)
+                * m1;
+        let x814 = (x157 + x715) * m1 + m2 * (x458 + x719);
+        let x815 = x31 * e0;
+        let x816 = 8.0 * x69 + (x581 - 2.0 * x392) * J1 + x403 * e0 - 4.0 * x71
+            + (2.0 * (x399 * x53) - x612) * m1
+            + J2 * (2.0 * x391 + 2.0 * x392 - 2.0 * x387 - 4.0 * e0) - 4.0 * x85
+            + m2 * (-x815 * x31 - x3 * (4.0 * (x93 * x28) - 2.0 * (d * x58)));
+        let x817 = x349 * e1 - x106 * x705 - 4.0 * x45 - 2.0 * x622 + 4.0 * x83
+            - 2.0 * x623;
+        let x818 = m2 * (d * ((6.0 * x7 + x181) * x3 - 8.0 * x183) - 8.0 * x624)
+            + m1 * (e3 * (8.0 * x80 + x625) + 4.0 * x626);
+        let x819 = 2.0 * (x61 * x22) - x725;
+        let x820 = (x437 + (x819 + 4.0 * x26 - 2.0 * x52) * e2) * m1
+            + m2 * (x149 + e3 * (2.0 * x57 + 4.0 * x16 + x812));
+        let x821 = 2.0 * x712 + x713;
+        let x822 = (2.0 * x734 + x443 + e2 * x821) * m1
+            + m2
+                * ((x721 + 2.0 * (x702 * e3)) * x28 - 2.0 * x733
+                    - x31 * (e3 * x5 + x163));
+        let x823 = x412 * J2 - 4.0 * x73 - 4.0 * x110 - 4.0 * x42 + x408 * J1
+            + d * (2.0 * x752 - 2.0 * x751);
+        let x824 = m1
+            * (x12 * (2.0 * x418 - 2.0 * (x80 * x61)) - 2.0 * x749 - x51 * x807)
+            + m2 * (x56 * x815 - x3 * (2.0 * (x65 * x93) + 2.0 * x594) - 2.0 * x748);
+        let x825 = m2 * (x5 * x815 - x3 * (2.0 * x596 + 2.0 * (x702 * x93)) + 2.0 * x746)
+            + (x12 * (2.0 * x421 - 2.0 * (x80 * x36)) - 2.0 * x744 + x591 * x807) * m1;
+        let x826 = (x819 * e0 - 2.0 * x756) * m1
+            + m2 * ((x736 - 2.0 * x811) * e1 + 2.0 * x757);
+        let x827 = (e0 * x821 - 2.0 * x754) * m1 + m2 * (x745 * e1 - 2.0 * x753);
+        let x828 = x113 * x723;
+        let x829 = x702 * x117;
+        let x830 = e3 * x466;
+        let x831 = x287 * e1_dot;
+        let x832 = (x280 * x640 - 2.0 * x831) * J2 + (2.0 * x831 - x279 * x640) * J1;
+        let x833 = 2.0 * x782 - 2.0 * x669 - 2.0 * (Izz * e0_dot);
+        let x834 = 2.0 * x776 - 2.0 * x481 - 2.0 * (Iyy * e1_dot);
+        let x835 = x833 * x246 - 2.0 * x472 + 2.0 * x680 - x834 * x241;
+        let x836 = 2.0 * x635 - 2.0 * x636;
+        let x837 = 2.0 * x491 - 2.0 * x490;
+        let x838 = x22 * (x494 * x241 + 2.0 * (x254 * e0_dot)) + x657 * e0_dot
+            + x492 * x263 - x837 * x277;
+        let x839 = x494 * d + 2.0 * x764;
+        let x840 = x497 - x272 * x839 + e0_dot * x665;
+        let x841 = x659 * e0_dot + x254 * x839 + x495;
+        let x842 = x637 * x479;
+        let x843 = 2.0 * x674 + 2.0 * x510 + 2.0 * (Ixx * e2_dot);
+        let x844 = x843 * x241;
+        let x845 = x640 * x284;
+        let x846 = x236 * x833;
+        let x847 = 2.0 * x842 - 4.0 * x534 + 2.0 * x844 - 4.0 * x787 + 2.0 * x845
+            - 2.0 * x846;
+        let x848 = x291 * x494;
+        let x849 = x843 * x246;
+        let x850 = x506 * x492;
+        let x851 = x236 * x834;
+        let x852 = 2.0 * x850 - 2.0 * x848 - 2.0 * x849 + 2.0 * x851 + 4.0 * x688
+            + 4.0 * x779;
+        let x853 = x261 * x492;
+        let x854 = x272 * e0_dot;
+        let x855 = (x853 - 2.0 * x854) * J1
+            + J2 * (2.0 * x854 - x853 + gamma1_dot * x837);
+        let x856 = 2.0 * x795 - x637 * d;
+        let x857 = x768 * e1_dot - x282 * x856 + x642;
+        let x858 = x857 * x28;
+        let x859 = x287 * x856 - x644 + x766 * e1_dot;
+        let x860 = x859 * x31;
+        let x861 = (2.0 * (x282 * e1_dot) - x637 * x246) * x28 - x640 * x296
+            - x762 * e1_dot;
+        let x862 = x840 * x20 + 2.0 * (x841 * x22);
+        let x863 = 2.0 * x848 + 2.0 * x849 - 2.0 * x850 - 2.0 * x851 - 4.0 * x688
+            - 4.0 * x779;
+        let x864 = 4.0 * x534 - 2.0 * x842 - 2.0 * x844 + 4.0 * x787 - 2.0 * x845
+            + 2.0 * x846;
+        let x865 = d * x22;
+        let x866 = x36 * J2;
+        let x867 = x36 * J1;
+        let x868 = x61 * J1;
+        let x869 = J2 * x723;
+        let x870 = x866 - x867;
+        let x871 = m1 * (8.0 * (x865 * x50) - d * (x18 * x723 + x36 * x53))
+            + (x868 + x869) * x14 - x51 * x870;
+        let x872 = x51 * J1;
+        let x873 = J2 * x51;
+        let x874 = x61 * x870 + (x872 - x873) * x14
+            + (-d * (-x36 * x94 - x18 * x51) - 8.0 * (x90 * x865)) * m1;
+        let x875 = x14 * J1;
+        let x876 = x591 * J2;
+        let x877 = (8.0 * (x865 * x101) - (x18 * x591 - x106 * x36) * d) * m1
+            + x36 * x870 + x14 * (x875 + x876);
+        let x878 = x113 * x22;
+        let x879 = 2.0 * e3 * x878;
+        let x880 = e1 * x79;
+        let x881 = -(x12 * x9);
+        let x882 = x113 * (x10 * (e3 * x132 - 4.0 * x880) + x881 * e0);
+        let x883 = x141 * x20;
+        let x884 = x141 * x19;
+        let x885 = x883 - 2.0 * x884;
+        let x886 = (e3 * x885 - x105 * x144) * m1;
+        let x887 = x153 * x20;
+        let x888 = x19 * x153;
+        let x889 = x887 - 2.0 * x888;
+        let x890 = m1 * (x889 * e3 - x105 * x158);
+        let x891 = d * x723;
+        let x892 = m1 * (8.0 * (x865 * x100) - d * (-x51 * x53 - x94 * x723))
+            + (x171 - x169) * J1 + (x61 * x723 + x169) * J2;
+        let x893 = (-8.0 * (x865 * x79) - (x591 * x53 - x106 * x723) * d) * m1
+            + (x62 - x67) * J1 + J2 * (x36 * x723 - x591 * x51);
+        let x894 = -(2.0 * x878 * e2);
+        let x895 = (x881 * e1 + x10 * x184) * x113;
+        let x896 = 2.0 * x884 - x883;
+        let x897 = (e2 * x896 - x144 * x891) * m1;
+        let x898 = 2.0 * x888 - x887;
+        let x899 = (x898 * e2 - x158 * x891) * m1;
+        let x900 = J2 * (x591 * x61 - x89)
+            + (8.0 * (x865 * x125) - (x106 * x51 - x591 * x94) * d) * m1
+            + (x89 + x91) * J1;
+        let x901 = 2.0 * x878 * e1;
+        let x902 = (x10 * x201 + x34 * x192) * x113;
+        let x903 = (x885 * e1 - x52 * x144) * m1;
+        let x904 = m1 * (x889 * e1 - x158 * x52);
+        let x905 = x591 * d;
+        let x906 = -(2.0 * x878 * e0);
+        let x907 = x113 * (x213 * x12 + x10 * x218);
+        let x908 = (x896 * e0 - x905 * x144) * m1;
+        let x909 = (x898 * e0 - x158 * x905) * m1;
+        let x910 = -(x113 * x335);
+        let x911 = -(x141 * x113);
+        let x912 = -(x113 * x153);
+        let x913 = x252 - x253;
+        let x914 = x254 * x263 - x259 * x254 - x913 * x277;
+        let x915 = x259 * x241 - d * x272 * x272;
+        let x916 = x915 + x258;
+        let x917 = x916 * x20;
+        let x918 = x10 * x266;
+        let x919 = (x255 + 2.0 * x256) * x272;
+        let x920 = (2.0 * x919 - 2.0 * x273) * x12;
+        let x921 = a_ * (-2.0 * x918 - x920) - x917;
+        let x922 = x506 * x254 - x291 * x272;
+        let x923 = x913 * x318 + x261 * x561;
+        let x924 = x917 + a_ * (2.0 * x918 + x920);
+        let x925 = x915 + x265;
+        let x926 = x269 + x919;
+        let x927 = d * x28;
+        let x928 = x5 * J1;
+        let x929 = J2 * x5;
+        let x930 = x56 * J1;
+        let x931 = x56 * J2;
+        let x932 = x931 - x930;
+        let x933 = x928 - x929;
+        let x934 = x932 * x40 + x65 * x933
+            + (-d * (x27 * x65 - x40 * x58) - 8.0 * (x927 * x50)) * m2;
+        let x935 = x40 * J2;
+        let x936 = x702 * J1;
+        let x937 = x935 + x936;
+        let x938 = m2 * (8.0 * (x927 * x79) - d * (x27 * x5 + x40 * x82)) + x5 * x933
+            + x40 * x937;
+        let x939 = x593 * J1;
+        let x940 = J2 * x65;
+        let x941 = x939 + x940;
+        let x942 = m2 * (8.0 * (x927 * x100) - (-x56 * x27 - x40 * x108) * d)
+            - x56 * x933 + x40 * x941;
+        let x943 = x117 * x28;
+        let x944 = 2.0 * e2 * x943;
+        let x945 = x3 * x9;
+        let x946 = x117 * (x4 * x127 + x945 * e0);
+        let x947 = x31 * x147;
+        let x948 = x30 * x147;
+        let x949 = 2.0 * x948 - x947;
+        let x950 = (x949 * e2 - x136 * x81) * m2;
+        let x951 = x161 * x30;
+        let x952 = x161 * x31;
+        let x953 = 2.0 * x951 - x952;
+        let x954 = m2 * (e2 * x953 - x151 * x81);
+        let x955 = x937 * x65 + x932 * x5
+            + m2 * (8.0 * (x927 * x101) - d * (x65 * x82 - x5 * x58));
+        let x956 = m2 * (8.0 * (x90 * x927) - (x56 * x58 - x65 * x108) * d) - x932 * x56
+            + x941 * x65;
+        let x957 = 2.0 * e3 * x943;
+        let x958 = (x4 * (e3 * x182 - 4.0 * x880) + x945 * e1) * x117;
+        let x959 = m2 * (e3 * x949 - x136 * x107);
+        let x960 = m2 * (e3 * x953 - x151 * x107);
+        let x961 = x25;
+        let x962 = (x5 * x593 - x702 * x56) * J1
+            + m2 * (-(-x56 * x82 - x108 * x5) * d - 8.0 * (x927 * x125))
+            + J2 * (x98 - x109);
+        let x963 = -(2.0 * x943 * e0);
+        let x964 = (x4 * x204 - x192 * x64) * x117;
+        let x965 = x947 - 2.0 * x948;
+        let x966 = m2 * (x965 * e0 - x136 * x961);
+        let x967 = x952 - 2.0 * x951;
+        let x968 = (x967 * e0 - x151 * x961) * m2;
+        let x969 = -(x56 * d);
+        let x970 = -(2.0 * e1 * x943);
+        let x971 = (x3 * x216 + x4 * x215) * x117;
+        let x972 = (x965 * e1 - x136 * x969) * m2;
+        let x973 = m2 * (x967 * e1 - x151 * x969);
+        let x974 = x117 * x334;
+        let x975 = x117 * x147;
+        let x976 = x161 * x117;
+        let x977 = x286 - x285;
+        let x978 = x282 * x5;
+        let x979 = (2.0 * x242 - 2.0 * x243 - 2.0 * x244 + 2.0 * x245) * x292;
+        let x980 = x287 * (x299 + 2.0 * x300);
+        let x981 = x3 * ((2.0 * x298 + 2.0 * x979) + (2.0 * x980 - 2.0 * x302));
+        let x982 = x4 * x308;
+        let x983 = x293 * x246 - x287 * x287 * d + x306;
+        let x984 = x983 * x31;
+        let x985 = a_ * (x981 + 2.0 * x982) - x984;
+        let x986 = x282 * x296 - x282 * x293;
+        let x987 = x287 * x479 - x282 * x284;
+        let x988 = x56 * x282;
+        let x989 = a_ * (-x981 - 2.0 * x982) + x984;
+        let x990 = x303 + x979 + x980;
+        let x991 = x257 * x14;
+        let x992 = x18 * x254 - x991 + e3 * x659;
+        let x993 = x992 * x22;
+        let x994 = x36 * x257;
+        let x995 = e3 * x665 - x18 * x272 - x994;
+        let x996 = x995 * x20;
+        let x997 = -2.0 * x993 - x996;
+        let x998 = x22 * (2.0 * (e3 * x254) - x241 * x14) - x36 * x277 - x36 * x263
+            + e3 * x657;
+        let x999 = x506 * x36;
+        let x1000 = x48 * x246;
+        let x1001 = x236 * x44;
+        let x1002 = x247 * e1;
+        let x1003 = x291 * x14;
+        let x1004 = x249 * e2;
+        let x1005 = 2.0 * x1001 - 2.0 * x999 - 2.0 * x1000 - 4.0 * x1002 + 2.0 * x1003
+            + 4.0 * x1004;
+        let x1006 = x800 * e2 + x329;
+        let x1007 = e3 * x272;
+        let x1008 = x36 * x261;
+        let x1009 = (-2.0 * x1007 - x1008) * J1
+            + J2 * (2.0 * x1007 + x36 * gamma1_dot + x1008);
+        let x1010 = e2 * x311;
+        let x1011 = e3 * x247;
+        let x1012 = x2 * x246 - x44 * x241 - 2.0 * x1010 + 2.0 * x1011;
+        let x1013 = x5 * x479;
+        let x1014 = x236 * x2;
+        let x1015 = x249 * e3;
+        let x1016 = x48 * x241;
+        let x1017 = e1 * x311;
+        let x1018 = x40 * x284;
+        let x1019 = 2.0 * x1016 - 2.0 * x1013 - 2.0 * x1014 - 4.0 * x1015 + 4.0 * x1017
+            + 2.0 * x1018;
+        let x1020 = (2.0 * (x282 * e2) + x5 * x246) * x28 - x40 * x296 - x287 * x588;
+        let x1021 = x27 * x287;
+        let x1022 = x40 * x301;
+        let x1023 = x1021 - x1022 + x766 * e2;
+        let x1024 = x1023 * x31;
+        let x1025 = x5 * x301;
+        let x1026 = x768 * e2 - x1025 - x282 * x27;
+        let x1027 = x1026 * x28;
+        let x1028 = 2.0 * x1027 - x1024;
+        let x1029 = x14 * x694;
+        let x1030 = 2.0 * x999 + 2.0 * x1000 - 2.0 * x1001 + 4.0 * x1002 - 2.0 * x1003
+            - 4.0 * x1004;
+        let x1031 = 2.0 * x993 + x996;
+        let x1032 = 2.0 * x1013 + 2.0 * x1014 + 4.0 * x1015 - 2.0 * x1016 - 4.0 * x1017
+            - 2.0 * x1018;
+        let x1033 = x1024 - 2.0 * x1027;
+        let x1034 = x5 * x701;
+        let x1035 = x65 * x284;
+        let x1036 = x56 * x479;
+        let x1037 = x236 * x74;
+        let x1038 = x311 * e0;
+        let x1039 = x72 * x241;
+        let x1040 = 2.0 * x1035 + 2.0 * x1036 - 2.0 * x1037 - 4.0 * x1038 + 4.0 * x1004
+            + 2.0 * x1039;
+        let x1041 = x247 * e0;
+        let x1042 = x291 * x51;
+        let x1043 = x72 * x246;
+        let x1044 = x506 * x61;
+        let x1045 = x236 * x76;
+        let x1046 = 4.0 * x1015 + 4.0 * x1041 - 2.0 * x1042 - 2.0 * x1043 + 2.0 * x1044
+            - 2.0 * x1045;
+        let x1047 = e3 * x311;
+        let x1048 = e2 * x247;
+        let x1049 = x241 * x76 + x74 * x246 - 2.0 * x1047 - 2.0 * x1048;
+        let x1050 = x800 * e3 + x332;
+        let x1051 = x272 * e2;
+        let x1052 = x261 * x61;
+        let x1053 = (2.0 * x1051 + x1052) * J1
+            + (gamma1_dot * x723 - 2.0 * x1051 - x1052) * J2;
+        let x1054 = x61 * x263 - x277 * x723 - (2.0 * (x254 * e2) - x51 * x241) * x22
+            + x413 * x272;
+        let x1055 = x61 * x257;
+        let x1056 = x1055 - x53 * x272 + x488 * e2;
+        let x1057 = x1056 * x20;
+        let x1058 = x51 * x257;
+        let x1059 = x1058 + x53 * x254 + x500 * e2;
+        let x1060 = x1059 * x22;
+        let x1061 = -x1057 - 2.0 * x1060;
+        let x1062 = (2.0 * (x282 * e3) - x56 * x246) * x28 - x762 * e3 - x65 * x296;
+        let x1063 = x287 * x58;
+        let x1064 = x65 * x301;
+        let x1065 = e3 * x766 - x1063 - x1064;
+        let x1066 = x1065 * x31;
+        let x1067 = x56 * x301;
+        let x1068 = x1067 + e3 * x768 + x282 * x58;
+        let x1069 = x1068 * x28;
+        let x1070 = 2.0 * x1069 - x1066;
+        let x1071 = x1057 + 2.0 * x1060;
+        let x1072 = 2.0 * x1042 - 4.0 * x1015 - 4.0 * x1041 + 2.0 * x1043 - 2.0 * x1044
+            + 2.0 * x1045;
+        let x1073 = x1066 - 2.0 * x1069;
+        let x1074 = 2.0 * x1037 - 2.0 * x1035 - 2.0 * x1036 + 4.0 * x1038 - 4.0 * x1004
+            - 2.0 * x1039;
+        let x1075 = x272 * e1;
+        let x1076 = x51 * x261;
+        let x1077 = (x1076 - 2.0 * x1075) * J1 + (2.0 * x1075 - x697 - x1076) * J2;
+        let x1078 = x36 * x694;
+        let x1079 = x1022 - x282 * x82 + x519 * e0;
+        let x1080 = x1079 * x28;
+        let x1081 = x287 * x82;
+        let x1082 = x1081 - x1025 + x525 * e0;
+        let x1083 = x1082 * x31;
+        let x1084 = 2.0 * x1080 - x1083;
+        let x1085 = -x287 * x815 - (x40 * x246 + 2.0 * (x282 * e0)) * x28 - x5 * x296;
+        let x1086 = x665 * e1 + x1058 + x94 * x272;
+        let x1087 = x1086 * x20;
+        let x1088 = x659 * e1 - x94 * x254 - x1055;
+        let x1089 = x1088 * x22;
+        let x1090 = -x1087 - 2.0 * x1089;
+        let x1091 = (2.0 * (x254 * e1) - x61 * x241) * x22 + x51 * x277 + x272 * x807
+            + x51 * x263;
+        let x1092 = x287 * e0;
+        let x1093 = (2.0 * x1092 + x280 * x5) * J2 - (x279 * x5 + 2.0 * x1092) * J1;
+        let x1094 = 2.0 * x1002 - x84 * x246 - x86 * x241 + 2.0 * x1038;
+        let x1095 = x5 * x284;
+        let x1096 = x40 * x479;
+        let x1097 = x96 * x241;
+        let x1098 = x236 * x84;
+        let x1099 = x249 * e1;
+        let x1100 = 2.0 * x1095 + 2.0 * x1096 + 2.0 * x1097 - 4.0 * x1047 + 2.0 * x1098
+            - 4.0 * x1099;
+        let x1101 = x506 * x51;
+        let x1102 = x96 * x246;
+        let x1103 = x249 * e0;
+        let x1104 = x291 * x61;
+        let x1105 = x236 * x86;
+        let x1106 = 2.0 * x1101 - 2.0 * x1102 - 4.0 * x1103 + 2.0 * x1104 + 4.0 * x1011
+            + 2.0 * x1105;
+        let x1107 = x1087 + 2.0 * x1089;
+        let x1108 = 2.0 * x1102 - 2.0 * x1101 + 4.0 * x1103 - 2.0 * x1104 - 4.0 * x1011
+            - 2.0 * x1105;
+        let x1109 = 4.0 * x1047 - 2.0 * x1095 - 2.0 * x1096 - 2.0 * x1097 - 2.0 * x1098
+            + 4.0 * x1099;
+        let x1110 = x1083 - 2.0 * x1080;
+        let x1111 = x730 * x272 - x22 * (2.0 * (x254 * e0) + x36 * x241) - x591 * x277
+            + x14 * x263;
+        let x1112 = x500 * e0 - x106 * x254 - x994;
+        let x1113 = x1112 * x22;
+        let x1114 = x991 + x106 * x272 + x488 * e0;
+        let x1115 = x1114 * x20;
+        let x1116 = -2.0 * x1113 - x1115;
+        let x1117 = x236 * x104;
+        let x1118 = x56 * x284;
+        let x1119 = x241 * x111;
+        let x1120 = x65 * x479;
+        let x1121 = 4.0 * x1103 - 2.0 * x1117 + 4.0 * x1010 - 2.0 * x1118 - 2.0 * x1119
+            + 2.0 * x1120;
+        let x1122 = x287 * x108;
+        let x1123 = x1067 - x1122 + x525 * e1;
+        let x1124 = x1123 * x31;
+        let x1125 = x282 * x108 + x519 * e1 + x1064;
+        let x1126 = x1125 * x28;
+        let x1127 = 2.0 * x1126 - x1124;
+        let x1128 = x56 * x296 - (2.0 * (x282 * e1) + x65 * x246) * x28 - x287 * x708;
+        let x1129 = x287 * e1;
+        let x1130 = J2 * (2.0 * x1129 - x56 * x280) - (2.0 * x1129 - x279 * x56) * J1;
+        let x1131 = x104 * x246 - 2.0 * x1041 + 2.0 * x1017 - x103 * x241;
+        let x1132 = x291 * x36;
+        let x1133 = x506 * x14;
+        let x1134 = x103 * x236;
+        let x1135 = x111 * x246;
+        let x1136 = 2.0 * x1132 + 2.0 * x1133 - 4.0 * x1099 + 2.0 * x1134 - 4.0 * x1048
+            + 2.0 * x1135;
+        let x1137 = x261 * x14;
+        let x1138 = x272 * e0;
+        let x1139 = (x1137 + 2.0 * x1138) * J1
+            + J2 * (x591 * gamma1_dot - x1137 - 2.0 * x1138);
+        let x1140 = 2.0 * x1113 + x1115;
+        let x1141 = 4.0 * x1099 - 2.0 * x1132 - 2.0 * x1133 - 2.0 * x1134 + 4.0 * x1048
+            - 2.0 * x1135;
+        let x1142 = x1124 - 2.0 * x1126;
+        let x1143 = 2.0 * x1117 - 4.0 * x1103 - 4.0 * x1010 + 2.0 * x1118 + 2.0 * x1119
+            - 2.0 * x1120;
+        let x1144 = 2.0 * x270 + 2.0 * x271;
+        let x1145 = x272 * J1 - J2 * x1144;
+        let x1146 = x254 * J1;
+        let x1147 = x261 * x22;
+        let x1148 = x279 * x28;
+        let x1149 = x287 * (2.0 * J2 - J1);
+        let x1150 = -(x282 * J1);
         Derivatives {
             qdot: [
                 e0_dot,
@@ -2834,94 +2815,95 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    (x8 + x14) * J1 - 2.0 * (e3 * x2) + (x20 * x21 + x27 * x27) * m1
-                        - 2.0 * (x30 * e2) + m2 * (x35 * x35 + x41 * x42)
-                        - 2.0 * (x46 * e1) + J2 * (x47 + x48 + x49),
-                    x79,
-                    x99,
-                    x114,
-                    x118,
-                    x122,
+                    J2 * (x6 + x9 + x15) - 2.0 * (e3 * x2) + (x18 * x18 + x24 * x7) * m1
+                        + m2 * (x27 * x27 + x33 * x8) + (x37 + x41) * J1
+                        - 2.0 * (x44 * e2) - 2.0 * (x48 * e1),
+                    x77,
+                    x97,
+                    x112,
+                    x116,
+                    x120,
                     x133,
-                    x151,
+                    x150,
+                    x166,
                     x167,
-                    x168,
                 ],
                 [
-                    x79,
-                    (x70 * x70 + x41 * x21) * m2 + 2.0 * (x76 * e2)
-                        + (x47 + x169 + x170) * J2 + J1 * (x171 + x172)
-                        + (x20 * x42 + x66 * x66) * m1 + 2.0 * (x74 * e0)
-                        + 2.0 * (e3 * x78),
-                    x174,
-                    x176,
+                    x77,
+                    (x9 + x168 + x169) * J2 + (x33 * x7 + x58 * x58) * m2
+                        + m1 * (x24 * x8 + x53 * x53) + 2.0 * (x74 * e2)
+                        + (x170 + x171) * J1 + 2.0 * (x72 * e0) + 2.0 * (e3 * x76),
+                    x173,
+                    x175,
+                    x177,
                     x178,
-                    x179,
                     x186,
                     x188,
                     x190,
                     x191,
                 ],
                 [
-                    x99,
-                    x174,
-                    (x82 * x82 + x125 * x20) * m1 + 2.0 * (x98 * e3)
-                        + m2 * (x41 * x126 + x95 * x95) + 2.0 * (x87 * e0)
-                        + (x48 + x169) * J1 + 2.0 * (x85 * e1) + (x8 + x171 + x192) * J2,
+                    x97,
+                    x173,
+                    2.0 * (x96 * e3) + 2.0 * (x86 * e0) + J1 * (x6 + x169)
+                        + m2 * (x33 * x123 + x82 * x82) + (x192 + x41 + x171) * J2
+                        + 2.0 * (x84 * e1) + (x122 * x24 + x94 * x94) * m1,
                     x193,
                     x194,
                     x196,
+                    x205,
                     x207,
                     x209,
-                    x211,
-                    x212,
+                    x210,
                 ],
                 [
-                    x114,
-                    x176,
+                    x112,
+                    x175,
                     x193,
-                    2.0 * (x100 * e1) + (x20 * x126 + x103 * x103) * m1
-                        + 2.0 * (x104 * e0) + (x49 + x170) * J1 + 2.0 * (x111 * e2)
-                        + (x192 + x172 + x14) * J2 + m2 * (x108 * x108 + x125 * x41),
-                    x213,
-                    x214,
+                    (x15 + x168) * J1 + 2.0 * (x103 * e1)
+                        + (x24 * x123 + x106 * x106) * m1 + (x37 + x192 + x170) * J2
+                        + m2 * (x108 * x108 + x122 * x33) + 2.0 * (x104 * e0)
+                        + 2.0 * (x111 * e2),
+                    x211,
+                    x212,
+                    x219,
                     x220,
                     x221,
                     x222,
-                    x223,
                 ],
-                [x118, x178, x194, x213, x115 * d + J2, 0.0, x227, x228, x229, 0.0],
-                [x122, x179, x196, x214, 0.0, J2 + x119 * d, x232, x233, x234, 0.0],
-                [x133, x186, x207, x220, x227, x232, x236, 0.0, 0.0, 0.0],
-                [x151, x188, x209, x221, x228, x233, 0.0, x236, 0.0, 0.0],
-                [x167, x190, x211, x222, x229, x234, 0.0, 0.0, x236, 0.0],
-                [x168, x191, x212, x223, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x116, x177, x194, x211, x113 * d + J2, 0.0, x226, x227, x228, 0.0],
+                [x120, x178, x196, x212, 0.0, J2 + x117 * d, x231, x232, x233, 0.0],
+                [x133, x186, x205, x219, x226, x231, x235, 0.0, 0.0, 0.0],
+                [x150, x188, x207, x220, x227, x232, 0.0, x235, 0.0, 0.0],
+                [x166, x190, x209, x221, x228, x233, 0.0, 0.0, x235, 0.0],
+                [x167, x191, x210, x222, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             force: [
-                2.0 * (e3 * x252) - x260 * x25 - x263 * x7 + 2.0 * (x267 * e2)
-                    + 2.0 * (x270 * e1) - m2 * (x35 * x280 + x293 * e2)
-                    + (2.0 * (x295 * e3) + x297) * x300 - (x27 * x306 + e3 * x320) * m1
-                    + x274 * (x33 * x322 + 2.0 * (e2 * x323)),
-                x325 - (x66 * x306 + x324 * e2) * m1 - 2.0 * (x252 * e2) - x56 * x263
-                    - x300 * (2.0 * (x295 * e2) + x296 * x52)
-                    + e3 * (2.0 * (x274 * x323) + x326) - 2.0 * (x270 * e0)
-                    - m2 * (e3 * x293 - x70 * x280) - x63 * x327,
-                2.0 * (x252 * e1) + (2.0 * (x295 * e1) - x328) * x300 - 2.0 * (x270 * e3)
-                    - x260 * x52 - 2.0 * (x267 * e0) - m2 * (x329 * e0 + x95 * x280)
-                    - m1 * (e1 * x320 - x82 * x306) - (x330 + 2.0 * (e0 * x323)) * x274
-                    - x33 * x263,
-                2.0 * (x270 * e2) - x331 - x274 * (x332 + 2.0 * (e1 * x323)) + x63 * x263
-                    - 2.0 * (x267 * e1) - (x324 * e0 - x103 * x306) * m1
-                    - 2.0 * (x252 * e0) - (2.0 * (x295 * e0) + x333) * x300
-                    - m2 * (x329 * e1 - x108 * x280),
-                x300 * x259 - x318 * x115,
-                x274 * x334 - x119 * x286,
-                -((x231 * x286 + x291 * x335 + x225 * x280) * m2
-                    + (x230 * x306 + x336 * x314 + x318 * x226) * m1),
-                -(m2 * (x286 * x146 + x291 * x148 + x136 * x280)
-                    + (x141 * x314 + x145 * x306 + x137 * x318) * m1),
-                -(m2 * (x161 * x280 + x291 * x156 + x158 * x286)
-                    + m1 * (x152 * x306 + x162 * x314 + x318 * x164)),
+                2.0 * (e3 * x251) - m1 * (e3 * x276 + x18 * x278)
+                    + (x5 * x281 + 2.0 * (e2 * x284)) * x287
+                    + (x289 + 2.0 * (x291 * e3)) * x254 - m2 * (x27 * x297 + x310 * e2)
+                    + 2.0 * (x314 * e2) + 2.0 * (x317 * e1) - x320 * x14 - x40 * x322,
+                x323 - 2.0 * (x251 * e2) - x322 * x65
+                    - x254 * (2.0 * (x291 * e2) + x288 * x61)
+                    + e3 * (2.0 * (x287 * x284) + x324) - 2.0 * (x317 * e0)
+                    - m2 * (e3 * x310 - x58 * x297) - x56 * x325
+                    - m1 * (x53 * x278 + x326 * e2),
+                2.0 * (x251 * e1) - m2 * (x82 * x297 + x327 * e0)
+                    + x254 * (2.0 * (x291 * e1) - x328) - x61 * x320 - 2.0 * (x317 * e3)
+                    - 2.0 * (x314 * e0) - (2.0 * (e0 * x284) + x329) * x287 - x322 * x5
+                    - m1 * (e1 * x276 - x94 * x278),
+                x56 * x322 - x330 - x254 * (2.0 * (x291 * e0) + x331) + 2.0 * (x317 * e2)
+                    - (2.0 * (e1 * x284) + x332) * x287 - 2.0 * (x314 * e1)
+                    - (x326 * e0 - x106 * x278) * m1 - m2 * (x327 * e1 - x108 * x297)
+                    - 2.0 * (x251 * e0),
+                x254 * x319 - x274 * x113,
+                x287 * x333 - x117 * x303,
+                -((x230 * x303 + x308 * x334 + x224 * x297) * m2
+                    + (x229 * x278 + x335 * x266 + x274 * x225) * m1),
+                -(m2 * (x303 * x145 + x308 * x147 + x136 * x297)
+                    + (x141 * x266 + x144 * x278 + x137 * x274) * m1),
+                -(m2 * (x151 * x297 + x308 * x161 + x163 * x303)
+                    + m1 * (x158 * x278 + x153 * x266 + x274 * x155)),
                 -(2.0 * (e1_dot * e1_dot) + 2.0 * (e2_dot * e2_dot)
                     + 2.0 * (e3_dot * e3_dot) + 2.0 * (e0_dot * e0_dot)),
             ],
@@ -2948,319 +2930,319 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [
-                    [0.0, x347, x355, x363, 0.0, 0.0, x369, x378, x387, 2.0],
+                    [0.0, x346, x354, x362, 0.0, 0.0, x368, x377, x386, 2.0],
                     [
-                        x347,
-                        8.0 * x71 + d * (4.0 * x388 + 4.0 * x389)
-                            + (4.0 * x390 + 4.0 * x391) * J2 + 8.0 * x72 - 8.0 * x73
-                            + (4.0 * x392 + 4.0 * x393) * J1,
-                        x405,
-                        x415,
+                        x346,
+                        8.0 * x69 + (4.0 * x387 + 4.0 * x388) * J1 + 8.0 * x70
+                            - 8.0 * x71 + (4.0 * x389 + 4.0 * x390) * d
+                            + J2 * (4.0 * x391 + 4.0 * x392),
+                        x404,
+                        x414,
                         0.0,
                         0.0,
-                        x417,
-                        x421,
-                        x425,
+                        x416,
+                        x420,
+                        x424,
                         0.0,
                     ],
                     [
-                        x355,
-                        x405,
-                        4.0 * x426 - 8.0 * x71 + x427 * e0 + 8.0 * x86
-                            - 2.0 * (x82 * x354) + 4.0 * x428,
-                        x432,
+                        x354,
+                        x404,
+                        x425 * e0 - 8.0 * x69 - 2.0 * (x94 * x348) + 4.0 * x426
+                            + 8.0 * x85 + 4.0 * x427,
+                        x431,
                         0.0,
                         x195,
-                        x437,
-                        x442,
-                        x447,
+                        x436,
+                        x441,
+                        x446,
                         0.0,
                     ],
                     [
-                        x363,
-                        x415,
-                        x432,
-                        8.0 * x73 - 2.0 * (x108 * x362) + 4.0 * x448 - 8.0 * x86
-                            + 4.0 * x449 + x450 * e0,
-                        x177,
+                        x362,
+                        x414,
+                        x431,
+                        4.0 * x447 + 8.0 * x71 + 4.0 * x448 - 2.0 * (x108 * x358)
+                            - 8.0 * x85 + x449 * e0,
+                        x176,
                         0.0,
-                        x454,
+                        x452,
+                        x457,
                         x459,
-                        x461,
                         0.0,
                     ],
-                    [0.0, 0.0, 0.0, x177, 0.0, 0.0, x462, x463, x464, 0.0],
-                    [0.0, 0.0, x195, 0.0, 0.0, 0.0, x465, x466, x467, 0.0],
-                    [x369, x417, x437, x454, x462, x465, x469, 0.0, 0.0, 0.0],
-                    [x378, x421, x442, x459, x463, x466, 0.0, x469, 0.0, 0.0],
-                    [x387, x425, x447, x461, x464, x467, 0.0, 0.0, x469, 0.0],
+                    [0.0, 0.0, 0.0, x176, 0.0, 0.0, x460, x461, x462, 0.0],
+                    [0.0, 0.0, x195, 0.0, 0.0, 0.0, x463, x464, x465, 0.0],
+                    [x368, x416, x436, x452, x460, x463, x467, 0.0, 0.0, 0.0],
+                    [x377, x420, x441, x457, x461, x464, 0.0, x467, 0.0, 0.0],
+                    [x386, x424, x446, x459, x462, x465, 0.0, 0.0, x467, 0.0],
                     [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        d * (4.0 * x346 - 4.0 * x344) - 8.0 * x43 - 8.0 * x44 + 8.0 * x45
-                            + (4.0 * x337 + 4.0 * x338) * J2
-                            - (4.0 * x341 - 4.0 * x340) * J1,
+                        8.0 * x47 - 8.0 * x45 - 8.0 * x46 + (4.0 * x343 - 4.0 * x345) * d
+                            + J2 * (4.0 * x336 + 4.0 * x337)
+                            - J1 * (4.0 * x339 - 4.0 * x340),
+                        x583,
+                        x586,
                         x589,
-                        x592,
+                        0.0,
+                        0.0,
+                        x590,
                         x595,
+                        x597,
                         0.0,
-                        0.0,
-                        x596,
+                    ],
+                    [x583, 0.0, x601, x604, 0.0, 0.0, x368, x607, x609, 2.0],
+                    [
+                        x586,
                         x601,
-                        x603,
+                        8.0 * x46 - 4.0 * x610 + 2.0 * (x600 * x82) + 8.0 * x83
+                            + 4.0 * x611 + x449 * e1,
+                        x614,
+                        x115,
                         0.0,
-                    ],
-                    [x589, 0.0, x607, x610, 0.0, 0.0, x369, x613, x615, 2.0],
-                    [
-                        x592,
-                        x607,
-                        8.0 * x44 + 8.0 * x84 + x450 * e1 - 4.0 * x616
-                            + 2.0 * (x606 * x95) + 4.0 * x617,
+                        x618,
                         x620,
-                        x117,
-                        0.0,
-                        x624,
-                        x626,
-                        x627,
+                        x621,
                         0.0,
                     ],
                     [
-                        x595,
-                        x610,
-                        x620,
-                        8.0 * x43 - 2.0 * (x103 * x354) + 4.0 * x628 + x427 * e1
-                            - 8.0 * x84 + 4.0 * x629,
+                        x589,
+                        x604,
+                        x614,
+                        8.0 * x45 - 2.0 * (x106 * x348) + 4.0 * x622 + x425 * e1
+                            - 8.0 * x83 + 4.0 * x623,
                         0.0,
                         x195,
-                        x633,
-                        x634,
-                        x635,
+                        x627,
+                        x628,
+                        x629,
                         0.0,
                     ],
-                    [0.0, 0.0, x117, 0.0, 0.0, 0.0, x636, x637, x463, 0.0],
-                    [0.0, 0.0, 0.0, x195, 0.0, 0.0, x638, x639, x466, 0.0],
-                    [x596, x369, x624, x633, x636, x638, x640, 0.0, 0.0, 0.0],
-                    [x601, x613, x626, x634, x637, x639, 0.0, x640, 0.0, 0.0],
-                    [x603, x615, x627, x635, x463, x466, 0.0, 0.0, x640, 0.0],
+                    [0.0, 0.0, x115, 0.0, 0.0, 0.0, x630, x631, x461, 0.0],
+                    [0.0, 0.0, 0.0, x195, 0.0, 0.0, x632, x633, x464, 0.0],
+                    [x590, x368, x618, x627, x630, x632, x634, 0.0, 0.0, 0.0],
+                    [x595, x607, x620, x628, x631, x633, 0.0, x634, 0.0, 0.0],
+                    [x597, x609, x621, x629, x461, x464, 0.0, 0.0, x634, 0.0],
                     [0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        4.0 * x350 - 8.0 * x28 - 8.0 * x29 + 2.0 * (x27 * x711)
-                            - 4.0 * x352 + x427 * e2,
-                        x712,
-                        x713,
-                        x715,
+                        2.0 * (x18 * x705) - 4.0 * x351 - 8.0 * x42 - 8.0 * x43
+                            + 4.0 * x353 + x425 * e2,
+                        x706,
+                        x707,
+                        x709,
                         0.0,
-                        x121,
-                        x716,
-                        x725,
-                        x733,
+                        x119,
+                        x711,
+                        x720,
+                        x728,
                         0.0,
                     ],
                     [
-                        x712,
-                        4.0 * x605 - 8.0 * x75 - 4.0 * x604 + 8.0 * x29 + x450 * e2
-                            - 2.0 * (x70 * x362),
-                        x734,
-                        x736,
-                        x177,
+                        x706,
+                        4.0 * x599 - 4.0 * x598 - 8.0 * x73 - 2.0 * (x58 * x358)
+                            + 8.0 * x43 + x449 * e2,
+                        x729,
+                        x731,
+                        x176,
                         0.0,
-                        x737,
-                        x740,
-                        x743,
+                        x732,
+                        x735,
+                        x738,
                         0.0,
                     ],
-                    [x713, x734, 0.0, x746, 0.0, 0.0, x748, x752, x755, 2.0],
+                    [x707, x729, 0.0, x741, 0.0, 0.0, x743, x747, x750, 2.0],
                     [
-                        x715,
-                        x736,
-                        x746,
-                        d * (4.0 * x757 - 4.0 * x756) + 8.0 * x75 + 8.0 * x110
-                            + 8.0 * x28 - (4.0 * x413 - 4.0 * x408) * J1
-                            + (4.0 * x410 - 4.0 * x409) * J2,
+                        x709,
+                        x731,
+                        x741,
+                        (4.0 * x751 - 4.0 * x752) * d + 8.0 * x73 + 8.0 * x110
+                            - (4.0 * x407 - 4.0 * x406) * J1 + 8.0 * x42
+                            + (4.0 * x411 - 4.0 * x405) * J2,
                         0.0,
                         0.0,
-                        x596,
-                        x760,
-                        x763,
+                        x590,
+                        x755,
+                        x758,
                         0.0,
                     ],
-                    [0.0, x177, 0.0, 0.0, 0.0, 0.0, x464, x636, x764, 0.0],
-                    [x121, 0.0, 0.0, 0.0, 0.0, 0.0, x467, x638, x765, 0.0],
-                    [x716, x737, x748, x596, x464, x467, x766, 0.0, 0.0, 0.0],
-                    [x725, x740, x752, x760, x636, x638, 0.0, x766, 0.0, 0.0],
-                    [x733, x743, x755, x763, x764, x765, 0.0, 0.0, x766, 0.0],
+                    [0.0, x176, 0.0, 0.0, 0.0, 0.0, x462, x630, x759, 0.0],
+                    [x119, 0.0, 0.0, 0.0, 0.0, 0.0, x465, x632, x760, 0.0],
+                    [x711, x732, x743, x590, x462, x465, x761, 0.0, 0.0, 0.0],
+                    [x720, x735, x747, x755, x630, x632, 0.0, x761, 0.0, 0.0],
+                    [x728, x738, x750, x758, x759, x760, 0.0, 0.0, x761, 0.0],
                     [0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        2.0 * (x35 * x606) + 4.0 * x357 - 8.0 * x0 + 4.0 * x359
-                            - 8.0 * x1 + x450 * e3,
-                        x812,
-                        x814,
-                        x815,
-                        x117,
+                        4.0 * x356 - 8.0 * x0 + 2.0 * (x27 * x600) + 4.0 * x360
+                            - 8.0 * x1 + x449 * e3,
+                        x806,
+                        x808,
+                        x809,
+                        x115,
                         0.0,
-                        x816,
-                        x819,
-                        x820,
+                        x810,
+                        x813,
+                        x814,
                         0.0,
                     ],
                     [
-                        x812,
-                        8.0 * x77 - 4.0 * x608 + 4.0 * x609 + 2.0 * (x711 * x66)
-                            + x427 * e3 + 8.0 * x1,
+                        x806,
+                        8.0 * x75 - 4.0 * x602 + 2.0 * (x53 * x705) + 4.0 * x603
+                            + x425 * e3 + 8.0 * x1,
+                        x816,
+                        x817,
+                        0.0,
+                        x119,
+                        x818,
+                        x820,
                         x822,
+                        0.0,
+                    ],
+                    [
+                        x808,
+                        x816,
+                        (4.0 * x396 + 4.0 * x394) * J1 - 8.0 * x75 + 8.0 * x0
+                            + (4.0 * x395 - 4.0 * x393) * J2 + 8.0 * x95
+                            + d * (-4.0 * x739 - 4.0 * x740),
                         x823,
                         0.0,
-                        x121,
+                        0.0,
+                        x416,
                         x824,
-                        x826,
-                        x828,
+                        x825,
                         0.0,
                     ],
-                    [
-                        x814,
-                        x822,
-                        (4.0 * x404 - 4.0 * x394) * J2 - 8.0 * x77
-                            + (4.0 * x395 + 4.0 * x396) * J1 + 8.0 * x0
-                            + (-4.0 * x744 - 4.0 * x745) * d + 8.0 * x97,
-                        x829,
-                        0.0,
-                        0.0,
-                        x417,
-                        x830,
-                        x831,
-                        0.0,
-                    ],
-                    [x815, x823, x829, 0.0, 0.0, 0.0, x748, x832, x833, 2.0],
-                    [x117, 0.0, 0.0, 0.0, 0.0, 0.0, x834, x462, x636, 0.0],
-                    [0.0, x121, 0.0, 0.0, 0.0, 0.0, x835, x465, x638, 0.0],
-                    [x816, x824, x417, x748, x834, x835, x836, 0.0, 0.0, 0.0],
-                    [x819, x826, x830, x832, x462, x465, 0.0, x836, 0.0, 0.0],
-                    [x820, x828, x831, x833, x636, x638, 0.0, 0.0, x836, 0.0],
+                    [x809, x817, x823, 0.0, 0.0, 0.0, x743, x826, x827, 2.0],
+                    [x115, 0.0, 0.0, 0.0, 0.0, 0.0, x828, x460, x630, 0.0],
+                    [0.0, x119, 0.0, 0.0, 0.0, 0.0, x829, x463, x632, 0.0],
+                    [x810, x818, x416, x743, x828, x829, x830, 0.0, 0.0, 0.0],
+                    [x813, x820, x824, x826, x460, x463, 0.0, x830, 0.0, 0.0],
+                    [x814, x822, x825, x827, x630, x632, 0.0, 0.0, x830, 0.0],
                     [0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        (2.0 * x873 - 2.0 * x872) * x25
-                            - (8.0 * (x21 * x871) + 2.0 * (x102 * x27)) * m1,
+                        (2.0 * x866 - 2.0 * x867) * x14
+                            - m1 * (8.0 * (x7 * x865) + 2.0 * (x18 * x105)),
+                        x871,
+                        x874,
                         x877,
-                        x880,
-                        x884,
-                        x885,
+                        x879,
                         0.0,
-                        x887,
-                        x891,
-                        x895,
+                        x882,
+                        x886,
+                        x890,
                         0.0,
                     ],
                     [
-                        x877,
-                        -(2.0 * (x66 * x896) + 8.0 * (x871 * x42)) * m1
-                            - (2.0 * x874 + 2.0 * x875) * x59,
+                        x871,
+                        -(2.0 * (x53 * x891) + 8.0 * (x865 * x8)) * m1
+                            - (2.0 * x868 + 2.0 * x869) * x51,
+                        x892,
+                        x893,
+                        x894,
+                        0.0,
+                        x895,
                         x897,
                         x899,
-                        x900,
-                        0.0,
-                        x901,
-                        x903,
-                        x905,
                         0.0,
                     ],
                     [
-                        x880,
-                        x897,
-                        (2.0 * x879 - 2.0 * x878) * x52
-                            - (8.0 * (x125 * x871) - 2.0 * (x82 * x65)) * m1,
+                        x874,
+                        x892,
+                        (2.0 * x872 - 2.0 * x873) * x61
+                            - (8.0 * (x122 * x865) - 2.0 * (x94 * x52)) * m1,
+                        x900,
+                        x901,
+                        0.0,
+                        x902,
+                        x903,
+                        x904,
+                        0.0,
+                    ],
+                    [
+                        x877,
+                        x893,
+                        x900,
+                        (2.0 * x875 + 2.0 * x876) * x36
+                            - (8.0 * (x123 * x865) - 2.0 * (x106 * x905)) * m1,
+                        x906,
+                        0.0,
                         x907,
                         x908,
-                        0.0,
                         x909,
-                        x910,
-                        x911,
                         0.0,
                     ],
-                    [
-                        x884,
-                        x899,
-                        x907,
-                        (2.0 * x881 + 2.0 * x882) * x13
-                            - (8.0 * (x912 * x452) - 2.0 * (x103 * x913)) * m1,
-                        x914,
-                        0.0,
-                        x915,
-                        x916,
-                        x917,
-                        0.0,
-                    ],
-                    [x885, x900, x908, x914, 0.0, 0.0, x918, x919, x920, 0.0],
+                    [x879, x894, x901, x906, 0.0, 0.0, x910, x911, x912, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x887, x901, x909, x915, x918, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x891, x903, x910, x916, x919, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x895, x905, x911, x917, x920, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x882, x895, x902, x907, x910, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x886, x897, x903, x908, x911, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x890, x899, x904, x909, x912, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        x7 * (2.0 * x936 - 2.0 * x937)
-                            - m2 * (2.0 * (x35 * x94) + 8.0 * (x935 * x42)),
+                        x40 * (2.0 * x928 - 2.0 * x929)
+                            - m2 * (2.0 * (x27 * x81) + 8.0 * (x927 * x8)),
+                        x934,
+                        x938,
                         x942,
-                        x947,
-                        x951,
                         0.0,
-                        x952,
-                        x953,
-                        x957,
-                        x961,
+                        x944,
+                        x946,
+                        x950,
+                        x954,
                         0.0,
                     ],
                     [
-                        x942,
-                        x56 * (2.0 * x939 - 2.0 * x940)
-                            - (8.0 * (x935 * x21) - 2.0 * (x70 * x107)) * m2,
+                        x934,
+                        (2.0 * x931 - 2.0 * x930) * x65
+                            - m2 * (8.0 * (x927 * x7) - 2.0 * (x58 * x107)),
+                        x955,
+                        x956,
+                        0.0,
+                        x957,
+                        x958,
+                        x959,
+                        x960,
+                        0.0,
+                    ],
+                    [
+                        x938,
+                        x955,
+                        (2.0 * x935 + 2.0 * x936) * x5
+                            - m2 * (2.0 * (x82 * x961) + 8.0 * (x927 * x123)),
+                        x962,
+                        0.0,
                         x963,
                         x964,
-                        0.0,
-                        x965,
                         x966,
-                        x967,
                         x968,
                         0.0,
                     ],
                     [
-                        x947,
-                        x963,
-                        x33 * (2.0 * x943 + 2.0 * x944)
-                            - m2 * (8.0 * (x452 * x969) + 2.0 * (x95 * x970)),
-                        x972,
+                        x942,
+                        x956,
+                        x962,
+                        -m2 * (8.0 * (x122 * x927) - 2.0 * (x108 * x969))
+                            - x56 * (2.0 * x939 + 2.0 * x940),
                         0.0,
+                        x970,
+                        x971,
+                        x972,
                         x973,
-                        x974,
-                        x976,
-                        x978,
-                        0.0,
-                    ],
-                    [
-                        x951,
-                        x964,
-                        x972,
-                        -x63 * (2.0 * x948 + 2.0 * x949)
-                            - (8.0 * (x125 * x935) - 2.0 * (x979 * x108)) * m2,
-                        0.0,
-                        x980,
-                        x981,
-                        x982,
-                        x983,
                         0.0,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x952, x965, x973, x980, 0.0, 0.0, x984, x985, x986, 0.0],
-                    [x953, x966, x974, x981, 0.0, x984, 0.0, 0.0, 0.0, 0.0],
-                    [x957, x967, x976, x982, 0.0, x985, 0.0, 0.0, 0.0, 0.0],
-                    [x961, x968, x978, x983, 0.0, x986, 0.0, 0.0, 0.0, 0.0],
+                    [x944, x957, x963, x970, 0.0, 0.0, x974, x975, x976, 0.0],
+                    [x946, x958, x964, x971, 0.0, x974, 0.0, 0.0, 0.0, 0.0],
+                    [x950, x959, x966, x972, 0.0, x975, 0.0, 0.0, 0.0, 0.0],
+                    [x954, x960, x968, x973, 0.0, x976, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
@@ -3410,343 +3392,340 @@ pub mod lagrange {
             ],
             d_force: [
                 [
-                    x487 * e2 + x502 * e3 + x33 * x504 - (x506 * x27 + e3 * x518) * m1
-                        - x521 * x25 - (x523 * x490 - x480 * x522) * J1
-                        + 2.0 * (x526 * e1) - m2 * (e2 * x540 + x35 * x542),
-                    e3 * x487
-                        - m1
-                            * (x512 * x406 + (2.0 * (x22 * x517) + 2.0 * x543) * x9
-                                + x506 * x66) - x63 * x504
-                        - m2 * (e3 * x540 - x542 * x70 - 2.0 * (x280 * x398))
-                        + x521 * x59 + x544 * e2
-                        + (-gamma2_dot * (-x480 * x56 - 2.0 * x545)
-                            - gamma1_dot * (2.0 * x546 + x52 * x490)) * J1 + x549
-                        - 2.0 * (x526 * e0),
-                    x502 * e1 - x521 * x52
-                        + (x480 * x552 - (2.0 * x550 + x490 * x59) * gamma1_dot
-                            - 2.0 * x551) * J1 - (x518 * e1 - x553 - x506 * x82) * m1
+                    x485 * e2 + x5 * x487 - (e3 * x502 + x18 * x504) * m1 + x515 * e3
+                        - m2 * (x516 * x27 + e2 * x529) - x531 * x14
+                        - (x492 * x532 - x478 * x533) * J1 + 2.0 * (x536 * e1),
+                    e3 * x485
+                        + (-gamma1_dot * (x61 * x492 + 2.0 * x537)
+                            - gamma2_dot * (-2.0 * x538 - x478 * x65)) * J1
+                        - m2 * (e3 * x529 - x516 * x58 - 2.0 * (x297 * x401))
+                        - x56 * x487 + x539 * e2 + x531 * x51
+                        - (x496 * x413 + x53 * x504
+                            + (2.0 * (x16 * x501) + 2.0 * x540) * x12) * m1 + x543
+                        - 2.0 * (x536 * e0),
+                    x515 * e1 - x531 * x61
+                        + (x478 * x546 - (2.0 * x544 + x51 * x492) * gamma1_dot
+                            - 2.0 * x545) * J1
                         - m2
-                            * (x542 * x95 + (x286 + x538 * e0) * x39
-                                + (x554 - 2.0 * (x533 * e0)) * x36) + e0 * x555 - x7 * x504
-                        + x558 - 2.0 * (e3 * x526),
-                    x563
-                        - ((x512 * e0 + x318) * x16 - x506 * x103
-                            + x18 * (2.0 * (e0 * x517) + x559)) * m1 - x13 * x521
-                        + 2.0 * (e2 * x526)
-                        - m2 * ((x539 - 2.0 * x534) * e1 - x564 - x542 * x108)
-                        + (2.0 * x561 - x490 * x565
-                            + gamma2_dot * (-2.0 * x566 - x63 * x480)) * J1 - x56 * x504
-                        + e1 * x555 + x544 * e0,
-                    x259 * x490 - x115 * x512 + x493 * x567,
-                    x480 * x568 - x119 * x538 + x334 * x472,
-                    -((x571 + x336 * x517 + x512 * x226 + x506 * x230) * m1
-                        + m2 * (x538 * x231 + x574 + x542 * x225 + x335 * x533)),
-                    -(m2 * (x136 * x542 + x538 * x146 + x533 * x148 + x577)
-                        + (x141 * x517 + x137 * x512 + x506 * x145 + x580) * m1),
-                    -(m2 * (x156 * x533 + x158 * x538 + x583 + x542 * x161)
-                        + (x506 * x152 + x162 * x517 + x512 * x164 + x586) * m1),
+                            * (x516 * x82 + (x303 + x527 * e0) * x31
+                                + (x547 - 2.0 * (x523 * e0)) * x28) + e0 * x548 - x40 * x487
+                        - m1 * (x502 * e1 - x549 - x94 * x504) + x552
+                        - 2.0 * (e3 * x536),
+                    x557 - x65 * x487
+                        - ((x496 * e0 + x274) * x20 - x106 * x504
+                            + x22 * (2.0 * (e0 * x501) + x553)) * m1
+                        - m2 * ((x528 - 2.0 * x524) * e1 - x516 * x108 - x558)
+                        + 2.0 * (e2 * x536) - x531 * x36
+                        + (2.0 * x555 + gamma2_dot * (-2.0 * x559 - x478 * x56)
+                            - x492 * x560) * J1 + e1 * x548 + x539 * e0,
+                    x319 * x492 - x113 * x496 + x494 * x561,
+                    x478 * x562 - x117 * x527 + x333 * x470,
+                    -(m2 * (x527 * x230 + x516 * x224 + x565 + x334 * x523)
+                        + (x568 + x335 * x501 + x496 * x225 + x229 * x504) * m1),
+                    -(m2 * (x516 * x136 + x571 + x527 * x145 + x523 * x147)
+                        + (x574 + x141 * x501 + x137 * x496 + x144 * x504) * m1),
+                    -((x153 * x501 + x496 * x155 + x158 * x504 + x577) * m1
+                        + m2 * (x161 * x523 + x163 * x527 + x580 + x516 * x151)),
                     0.0,
                 ],
                 [
-                    (gamma2_dot * (-x7 * x641 - 2.0 * x545)
-                        + (x13 * x642 + 2.0 * x546) * gamma1_dot) * J1
-                        - (x648 * x27 - 2.0 * (x400 * x306) + e3 * (-2.0 * x653 - x658))
-                            * m1 + x659 + x33 * x663 - x666 * x25 + x677 * e2 + e3 * x685
-                        + 2.0 * (x688 * e1)
+                    x639 * x5
                         - m2
-                            * (x691 * x594 + x3 * (2.0 * (x22 * x693) + 2.0 * x694)
-                                + x695 * x35),
-                    x696 * e2 - x63 * x663 + x666 * x59 - m1 * (x697 * e2 + x648 * x66)
-                        - m2 * (e3 * (2.0 * x699 - x698) - x695 * x70)
-                        - 2.0 * (x688 * e0) + x677 * e3
-                        - (x642 * x700 + x701 * x641) * J1,
-                    x685 * e1 - x7 * x663
-                        - m2 * ((x698 - 2.0 * x699) * e0 + x695 * x95 + x564)
-                        + (-x642 * x703 - gamma2_dot * (x33 * x641 - 2.0 * x566)
-                            - 2.0 * x561) * J1 - x666 * x52
+                            * (x643 * x588 + x3 * (2.0 * (x16 * x645) + 2.0 * x646)
+                                + x27 * x647)
+                        + (gamma2_dot * (-2.0 * x538 - x40 * x640)
+                            + gamma1_dot * (2.0 * x537 + x36 * x648)) * J1 + x649
+                        - x656 * x14
                         - m1
-                            * ((x704 - 2.0 * (x652 * e1)) * x18 - x648 * x82
-                                - (x657 * e1 + x318) * x16) + x705 * e0 - 2.0 * (x688 * e3)
-                        + x706,
-                    x696 * e0 + 2.0 * (x688 * e2)
+                            * (x658 * x18 - 2.0 * (x399 * x278)
+                                + e3 * (-2.0 * x663 - x667)) + x678 * e2 + e3 * x686
+                        + 2.0 * (x689 * e1),
+                    x690 * e2 + x656 * x51 - m2 * (e3 * (2.0 * x692 - x691) - x58 * x647)
+                        - (x658 * x53 + x693 * e2) * m1 - x56 * x639 - 2.0 * (x689 * e0)
+                        + x678 * e3 - (x648 * x694 + x695 * x640) * J1,
+                    x686 * e1
+                        - ((x696 - 2.0 * (x662 * e1)) * x22 - x658 * x94
+                            - (x666 * e1 + x274) * x20) * m1
+                        - m2 * ((x691 - 2.0 * x692) * e0 + x558 + x82 * x647)
+                        + (-x648 * x698 - 2.0 * x555
+                            - (x5 * x640 - 2.0 * x559) * gamma2_dot) * J1 + x699 * e0
+                        - x656 * x61 - x40 * x639 - 2.0 * (x689 * e3) + x700,
+                    x690 * e0
                         - m2
-                            * ((x554 - 2.0 * (x693 * e1)) * x36 - x695 * x108
-                                + (x286 + x691 * e1) * x39) - x56 * x663
-                        + J1
-                            * (-x707 * x641 - 2.0 * x551
-                                - gamma1_dot * (2.0 * x550 + x642 * x25))
-                        - m1 * (x697 * e0 - x553 - x648 * x103) + x558 + x705 * e1
-                        - x666 * x13,
-                    x567 * x647 - x657 * x115 + x642 * x259,
-                    x662 * x334 - x691 * x119 - x641 * x568,
-                    -(m2 * (x691 * x231 + x693 * x335 + x695 * x225 + x709)
-                        + m1 * (x657 * x226 + x710 + x648 * x230 + x652 * x336)),
+                            * ((x547 - 2.0 * (x645 * e1)) * x28
+                                + (x303 + x643 * e1) * x31 - x108 * x647)
+                        - (x693 * e0 - x549 - x658 * x106) * m1 + 2.0 * (x689 * e2)
+                        - x639 * x65 - x656 * x36 + x552 + x699 * e1
+                        + (-gamma1_dot * (x648 * x14 + 2.0 * x544) - 2.0 * x545
+                            - x640 * x701) * J1,
+                    x561 * x652 - x666 * x113 + x648 * x319,
+                    x637 * x333 - x643 * x117 - x640 * x562,
+                    -(m2 * (x643 * x230 + x645 * x334 + x224 * x647 + x703)
+                        + m1 * (x666 * x225 + x704 + x658 * x229 + x662 * x335)),
+                    -((x662 * x141 + x666 * x137 - 2.0 * x575 + x591 * x266 - x576
+                        + x658 * x144) * m1
+                        + (x645 * x147 - 2.0 * x579 + x303 * x593 + x578 + x643 * x145
+                            + x136 * x647) * m2),
+                    -((x662 * x153 + x574 + x666 * x155 + x658 * x158) * m1
+                        + m2 * (x645 * x161 + x151 * x647 + x571 + x163 * x643)),
+                    0.0,
+                ],
+                [
+                    (2.0 * x545 - x771 * x533 + gamma1_dot * (x36 * x652 + 2.0 * x544))
+                        * J1
+                        - m2
+                            * (x27 * x763 - (e2 * x767 + x303) * x31
+                                + (2.0 * (e2 * x769) + x770) * x28) + x780 * e2 + x788 * e3
+                        + x789 - x792 * x14 + 2.0 * (x793 * e1)
+                        - m1 * (x549 + x18 * x794 + e3 * x799) + x5 * x801,
+                    x557 + x792 * x51
+                        - m2 * ((2.0 * x803 - x802) * e3 - x763 * x58 - x558) + e3 * x780
+                        - 2.0 * (x793 * e0) + x804 * e2
+                        + (2.0 * x555 - x652 * x694
+                            + gamma2_dot * (-x771 * x65 - 2.0 * x559)) * J1
+                        - ((x274 + x797 * e2) * x20 + x53 * x794
+                            + x22 * (x553 + 2.0 * (x798 * e2))) * m1 - x56 * x801,
+                    x788 * e1 - (x652 * x698 + x771 * x546) * J1
+                        - m2 * ((x802 - 2.0 * x803) * e0 + x763 * x82) - x40 * x801
+                        - x792 * x61 - 2.0 * (e3 * x793) - (e1 * x799 - x94 * x794) * m1
+                        + x805 * e0,
+                    (gamma1_dot * (2.0 * x537 - x652 * x14)
+                        + gamma2_dot * (x56 * x771 - 2.0 * x538)) * J1
+                        - (x12 * (2.0 * (x798 * x93) - 2.0 * x540) - x106 * x794
+                            + x797 * x730) * m1
+                        - m2
+                            * (x3 * (2.0 * x646 - 2.0 * (x80 * x769)) - x763 * x108
+                                + x767 * x708) - x65 * x801 + x804 * e0 + x649
+                        + 2.0 * (e2 * x793) - x792 * x36 + e1 * x805,
+                    x319 * x652 - x113 * x797 - x561 * x648,
+                    x470 * x562 - x478 * x333 - x117 * x767,
+                    -(m2 * (x334 * x769 + x580 + x763 * x224 + x230 * x767)
+                        + m1 * (x798 * x335 + x797 * x225 + x229 * x794 + x577)),
+                    -((x137 * x797 + x144 * x794 + x704 + x141 * x798) * m1
+                        + m2 * (x136 * x763 + x147 * x769 + x703 + x145 * x767)),
                     -(m2
-                        * (x693 * x148 + x695 * x136 + x599 * x286 - 2.0 * x582 + x581
-                            + x691 * x146)
-                        + m1
-                            * (x597 * x314 + x652 * x141 - x584 + x657 * x137
-                                - 2.0 * x585 + x648 * x145)),
-                    -((x652 * x162 + x657 * x164 + x648 * x152 + x580) * m1
-                        + (x695 * x161 + x693 * x156 + x158 * x691 + x577) * m2),
+                        * (2.0 * x563 + x308 * x593 + x161 * x769 + x163 * x767
+                            + x763 * x151 - x564)
+                        + (x266 * x723 - 2.0 * x566 + x158 * x794 + x797 * x155
+                            + x153 * x798 + x567) * m1),
                     0.0,
                 ],
                 [
-                    x778 * e2 - x769 * x25
+                    x5 * x832 + 2.0 * (x835 * e1)
+                        + (x494 * x532 - 2.0 * x555
+                            - gamma2_dot * (x40 * x836 - 2.0 * x559)) * J1
+                        - (x18 * x838 - (x274 + e3 * x840) * x20
+                            + (x696 - 2.0 * (x841 * e3)) * x22) * m1 + x847 * e2
+                        + x852 * e3 - x855 * x14
+                        - m2 * ((2.0 * x858 - x860) * e2 + x27 * x861 + x558) + x700,
+                    J1
+                        * (2.0 * x545 - x695 * x836
+                            + (2.0 * x544 + x494 * x61) * gamma1_dot)
+                        - (x549 + x53 * x838 + e2 * x862) * m1 - 2.0 * (x835 * e0)
                         - m2
-                            * (x35 * x780 - (e2 * x785 + x286) * x39
-                                + (2.0 * (e2 * x787) + x788) * x36) + x796 * e3 + x797
-                        + 2.0 * (x798 * e1)
-                        + ((x13 * x647 + 2.0 * x550) * gamma1_dot - x799 * x522
-                            + 2.0 * x551) * J1 + x33 * x801
-                        - m1 * (x553 + x27 * x802 + e3 * x807),
-                    x769 * x59 + x563 - x63 * x801
-                        + (2.0 * x561 - x647 * x700
-                            + gamma2_dot * (-x56 * x799 - 2.0 * x566)) * J1
-                        - ((x318 + x805 * e2) * x16 + x802 * x66
-                            + x18 * (x559 + 2.0 * (x806 * e2))) * m1 + e3 * x778
-                        - 2.0 * (x798 * e0) + x808 * e2
-                        - m2 * ((2.0 * x810 - x809) * e3 - x780 * x70 - x564),
-                    x796 * e1 - (e1 * x807 - x82 * x802) * m1 - x769 * x52 - x7 * x801
-                        - 2.0 * (e3 * x798)
-                        - (x780 * x95 + (x809 - 2.0 * x810) * e0) * m2 + x811 * e0
-                        - (x647 * x703 + x552 * x799) * J1,
-                    x808 * e0
-                        - (x9 * (2.0 * (x806 * x81) - 2.0 * x543) + x805 * x735
-                            - x103 * x802) * m1
-                        + (gamma2_dot * (x63 * x799 - 2.0 * x545)
-                            + (2.0 * x546 - x647 * x25) * gamma1_dot) * J1 + x659
-                        + 2.0 * (e2 * x798) - x769 * x13 - x56 * x801
-                        - m2
-                            * (x3 * (2.0 * x694 - 2.0 * (x93 * x787)) + x785 * x714
-                                - x780 * x108) + e1 * x811,
-                    x259 * x647 - x115 * x805 - x567 * x642,
-                    x472 * x568 - x480 * x334 - x119 * x785,
-                    -((x335 * x787 + x583 + x780 * x225 + x231 * x785) * m2
-                        + m1 * (x806 * x336 + x586 + x805 * x226 + x230 * x802)),
-                    -(m1 * (x137 * x805 + x802 * x145 + x710 + x141 * x806)
-                        + (x136 * x780 + x148 * x787 + x709 + x146 * x785) * m2),
-                    -((x727 * x314 + x802 * x152 - 2.0 * x569 + x805 * x164 + x570
-                        + x162 * x806) * m1
-                        + m2
-                            * (2.0 * x573 - x572 + x156 * x787 + x158 * x785
-                                + x780 * x161 + x291 * x599)),
-                    0.0,
-                ],
-                [
-                    (x523 * x493 - 2.0 * x561 - gamma2_dot * (x7 * x837 - 2.0 * x566))
-                        * J1 + 2.0 * (x840 * e1) + x846 * e2 + x851 * e3
+                            * ((2.0 * (x857 * e3) + x770) * x28 - x861 * x58
+                                - x31 * (x303 + x859 * e3)) + x789 + x51 * x855 + e3 * x847
+                        - x56 * x832 + x863 * e2,
+                    x864 * e0 - x40 * x832
                         - m1
-                            * (x27 * x855 - (x318 + e3 * x853) * x16
-                                + (x704 - 2.0 * (x856 * e3)) * x18) - x859 * x25
-                        + x33 * x861
-                        - m2 * ((2.0 * x864 - x866) * e2 + x35 * x867 + x564) + x706,
-                    x859 * x59 - 2.0 * (x840 * e0)
-                        + (2.0 * x551 - x837 * x701
-                            + gamma1_dot * (x493 * x52 + 2.0 * x550)) * J1 + x797
-                        + e3 * x846
+                            * (x840 * x807 - x94 * x838
+                                + (2.0 * x540 - 2.0 * (x80 * x841)) * x12)
+                        - 2.0 * (e3 * x835) + x543 + x852 * e1
+                        + (-gamma2_dot * (x836 * x5 - 2.0 * x538)
+                            - gamma1_dot * (2.0 * x537 - x51 * x494)) * J1
                         - m2
-                            * ((2.0 * (x863 * e3) + x788) * x36 - x867 * x70
-                                - x39 * (x286 + x865 * e3)) - x63 * x861
-                        - (x553 + e2 * x868 + x66 * x855) * m1 + x869 * e2,
-                    x870 * e0 - x859 * x52
-                        - m2
-                            * (x865 * x821 + x867 * x95
-                                - x3 * (2.0 * (x863 * x81) + 2.0 * x694))
-                        - 2.0 * (e3 * x840) - x7 * x861 + x549 + x851 * e1
-                        + J1
-                            * (-gamma2_dot * (x33 * x837 - 2.0 * x545)
-                                - gamma1_dot * (2.0 * x546 - x493 * x59))
-                        - (x853 * x813 + (2.0 * x543 - 2.0 * (x93 * x856)) * x9
-                            - x82 * x855) * m1,
-                    x870 * e1 - x859 * x13 - (x707 * x837 - x493 * x565) * J1 + x869 * e0
-                        - (x868 * e0 - x103 * x855) * m1
-                        - m2 * (e1 * (x866 - 2.0 * x864) - x108 * x867) - x56 * x861
-                        + 2.0 * (e2 * x840),
-                    x567 * x490 - x493 * x259 - x115 * x853,
-                    x662 * x568 - x865 * x119 + x334 * x641,
+                            * (x859 * x815 - x3 * (2.0 * (x857 * x93) + 2.0 * x646)
+                                + x861 * x82) - x855 * x61,
+                    x864 * e1 - (x836 * x701 - x494 * x560) * J1 + x863 * e0
+                        - m1 * (x862 * e0 - x106 * x838) - x36 * x855
+                        - m2 * (e1 * (x860 - 2.0 * x858) - x861 * x108) - x65 * x832
+                        + 2.0 * (e2 * x835),
+                    x561 * x492 - x494 * x319 - x113 * x840,
+                    x637 * x562 - x859 * x117 + x333 * x640,
                     -(m2
-                        * (x867 * x225 + x708 * x286 - x575 + x865 * x231 - 2.0 * x576
-                            + x863 * x335)
-                        + (x853 * x226 - x578 + x230 * x855 + 2.0 * x579 + x856 * x336
-                            + x318 * x727) * m1),
-                    -(m2 * (x136 * x867 + x574 + x865 * x146 + x863 * x148)
-                        + (x137 * x853 + x571 + x856 * x141 + x145 * x855) * m1),
-                    -((x152 * x855 + x710 + x856 * x162 + x853 * x164) * m1
-                        + m2 * (x867 * x161 + x865 * x158 + x709 + x863 * x156)),
+                        * (x861 * x224 + x859 * x230 - 2.0 * x570 + x857 * x334 - x569
+                            + x702 * x303)
+                        + (x840 * x225 - x572 + x229 * x838 + x274 * x723 + 2.0 * x573
+                            + x841 * x335) * m1),
+                    -(m1 * (x137 * x840 + x568 + x841 * x141 + x144 * x838)
+                        + m2 * (x136 * x861 + x859 * x145 + x857 * x147 + x565)),
+                    -(m2 * (x861 * x151 + x859 * x163 + x703 + x857 * x161)
+                        + (x158 * x838 + x704 + x841 * x153 + x840 * x155) * m1),
                     0.0,
                 ],
                 [
-                    2.0 * (e3 * x931) - x331
-                        - (x927 * e3 - x102 * x306 + x929 * x27) * m1 - x930 * x25
-                        - (x300 * x25 + x13 * x255) * x296,
-                    x930 * x59 - 2.0 * (x931 * e2) - x727 * x260
-                        - x296 * (-x255 * x52 - x300 * x59)
-                        - m1 * (x929 * x66 - x306 * x896 + x932 * e2),
-                    x325 - (x300 * x52 - x255 * x59) * x296 - x52 * x930
-                        + 2.0 * (x931 * e1) - (x927 * e1 - x929 * x82 - x306 * x65) * m1,
-                    -x597 * x260 - x296 * (x13 * x300 - x255 * x25) - 2.0 * (x931 * e0)
-                        - (x932 * e0 - x913 * x306 - x929 * x103) * m1 - x13 * x930,
-                    x567 * x300 - x922 * x115 - x255 * x259,
+                    2.0 * (e3 * x922) - x330
+                        - (x914 * x18 + x921 * e3 - x105 * x278) * m1
+                        - x288 * (x254 * x14 + x36 * x272) - x923 * x14,
+                    x51 * x923 - 2.0 * (x922 * e2) - (-x272 * x61 - x51 * x254) * x288
+                        - x320 * x723 - (x914 * x53 - x278 * x891 + x924 * e2) * m1,
+                    x323 - x61 * x923 + 2.0 * (x922 * e1)
+                        - m1 * (x921 * e1 - x914 * x94 - x52 * x278)
+                        - x288 * (x254 * x61 - x51 * x272),
+                    -x36 * x923 - 2.0 * (x922 * e0) - x591 * x320
+                        - (x924 * e0 - x905 * x278 - x914 * x106) * m1
+                        - (x36 * x254 - x272 * x14) * x288,
+                    x561 * x254 - x916 * x113 - x272 * x319,
                     0.0,
-                    -(m1 * (x226 * x933 + x336 * x934 + x929 * x230 - x318 * x336)),
-                    -((x929 * x145 - x141 * x318 + x141 * x934 + x137 * x933) * m1),
-                    -((x162 * x934 + x164 * x933 - x318 * x162 + x929 * x152) * m1),
+                    -(m1 * (x225 * x925 + x335 * x926 + x914 * x229 - x274 * x335)),
+                    -((x914 * x144 - x141 * x274 + x141 * x926 + x137 * x925) * m1),
+                    -((x153 * x926 + x155 * x925 - x274 * x153 + x914 * x158) * m1),
                     0.0,
                 ],
                 [
-                    2.0 * (x989 * e2) - x262 * (x7 * x988 - x987)
-                        - x322 * (x7 * x274 + x987)
-                        - m2 * (x996 * e2 - x94 * x280 + x35 * x997),
-                    2.0 * (e3 * x989) - m2 * (x996 * e3 - x280 * x107 - x70 * x997)
-                        - x322 * (x56 * x274 - x998) - x262 * (x56 * x988 + x998),
-                    -m2 * (x95 * x997 - x970 * x280 + x999 * e0)
-                        - (x33 * x988 - x261 * x708) * x262
-                        - x322 * (x33 * x274 - x7 * x261) - 2.0 * (x989 * e0),
-                    -(-x63 * x274 - x56 * x261) * x322
-                        - (-x261 * x599 - x63 * x988) * x262
-                        - m2 * (x999 * e1 - x979 * x280 - x108 * x997)
-                        - 2.0 * (x989 * e1),
+                    2.0 * (x987 * e2) - (x40 * x977 - x978) * x321
+                        - m2 * (x985 * e2 - x81 * x297 + x27 * x986)
+                        - x281 * (x40 * x287 + x978),
+                    2.0 * (e3 * x987) - (x65 * x977 + x988) * x321
+                        - m2 * (x985 * e3 - x58 * x986 - x107 * x297)
+                        - (x287 * x65 - x988) * x281,
+                    -(x287 * x5 - x40 * x282) * x281
+                        - m2 * (x986 * x82 - x961 * x297 + x989 * e0) - 2.0 * (x987 * e0)
+                        - x321 * (x5 * x977 - x702 * x282),
+                    -x281 * (-x282 * x65 - x56 * x287)
+                        - (-x56 * x977 - x282 * x593) * x321
+                        - m2 * (x989 * e1 - x969 * x297 - x108 * x986)
+                        - 2.0 * (x987 * e1),
                     0.0,
-                    x274 * x568 - x261 * x334 - x119 * x994,
-                    -(m2 * (x225 * x997 - x291 * x231 + x1000 * x335 + x231 * x994)),
-                    -(m2 * (x146 * x994 + x136 * x997 - x291 * x146 + x1000 * x148)),
-                    -(m2 * (x158 * x994 + x161 * x997 - x158 * x291 + x156 * x1000)),
+                    x287 * x562 - x282 * x333 - x117 * x983,
+                    -(m2 * (x224 * x986 - x308 * x230 + x990 * x334 + x230 * x983)),
+                    -(m2 * (x145 * x983 + x136 * x986 - x308 * x145 + x990 * x147)),
+                    -(m2 * (x163 * x983 + x151 * x986 - x163 * x308 + x161 * x990)),
                     0.0,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x33 * x1001 - x90 * x262 + 2.0 * (e1 * x1004) + e3 * x1011
-                        - m2 * (x1019 * e2 + x35 * x1020)
-                        - (x1021 * x27 + x1028 * e3) * m1 + x1035 * e2
-                        - (x1038 - x297) * x25,
-                    x1035 * e3 - 2.0 * (x1004 * e0) - x63 * x1001
-                        - (x1039 * e2 + x1021 * x66) * m1 + x1040 * e2
-                        - (x1041 + x33 * x701) * J1 + x1038 * x59
-                        - m2 * (x1019 * e3 - x1020 * x70),
-                    x1042 * e0 + x1011 * e1 - (x33 * x552 + x1043) * J1 - x7 * x1001
-                        - m2 * (x1020 * x95 + x1044 * e0)
-                        - (x1028 * e1 - x1021 * x82) * m1 - x1038 * x52
-                        - 2.0 * (e3 * x1004),
-                    2.0 * (e2 * x1004) - m2 * (x1044 * e1 - x1020 * x108) - x56 * x1001
-                        - x1038 * x13 - (x25 * x565 + x1045) * J1
-                        - (x1039 * e0 - x1021 * x103) * m1 + x1040 * e0 + x1042 * e1,
-                    x259 * x25 - x115 * x1023 - x13 * x567,
-                    x7 * x334 - x119 * x1014 - x33 * x568,
-                    -((x1023 * x226 + x336 * x1026 + x1021 * x230) * m1
-                        + m2 * (x335 * x1017 + x1020 * x225 + x231 * x1014)),
-                    -((x141 * x1026 + x1021 * x145 + x137 * x1023) * m1
-                        + m2 * (x146 * x1014 + x1020 * x136 + x1017 * x148)),
-                    -(m1 * (x1021 * x152 + x162 * x1026 + x1023 * x164)
-                        + m2 * (x158 * x1014 + x1020 * x161 + x156 * x1017)),
+                    e3 * x1005 - (x997 * e3 + x18 * x998) * m1 + x5 * x1006
+                        - (x1009 - x289) * x14 - x88 * x321 + 2.0 * (e1 * x1012)
+                        + e2 * x1019 - m2 * (x1020 * x27 + x1028 * e2),
+                    x51 * x1009 - 2.0 * (x1012 * e0) - (x65 * x546 + x1029) * J1
+                        - x56 * x1006 + e3 * x1019 + x1030 * e2
+                        - (x998 * x53 + x1031 * e2) * m1
+                        - m2 * (e3 * x1028 - x1020 * x58),
+                    x1032 * e0 - m2 * (x1033 * e0 + x1020 * x82) + x1005 * e1
+                        - x1009 * x61 - (x997 * e1 - x998 * x94) * m1
+                        - (x14 * x698 + x5 * x546) * J1 - x40 * x1006
+                        - 2.0 * (e3 * x1012),
+                    2.0 * (e2 * x1012) - x36 * x1009 - (x1034 + x14 * x560) * J1
+                        - (x1033 * e1 - x1020 * x108) * m2 - x65 * x1006
+                        - m1 * (x1031 * e0 - x106 * x998) + x1032 * e1 + x1030 * e0,
+                    x319 * x14 - x36 * x561 - x995 * x113,
+                    x40 * x333 - x5 * x562 - x117 * x1023,
+                    -((x992 * x335 + x995 * x225 + x998 * x229) * m1
+                        + m2 * (x334 * x1026 + x1020 * x224 + x1023 * x230)),
+                    -((x998 * x144 + x141 * x992 + x137 * x995) * m1
+                        + m2 * (x1020 * x136 + x1023 * x145 + x1026 * x147)),
+                    -(m1 * (x995 * x155 + x998 * x158 + x992 * x153)
+                        + m2 * (x161 * x1026 + x163 * x1023 + x1020 * x151)),
                     -(4.0 * e0_dot),
                 ],
                 [
-                    2.0 * (x1048 * e1) - (x7 * x707 - x523 * x59) * J1
-                        - m2 * (x35 * x1049 + x1057 * e2)
-                        - m1 * (x27 * x1058 + e3 * x1065) + x33 * x1066 + e3 * x1072
-                        - x1075 * x25 + x1081 * e2,
-                    x1075 * x59 - m1 * (x66 * x1058 + x1082 * e2) + e2 * x1083
-                        - 2.0 * (x1048 * e0) - (x56 * x707 - x700 * x59) * J1
-                        + e3 * x1081 - x63 * x1066 - (x1057 * e3 - x70 * x1049) * m2,
-                    x1072 * e1 - 2.0 * (e3 * x1048) - x1075 * x52
-                        - (e1 * x1065 - x82 * x1058) * m1 - (x1045 - x703 * x59) * J1
-                        + x1084 * e0 - x7 * x1066 - m2 * (x1085 * e0 + x95 * x1049),
-                    x1084 * e1 - (x1082 * e0 - x103 * x1058) * m1
-                        - (-x63 * x707 - x1043) * J1 + 2.0 * (e2 * x1048) - x56 * x1066
-                        - x1075 * x13 - (x1085 * e1 - x108 * x1049) * m2 + x1083 * e0,
-                    x567 * x52 - x259 * x59 - x115 * x1060,
-                    x56 * x334 + x63 * x568 - x119 * x1052,
-                    -(m2 * (x335 * x1055 + x225 * x1049 + x231 * x1052)
-                        + (x226 * x1060 + x230 * x1058 + x336 * x1063) * m1),
-                    -(m2 * (x136 * x1049 + x1052 * x146 + x1055 * x148)
-                        + (x1058 * x145 + x141 * x1063 + x137 * x1060) * m1),
-                    -((x156 * x1055 + x158 * x1052 + x161 * x1049) * m2
-                        + (x164 * x1060 + x162 * x1063 + x1058 * x152) * m1),
+                    x1040 * e2 + e3 * x1046 - (x40 * x701 - x51 * x532) * J1
+                        + 2.0 * (x1049 * e1) + x5 * x1050 - x14 * x1053
+                        - (x18 * x1054 + e3 * x1061) * m1
+                        - m2 * (x1062 * x27 + x1070 * e2),
+                    x51 * x1053 - m2 * (e3 * x1070 - x1062 * x58)
+                        - (x1071 * e2 + x53 * x1054) * m1 - 2.0 * (x1049 * e0)
+                        - x56 * x1050 + x1040 * e3 - (x65 * x701 - x51 * x694) * J1
+                        + x1072 * e2,
+                    x1074 * e0 - 2.0 * (e3 * x1049) - (x1062 * x82 + x1073 * e0) * m2
+                        - (x1034 - x51 * x698) * J1 - (x1061 * e1 - x94 * x1054) * m1
+                        + x1046 * e1 - x61 * x1053 - x40 * x1050,
+                    x1072 * e0 - x36 * x1053 - (-x51 * x560 - x56 * x701) * J1
+                        + 2.0 * (e2 * x1049) - (x1071 * e0 - x106 * x1054) * m1
+                        + x1074 * e1 - m2 * (x1073 * e1 - x1062 * x108) - x65 * x1050,
+                    x561 * x61 - x51 * x319 - x113 * x1056,
+                    x56 * x562 + x65 * x333 - x117 * x1065,
+                    -(m1 * (x229 * x1054 + x1059 * x335 + x1056 * x225)
+                        + m2 * (x1068 * x334 + x230 * x1065 + x1062 * x224)),
+                    -(m2 * (x136 * x1062 + x145 * x1065 + x1068 * x147)
+                        + (x141 * x1059 + x137 * x1056 + x144 * x1054) * m1),
+                    -((x158 * x1054 + x1059 * x153 + x155 * x1056) * m1
+                        + (x161 * x1068 + x163 * x1065 + x1062 * x151) * m2),
                     -(4.0 * e1_dot),
                 ],
                 [
-                    x1092 * e2 - (x708 * x522 - x1086) * J1
-                        - m1 * (x1097 * e3 + x1098 * x27) - x1101 * x25
-                        - m2 * (x1107 * e2 + x35 * x1108) + 2.0 * (x1109 * e1)
-                        + e3 * x1115 + x33 * x1117,
-                    e3 * x1092 - 2.0 * (x1109 * e0) - x63 * x1117
-                        - (x708 * x701 + x52 * x700) * J1 + x1101 * x59
-                        - (x1098 * x66 + x1118 * e2) * m1
-                        - m2 * (e3 * x1107 - x70 * x1108) + x1119 * e2,
-                    e1 * x1115 - x33 * x708 * x262 - (x1097 * e1 - x1098 * x82) * m1
-                        - (x1101 + x328) * x52 - 2.0 * (e3 * x1109)
-                        - (x1120 * e0 + x95 * x1108) * m2 - x7 * x1117 + x1121 * e0,
-                    2.0 * (e2 * x1109) - m2 * (x1120 * e1 - x108 * x1108) + x1121 * e1
-                        + x1119 * e0 - x56 * x1117 - (x1118 * e0 - x1098 * x103) * m1
-                        - x13 * x1101 - (x1041 + x707 * x708) * J1,
-                    x259 * x52 - x1095 * x115 + x567 * x59,
-                    x7 * x568 - x119 * x1103 + x33 * x334,
-                    -(m2 * (x225 * x1108 + x335 * x1105 + x231 * x1103)
-                        + (x1095 * x226 + x1098 * x230 + x1093 * x336) * m1),
-                    -((x141 * x1093 + x137 * x1095 + x1098 * x145) * m1
-                        + m2 * (x1105 * x148 + x136 * x1108 + x146 * x1103)),
-                    -(m2 * (x161 * x1108 + x158 * x1103 + x156 * x1105)
-                        + (x1098 * x152 + x1093 * x162 + x1095 * x164) * m1),
+                    x1093 * x5 - x1077 * x14 - (x702 * x533 - x1078) * J1
+                        - m2 * (e2 * x1084 + x27 * x1085)
+                        - (e3 * x1090 + x18 * x1091) * m1 + 2.0 * (x1094 * e1)
+                        + x1100 * e2 + x1106 * e3,
+                    x51 * x1077 - (x1107 * e2 + x53 * x1091) * m1
+                        - (x61 * x694 + x695 * x702) * J1 - 2.0 * (x1094 * e0)
+                        - m2 * (e3 * x1084 - x1085 * x58) - x56 * x1093 + x1108 * e2
+                        + e3 * x1100,
+                    x1106 * e1 - x702 * x5 * x321 - m1 * (x1090 * e1 - x94 * x1091)
+                        - x40 * x1093 - 2.0 * (e3 * x1094) + x1109 * e0
+                        - m2 * (x1085 * x82 + x1110 * e0) - (x328 + x1077) * x61,
+                    x1109 * e1 + 2.0 * (e2 * x1094) - x1093 * x65
+                        - (x1029 + x702 * x701) * J1 - (x1107 * e0 - x106 * x1091) * m1
+                        + x1108 * e0 - m2 * (x1110 * e1 - x1085 * x108) - x36 * x1077,
+                    x61 * x319 - x113 * x1086 + x51 * x561,
+                    x333 * x5 - x1082 * x117 + x40 * x562,
+                    -(m2 * (x1085 * x224 + x334 * x1079 + x1082 * x230)
+                        + m1 * (x1086 * x225 + x335 * x1088 + x229 * x1091)),
+                    -(m2 * (x136 * x1085 + x1082 * x145 + x1079 * x147)
+                        + m1 * (x1091 * x144 + x137 * x1086 + x141 * x1088)),
+                    -((x163 * x1082 + x1085 * x151 + x161 * x1079) * m2
+                        + m1 * (x1086 * x155 + x1091 * x158 + x153 * x1088)),
                     -(4.0 * e2_dot),
                 ],
                 [
-                    x1133 * e2 - m2 * (x1122 * x35 + x1128 * e2)
-                        - (x27 * x1134 + e3 * x1139) * m1 - x1142 * x25 + x1147 * e3
-                        - (x523 * x13 + x599 * x522) * J1 + 2.0 * (x1148 * e1)
-                        + x33 * x1150,
-                    x1151 * e2 - m2 * (x1128 * e3 - x1122 * x70) + x1142 * x59
-                        - (x1086 + x701 * x599) * J1 - 2.0 * (x1148 * e0)
-                        - m1 * (x66 * x1134 + x1152 * e2) - x63 * x1150 + x1133 * e3,
-                    x1153 * e0 + x1147 * e1 - 2.0 * (x1148 * e3) - x1142 * x52
-                        - m2 * (x1122 * x95 + x1154 * e0)
-                        - (x1139 * e1 - x82 * x1134) * m1
-                        - (x552 * x599 + x13 * x703) * J1 - x7 * x1150,
-                    2.0 * (x1148 * e2) - x56 * x1150 - m2 * (x1154 * e1 - x1122 * x108)
-                        - (x1152 * e0 - x103 * x1134) * m1 - x13 * (x1142 + x333)
-                        + x1151 * e0 + x1153 * e1 + x63 * x599 * x262,
-                    x13 * x259 + x567 * x25 - x115 * x1135,
-                    x56 * x568 - x119 * x1126 - x63 * x334,
-                    -(m2 * (x335 * x1123 + x231 * x1126 + x1122 * x225)
-                        + (x226 * x1135 + x230 * x1134 + x336 * x1137) * m1),
-                    -(m1 * (x1134 * x145 + x141 * x1137 + x137 * x1135)
-                        + (x146 * x1126 + x1122 * x136 + x1123 * x148) * m2),
-                    -(m1 * (x162 * x1137 + x164 * x1135 + x152 * x1134)
-                        + m2 * (x158 * x1126 + x156 * x1123 + x1122 * x161)),
+                    e2 * x1121 - (x18 * x1111 + x1116 * e3) * m1
+                        - m2 * (x1127 * e2 + x1128 * x27) + x5 * x1130
+                        + 2.0 * (x1131 * e1) + e3 * x1136 - x14 * x1139
+                        - (x36 * x532 + x533 * x593) * J1,
+                    x51 * x1139 - (x53 * x1111 + x1140 * e2) * m1
+                        - (e3 * x1127 - x1128 * x58) * m2 - 2.0 * (x1131 * e0)
+                        - (x1078 + x695 * x593) * J1 + e3 * x1121 + e2 * x1141
+                        - x56 * x1130,
+                    x1136 * e1 - x40 * x1130 - m2 * (x1128 * x82 + x1142 * e0)
+                        - 2.0 * (x1131 * e3) - m1 * (x1116 * e1 - x94 * x1111)
+                        + x1143 * e0 - (x36 * x698 + x593 * x546) * J1 - x61 * x1139,
+                    x1141 * e0 + 2.0 * (x1131 * e2) - m2 * (x1142 * e1 - x1128 * x108)
+                        + x1143 * e1 + x56 * x321 * x593 - x65 * x1130
+                        - x36 * (x331 + x1139) - (x1140 * e0 - x106 * x1111) * m1,
+                    x561 * x14 + x36 * x319 - x113 * x1114,
+                    x65 * x562 - x56 * x333 - x117 * x1123,
+                    -(m1 * (x229 * x1111 + x1112 * x335 + x225 * x1114)
+                        + m2 * (x230 * x1123 + x334 * x1125 + x1128 * x224)),
+                    -(m2 * (x1128 * x136 + x1123 * x145 + x1125 * x147)
+                        + (x141 * x1112 + x137 * x1114 + x1111 * x144) * m1),
+                    -((x155 * x1114 + x158 * x1111 + x1112 * x153) * m1
+                        + m2 * (x163 * x1123 + x1128 * x151 + x161 * x1125)),
                     -(4.0 * e3_dot),
                 ],
                 [
-                    -(x115 * (x27 * x1156 + 4.0 * (x257 * x883)) - x1155 * x13
-                        + x25 * x1157),
-                    -((x1156 * x66 - 4.0 * (x257 * x898)) * x115 + x1155 * x52
-                        - x59 * x1157),
-                    -(x115 * (4.0 * (x257 * x906) - x82 * x1156) + x52 * x1157
-                        + x1155 * x59),
-                    -(x13 * x1157 + x1155 * x25
-                        + x115 * (-x103 * x1156 - 4.0 * (x257 * x912))),
+                    -(x14 * x1145 - x1146 * x36
+                        + x113 * (x18 * x1144 + 4.0 * (e3 * x1147))),
+                    -(x113 * (x1144 * x53 - 4.0 * (x1147 * e2)) + x1146 * x61
+                        - x51 * x1145),
+                    -(x61 * x1145 + x113 * (4.0 * (x1147 * e1) - x1144 * x94)
+                        + x1146 * x51),
+                    -(x113 * (-4.0 * (x1147 * e0) - x106 * x1144) + x36 * x1145
+                        + x1146 * x14),
                     0.0,
                     0.0,
-                    -((x230 * x1156 - 2.0 * (x257 * x336)) * x115),
-                    -((x1156 * x145 - 2.0 * (x141 * x257)) * x115),
-                    -((x1156 * x152 - 2.0 * (x162 * x257)) * x115),
+                    -((x229 * x1144 - 2.0 * (x261 * x335)) * x113),
+                    -((x1144 * x144 - 2.0 * (x141 * x261)) * x113),
+                    -((x1144 * x158 - 2.0 * (x153 * x261)) * x113),
                     0.0,
                 ],
                 [
-                    -(x7 * x1159 - x33 * x1158
-                        + x119 * (4.0 * (x946 * x276) - 2.0 * x1012)),
-                    -((4.0 * (x276 * x962) + 2.0 * x1051) * x119 + x63 * x1158
-                        + x56 * x1159),
-                    -(x7 * x1158 + x33 * x1159
-                        - x119 * (2.0 * x1102 + 4.0 * (x276 * x969))),
-                    -(x56 * x1158 - x119 * (4.0 * (x971 * x276) - 2.0 * x1125)
-                        - x63 * x1159),
+                    -((4.0 * (x1148 * e2) - 2.0 * x1021) * x117 - x5 * x1149
+                        + x40 * x1150),
+                    -(x1150 * x65 + x56 * x1149
+                        + x117 * (2.0 * x1063 + 4.0 * (e3 * x1148))),
+                    -(x40 * x1149 - x117 * (2.0 * x1081 + 4.0 * (x1148 * e0))
+                        + x1150 * x5),
+                    -(x65 * x1149 - (4.0 * (x1148 * e1) - 2.0 * x1122) * x117
+                        - x56 * x1150),
                     0.0,
                     0.0,
-                    -(x119 * (2.0 * (x276 * x335) - 2.0 * (x274 * x225))),
-                    -(x119 * (2.0 * (x276 * x148) - 2.0 * (x136 * x274))),
-                    -((2.0 * (x276 * x156) - 2.0 * (x274 * x161)) * x119),
+                    -(x117 * (2.0 * (x279 * x334) - 2.0 * (x287 * x224))),
+                    -(x117 * (2.0 * (x279 * x147) - 2.0 * (x136 * x287))),
+                    -((2.0 * (x279 * x161) - 2.0 * (x287 * x151)) * x117),
                     0.0,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4798,89 +4777,89 @@ pub mod maggi {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = a_ * e2;
+        let x0 = a_ * e3;
         let x1 = e1 * e1;
         let x2 = e0 * e0;
         let x3 = 4.0 * x1 + 4.0 * x2;
         let x4 = x0 * x3;
-        let x5 = f64::sin(gamma1);
-        let x6 = e3 * e0;
-        let x7 = x6 * e2;
-        let x8 = e3 * e3;
-        let x9 = e2 * e2;
-        let x10 = 2.0 * x1 + 2.0 * x2;
-        let x11 = 2.0 * x8 - 2.0 * x9 + x10;
-        let x12 = f64::cos(gamma1);
-        let x13 = x12 * e2;
-        let x14 = f64::sin(gamma2);
+        let x5 = f64::cos(gamma2);
+        let x6 = x5 * e3;
+        let x7 = f64::sin(gamma2);
+        let x8 = e2 * e0;
+        let x9 = e3 * x8;
+        let x10 = e2 * e2;
+        let x11 = 2.0 * x1 + 2.0 * x2;
+        let x12 = 2.0 * x10 + x11;
+        let x13 = e3 * e3;
+        let x14 = f64::sin(gamma1);
         let x15 = e3 * e1;
         let x16 = x15 * e2;
-        let x17 = f64::cos(gamma2);
-        let x18 = x17 * e2;
-        let x19 = 2.0 * x9 + x10;
+        let x17 = 2.0 * x13 - 2.0 * x1;
+        let x18 = f64::cos(gamma1);
+        let x19 = x18 * e3;
         let x20 = m0
-            + (x9 * (x9 + x10) + (x19 + x8) * x8 + f64::powi(e0, 4)
+            + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
                 + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
-        let x21 = 4.0 * x8 + 4.0 * x9;
-        let x22 = x12 * e1;
-        let x23 = 2.0 * x8 - 2.0 * x1;
-        let x24 = x23 + 2.0 * x2 + 2.0 * x9;
-        let x25 = x15 * e0;
-        let x26 = a_ * e1;
-        let x27 = x26 * x21;
-        let x28 = e2 * e1;
-        let x29 = x14 * e0;
-        let x30 = a_ * e0;
-        let x31 = x30 * x21;
-        let x32 = x5 * e1;
-        let x33 = e2 * e0;
-        let x34 = x17 * e0;
-        let x35 = x12 * e3;
-        let x36 = a_ * e3;
-        let x37 = x36 * x3;
-        let x38 = x17 * e3;
-        let x39 = gamma1_dot * m1;
-        let x40 = x2 - x8;
-        let x41 = x1 + x40 - x9;
-        let x42 = m2 * gamma2_dot;
-        let x43 = x40 - x1 + x9;
-        let x44 = (2.0 * (x14 * e1) + 2.0 * x38) * d + 2.0 * x36;
-        let x45 = 2.0 * x28 + 2.0 * x6;
-        let x46 = e1 * e0;
-        let x47 = e3 * e2;
-        let x48 = 2.0 * x47 - 2.0 * x46;
-        let x49 = a_ * x14;
-        let x50 = (x17 * x45 - x14 * x48) * x49;
-        let x51 = x17 * x48 + x45 * x14;
-        let x52 = 2.0 * d + 2.0 * (x17 * a_);
-        let x53 = x51 * x52;
-        let x54 = 2.0 * x50 - x53;
-        let x55 = 2.0 * x0 - d * (2.0 * x32 - 2.0 * x13);
-        let x56 = 2.0 * (x12 * a_) + 2.0 * d;
-        let x57 = x12 * x43 - x45 * x5;
-        let x58 = x56 * x57;
-        let x59 = a_ * x5;
-        let x60 = (x43 * x5 + x12 * x45) * x59;
-        let x61 = -x58 - 2.0 * x60;
-        let x62 = (2.0 * x34 - 2.0 * (x14 * e2)) * d + 2.0 * x30;
-        let x63 = x53 - 2.0 * x50;
-        let x64 = 2.0 * x26 + d * (2.0 * x22 + 2.0 * (x5 * e2));
-        let x65 = x58 + 2.0 * x60;
-        let x66 = d * (2.0 * (x12 * e0) - 2.0 * (e3 * x5)) + 2.0 * x30;
-        let x67 = 2.0 * x26 - (2.0 * (e3 * x14) - 2.0 * (x17 * e1)) * d;
-        let x68 = 2.0 * x0 + (2.0 * x18 + 2.0 * x29) * d;
-        let x69 = 2.0 * x36 + d * (2.0 * x35 + 2.0 * (x5 * e0));
-        let x70 = 2.0 * x46 + 2.0 * x47;
-        let x71 = 2.0 * x15 - 2.0 * x33;
-        let x72 = x8 + x2;
-        let x73 = x72 - x1 - x9;
-        let x74 = x71 * x14 + x17 * x73;
-        let x75 = x74 * x52;
-        let x76 = (x17 * x71 - x73 * x14) * x49;
+        let x21 = 4.0 * x13 + 4.0 * x10;
+        let x22 = x18 * e1;
+        let x23 = x17 + 2.0 * x2 + 2.0 * x10;
+        let x24 = x15 * e0;
+        let x25 = a_ * e1;
+        let x26 = x25 * x21;
+        let x27 = e2 * e1;
+        let x28 = x5 * e2;
+        let x29 = x7 * e0;
+        let x30 = a_ * e2;
+        let x31 = x30 * x3;
+        let x32 = 2.0 * x13 - 2.0 * x10 + x11;
+        let x33 = x18 * e2;
+        let x34 = gamma1_dot * m1;
+        let x35 = e3 * e0;
+        let x36 = x2 - x13;
+        let x37 = x1 + x36 - x10;
+        let x38 = m2 * gamma2_dot;
+        let x39 = a_ * e0;
+        let x40 = x39 * x21;
+        let x41 = x5 * e0;
+        let x42 = x14 * e1;
+        let x43 = e1 * e0;
+        let x44 = e3 * e2;
+        let x45 = 2.0 * x44 - 2.0 * x43;
+        let x46 = 2.0 * x35 + 2.0 * x27;
+        let x47 = x5 * x45 + x7 * x46;
+        let x48 = 2.0 * d + 2.0 * (x5 * a_);
+        let x49 = x47 * x48;
+        let x50 = a_ * x7;
+        let x51 = x50 * (x5 * x46 - x7 * x45);
+        let x52 = x49 - 2.0 * x51;
+        let x53 = x36 - x1 + x10;
+        let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
+        let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
+        let x56 = a_ * x14;
+        let x57 = (x53 * x14 + x18 * x46) * x56;
+        let x58 = 2.0 * (x18 * a_) + 2.0 * d;
+        let x59 = x18 * x53 - x14 * x46;
+        let x60 = x58 * x59;
+        let x61 = 2.0 * x57 + x60;
+        let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
+        let x63 = -2.0 * x57 - x60;
+        let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
+        let x65 = 2.0 * x51 - x49;
+        let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
+        let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
+        let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
+        let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
+        let x70 = 2.0 * x43 + 2.0 * x44;
+        let x71 = 2.0 * x15 - 2.0 * x8;
+        let x72 = x13 + x2;
+        let x73 = x72 - x1 - x10;
+        let x74 = x71 * x7 + x5 * x73;
+        let x75 = x74 * x48;
+        let x76 = (x5 * x71 - x73 * x7) * x50;
         let x77 = 2.0 * x76 - x75;
-        let x78 = x12 * x70 - x71 * x5;
-        let x79 = x78 * x56;
-        let x80 = (x70 * x5 + x12 * x71) * x59;
+        let x78 = x18 * x70 - x71 * x14;
+        let x79 = x78 * x58;
+        let x80 = (x70 * x14 + x18 * x71) * x56;
         let x81 = -x79 - 2.0 * x80;
         let x82 = x79 + 2.0 * x80;
         let x83 = x75 - 2.0 * x76;
@@ -4900,7 +4879,7 @@ pub mod maggi {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x1 + x72 + x9 - 1.0,
+                x1 + x72 + x10 - 1.0,
                 x85 * x85 + x84 * x84 + x87 * x87 + x86 * x86 + 1.0,
             ),
         ];
@@ -4935,47 +4914,42 @@ pub mod maggi {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (m1 * ((x5 * (4.0 * x7 + x11 * e1) - x13 * x3) * d - x4)
-                + m2 * (x4 + (x14 * (x11 * e0 - 4.0 * x16) + x18 * x3) * d)) * e2_dot
-                + X_dot * x20
-                + (m1 * (d * (x21 * x22 + (x24 * e2 + 4.0 * x25) * x5) + x27)
+            e3_dot
+                * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
+                    + (d
+                        * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16)
+                            - x19 * x3) - x4) * m1) + X_dot * x20
+                + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
                     + m2
                         * (d
-                            * ((x24 * x14 - 4.0 * (x17 * x15)) * e3
-                                - x28 * (4.0 * x18 + 4.0 * x29)) - x27)) * e1_dot
-                + ((x31
-                    + d
-                        * ((4.0 * x13 - 4.0 * x32) * x33
-                            + e3
-                                * (4.0 * (x12 * x6)
-                                    + x5 * (2.0 * x2 - 2.0 * x1 - 2.0 * x8 - 2.0 * x9)))) * m1
-                    + m2
-                        * (d
-                            * (x14
-                                * ((2.0 * x1 + 2.0 * x8 - 2.0 * x2 + 2.0 * x9) * e2
-                                    - 4.0 * x25) - x34 * x21) - x31)) * e0_dot
-                + e3_dot
-                    * ((d
-                        * (x5 * ((x23 - 2.0 * x2 - 2.0 * x9) * e0 - 4.0 * x16)
-                            - x35 * x3) - x37) * m1
-                        + m2
-                            * (x37
-                                + (x38 * x3 + ((x19 - 2.0 * x8) * e1 - 4.0 * x7) * x14)
-                                    * d))
-                + (x39 * (x12 * (2.0 * x28 - 2.0 * x6) - x5 * x41)
-                    + (x17 * (2.0 * x15 + 2.0 * x33) + x14 * x41) * x42) * d,
-            (m2 * (x43 * x44 + e2 * x54) + (x55 * x48 + x61 * e3) * m1) * e0_dot
-                + e3_dot * (m2 * (x63 * e1 - x43 * x62) + (x65 * e0 - x64 * x48) * m1)
-                + x20 * Y_dot
-                + e2_dot * ((x61 * e1 - x66 * x48) * m1 + (x63 * e0 + x43 * x67) * m2)
-                + (m2 * (e3 * x54 - x43 * x68) + m1 * (x48 * x69 + x65 * e2)) * e1_dot
-                + (x39 * x57 + x51 * x42) * d,
-            (m2 * (x70 * x44 + x77 * e2) + (x81 * e3 + x55 * x73) * m1) * e0_dot
-                + ((x73 * x69 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x68)) * e1_dot
-                + d * (x39 * x78 + x42 * x74)
-                + e3_dot * (m1 * (x82 * e0 - x64 * x73) + m2 * (x83 * e1 - x70 * x62))
+                            * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
+                                - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
+                + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
+                    + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
+                + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
+                    + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
+                + (m2
+                    * (d
+                        * (x7
+                            * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
+                                - 4.0 * x24) - x41 * x21) - x40)
+                    + m1
+                        * (x40
+                            + ((4.0 * (x19 * e0)
+                                + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
+                                + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
+            x20 * Y_dot
+                + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
+                + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
+                + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
+                + (x38 * x47 + x34 * x59) * d
+                + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
+            (m2 * (x70 * x64 + x77 * e2) + (x81 * e3 + x62 * x73) * m1) * e0_dot
+                + ((x73 * x68 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x69)) * e1_dot
+                + d * (x34 * x78 + x38 * x74)
+                + e3_dot * (m1 * (x82 * e0 - x55 * x73) + m2 * (x83 * e1 - x70 * x54))
                 + Z_dot * x20
-                + e2_dot * ((x81 * e1 - x73 * x66) * m1 + m2 * (x83 * e0 + x70 * x67)),
+                + e2_dot * ((x81 * e1 - x73 * x67) * m1 + m2 * (x83 * e0 + x70 * x66)),
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -5246,19 +5220,19 @@ pub mod maggi {
         let x118 = 2.0 * x3 - 2.0 * x0;
         let x119 = 2.0 * x1 + 2.0 * x4;
         let x120 = x118 + x119;
-        let x121 = 4.0 * x82 + x120 * e2;
-        let x122 = x106 * e1;
-        let x123 = (x117 + d * (x39 * x121 + x5 * x122)) * m1;
+        let x121 = e3 * e1;
+        let x122 = x104 * x121;
+        let x123 = e2 * e1;
         let x124 = x104 * e2;
         let x125 = x54 * e0;
-        let x126 = e2 * e1;
-        let x127 = e3 * e1;
-        let x128 = x104 * x127;
-        let x129 = (d
-            * (e3 * (x54 * x120 - 4.0 * x128) - (4.0 * x124 + 4.0 * x125) * x126) - x117)
+        let x126 = (d
+            * (e3 * (x54 * x120 - 4.0 * x122) - x123 * (4.0 * x124 + 4.0 * x125)) - x117)
             * m2;
-        let x130 = x123 + x129;
-        let x131 = x130 * e3;
+        let x127 = 4.0 * x82 + x120 * e2;
+        let x128 = x106 * x5;
+        let x129 = (x117 + d * (x39 * x127 + x128 * e1)) * m1;
+        let x130 = x126 + x129;
+        let x131 = e3 * x130;
         let x132 = a_ * e0;
         let x133 = x132 * x5;
         let x134 = e3 * e0;
@@ -5266,2390 +5240,2387 @@ pub mod maggi {
         let x136 = 2.0 * x1 - 2.0 * x4;
         let x137 = x136 - 2.0 * x0;
         let x138 = x137 - 2.0 * x3;
-        let x139 = x39 * e1;
-        let x140 = x106 * e2;
+        let x139 = x106 * e2;
+        let x140 = x39 * e1;
         let x141 = e2 * e0;
         let x142 = (x133
-            + (e3 * (4.0 * x135 + x39 * x138) + (4.0 * x140 - 4.0 * x139) * x141) * d)
+            + (e3 * (4.0 * x135 + x39 * x138) + (4.0 * x139 - 4.0 * x140) * x141) * d)
             * m1;
-        let x143 = x104 * e0;
+        let x143 = -(x104 * x5);
         let x144 = 2.0 * x0 + 2.0 * x3;
         let x145 = x144 - 2.0 * x1;
         let x146 = (x145 + 2.0 * x4) * e2 - 4.0 * x82;
-        let x147 = m2 * ((x146 * x54 - x143 * x5) * d - x133);
+        let x147 = ((x143 * e0 + x146 * x54) * d - x133) * m2;
         let x148 = x142 + x147;
-        let x149 = e2 * x148;
-        let x150 = x104 * x2;
-        let x151 = x144 + x136;
-        let x152 = e3 * x126;
-        let x153 = x151 * e0 - 4.0 * x152;
-        let x154 = a_ * e2;
-        let x155 = x154 * x2;
-        let x156 = m2 * (d * (x150 * e2 + x54 * x153) + x155);
-        let x157 = -(x106 * x2);
-        let x158 = e3 * x141;
-        let x159 = 4.0 * x158 + x151 * e1;
-        let x160 = (d * (x157 * e2 + x39 * x159) - x155) * m1;
-        let x161 = x156 + x160;
-        let x162 = x161 * e0;
-        let x163 = x118 - 2.0 * x4;
-        let x164 = (x163 - 2.0 * x1) * e0 - 4.0 * x152;
-        let x165 = a_ * e3;
-        let x166 = x165 * x2;
-        let x167 = (d * (e3 * x157 + x39 * x164) - x166) * m1;
-        let x168 = 2.0 * x0 + x119;
-        let x169 = (x168 - 2.0 * x3) * e1 - 4.0 * x158;
-        let x170 = m2 * ((x54 * x169 + e3 * x150) * d + x166);
-        let x171 = x167 + x170;
-        let x172 = x171 * e1;
-        let x173 = (2.0 * x162 - 2.0 * x131 - 2.0 * x149 + 2.0 * x172) * x7;
-        let x174 = x1 - x3;
-        let x175 = x174 - x0 + x4;
-        let x176 = 2.0 * x124 + 2.0 * x125;
-        let x177 = x176 * d;
-        let x178 = 2.0 * x154 + x177;
-        let x179 = 2.0 * x68 - 2.0 * x71;
-        let x180 = 2.0 * x126 + 2.0 * x134;
-        let x181 = x104 * x179 + x180 * x54;
-        let x182 = x181 * x110;
-        let x183 = x104 * x180 - x54 * x179;
-        let x184 = x183 * x55;
-        let x185 = 2.0 * x184 - x182;
-        let x186 = m2 * (e3 * x185 - x175 * x178);
-        let x187 = x106 * x175 - x180 * x39;
-        let x188 = x106 * a_;
-        let x189 = 2.0 * x188 + 2.0 * d;
-        let x190 = x187 * x189;
-        let x191 = x175 * x39;
-        let x192 = x106 * x180;
-        let x193 = x191 + x192;
-        let x194 = x193 * x40;
-        let x195 = x190 + 2.0 * x194;
-        let x196 = x39 * e0;
-        let x197 = 2.0 * (x106 * e3) + 2.0 * x196;
-        let x198 = -(d * x197);
-        let x199 = 2.0 * x165 - x198;
-        let x200 = (e2 * x195 + x199 * x179) * m1;
-        let x201 = x186 + x200;
-        let x202 = x201 * e3;
-        let x203 = e3 * x54;
-        let x204 = x104 * e1;
-        let x205 = 2.0 * x203 - 2.0 * x204;
-        let x206 = x205 * d;
-        let x207 = 2.0 * x116 - x206;
-        let x208 = x182 - 2.0 * x184;
-        let x209 = m2 * (x175 * x207 + x208 * e0);
-        let x210 = -x190 - 2.0 * x194;
-        let x211 = x106 * e0;
-        let x212 = e3 * x39;
-        let x213 = 2.0 * x211 - 2.0 * x212;
-        let x214 = d * x213;
-        let x215 = x214 + 2.0 * x132;
-        let x216 = (e1 * x210 - x215 * x179) * m1;
-        let x217 = x209 + x216;
-        let x218 = x217 * e0;
-        let x219 = x54 * e2;
-        let x220 = 2.0 * x143 - 2.0 * x219;
-        let x221 = x220 * d;
-        let x222 = 2.0 * x132 + x221;
-        let x223 = m2 * (x208 * e1 - x222 * x175);
-        let x224 = x39 * e2;
-        let x225 = 2.0 * x224 + 2.0 * x122;
-        let x226 = d * x225;
+        let x149 = x148 * e2;
+        let x150 = e3 * x2;
+        let x151 = e3 * x141;
+        let x152 = 2.0 * x0 + x119;
+        let x153 = (x152 - 2.0 * x3) * e1 - 4.0 * x151;
+        let x154 = m2 * (a_ * x150 + d * (x104 * x150 + x54 * x153));
+        let x155 = -(e3 * x2);
+        let x156 = e3 * x123;
+        let x157 = x118 - 2.0 * x4;
+        let x158 = (x157 - 2.0 * x1) * e0 - 4.0 * x156;
+        let x159 = (d * (x106 * x155 + x39 * x158) + a_ * x155) * m1;
+        let x160 = x154 + x159;
+        let x161 = x160 * e1;
+        let x162 = x144 + x136;
+        let x163 = x162 * e0 - 4.0 * x156;
+        let x164 = a_ * e2;
+        let x165 = x164 * x2;
+        let x166 = m2 * (d * (x124 * x2 + x54 * x163) + x165);
+        let x167 = 4.0 * x151 + x162 * e1;
+        let x168 = ((x39 * x167 - x139 * x2) * d - x165) * m1;
+        let x169 = x166 + x168;
+        let x170 = x169 * e0;
+        let x171 = x7 * (2.0 * x161 - 2.0 * x131 - 2.0 * x149 + 2.0 * x170);
+        let x172 = x1 - x3;
+        let x173 = x172 - x0 + x4;
+        let x174 = 2.0 * x124 + 2.0 * x125;
+        let x175 = x174 * d;
+        let x176 = x175 + 2.0 * x164;
+        let x177 = 2.0 * x68 - 2.0 * x71;
+        let x178 = 2.0 * x123 + 2.0 * x134;
+        let x179 = x104 * x177 + x178 * x54;
+        let x180 = x179 * x110;
+        let x181 = x104 * x178 - x54 * x177;
+        let x182 = x181 * x55;
+        let x183 = 2.0 * x182 - x180;
+        let x184 = m2 * (e3 * x183 - x173 * x176);
+        let x185 = a_ * e3;
+        let x186 = 2.0 * (x106 * e3) + 2.0 * (x39 * e0);
+        let x187 = -(x186 * d);
+        let x188 = 2.0 * x185 - x187;
+        let x189 = x106 * x173 - x178 * x39;
+        let x190 = x106 * a_;
+        let x191 = 2.0 * x190 + 2.0 * d;
+        let x192 = x189 * x191;
+        let x193 = x173 * x39;
+        let x194 = x106 * x178;
+        let x195 = x193 + x194;
+        let x196 = x195 * x40;
+        let x197 = x192 + 2.0 * x196;
+        let x198 = (x188 * x177 + e2 * x197) * m1;
+        let x199 = x184 + x198;
+        let x200 = e3 * x199;
+        let x201 = e3 * x54;
+        let x202 = x104 * e1;
+        let x203 = 2.0 * x201 - 2.0 * x202;
+        let x204 = x203 * d;
+        let x205 = 2.0 * x116 - x204;
+        let x206 = x180 - 2.0 * x182;
+        let x207 = m2 * (x173 * x205 + x206 * e0);
+        let x208 = -x192 - 2.0 * x196;
+        let x209 = x106 * e0;
+        let x210 = e3 * x39;
+        let x211 = 2.0 * x209 - 2.0 * x210;
+        let x212 = d * x211;
+        let x213 = x212 + 2.0 * x132;
+        let x214 = (e1 * x208 - x213 * x177) * m1;
+        let x215 = x207 + x214;
+        let x216 = x215 * e0;
+        let x217 = x104 * e0;
+        let x218 = x54 * e2;
+        let x219 = 2.0 * x217 - 2.0 * x218;
+        let x220 = x219 * d;
+        let x221 = 2.0 * x132 + x220;
+        let x222 = (x206 * e1 - x173 * x221) * m2;
+        let x223 = x39 * e2;
+        let x224 = x106 * e1;
+        let x225 = 2.0 * x223 + 2.0 * x224;
+        let x226 = x225 * d;
         let x227 = 2.0 * x116 + x226;
-        let x228 = m1 * (x195 * e0 - x227 * x179);
-        let x229 = x223 + x228;
+        let x228 = (x197 * e0 - x227 * x177) * m1;
+        let x229 = x222 + x228;
         let x230 = x229 * e1;
-        let x231 = 2.0 * x139 - 2.0 * x140;
+        let x231 = 2.0 * x140 - 2.0 * x139;
         let x232 = d * x231;
-        let x233 = 2.0 * x154 - x232;
-        let x234 = (e3 * x210 + x233 * x179) * m1;
-        let x235 = x54 * e1;
-        let x236 = 2.0 * (x104 * e3) + 2.0 * x235;
-        let x237 = x236 * d;
-        let x238 = 2.0 * x165 + x237;
-        let x239 = m2 * (x185 * e2 + x238 * x175);
-        let x240 = x234 + x239;
-        let x241 = x240 * e2;
-        let x242 = (2.0 * x218 - 2.0 * x202 + 2.0 * x230 - 2.0 * x241) * x7;
-        let x243 = x3 - x0 + x1 - x4;
-        let x244 = x54 * x243;
-        let x245 = 2.0 * x127 - 2.0 * x141;
-        let x246 = x104 * x245;
-        let x247 = x246 - x244;
-        let x248 = x247 * x55;
-        let x249 = x104 * x243 + x245 * x54;
-        let x250 = x249 * x110;
-        let x251 = 2.0 * x248 - x250;
-        let x252 = 2.0 * x68 + 2.0 * x71;
-        let x253 = (x251 * e2 + x238 * x252) * m2;
-        let x254 = x39 * x252 + x106 * x245;
-        let x255 = x254 * x40;
-        let x256 = x106 * x252 - x245 * x39;
-        let x257 = x256 * x189;
-        let x258 = -2.0 * x255 - x257;
-        let x259 = (x258 * e3 + x233 * x243) * m1;
-        let x260 = x253 + x259;
-        let x261 = x260 * e2;
-        let x262 = x250 - 2.0 * x248;
-        let x263 = (x262 * e0 + x207 * x252) * m2;
-        let x264 = (x258 * e1 - x215 * x243) * m1;
-        let x265 = x263 + x264;
+        let x233 = 2.0 * x164 - x232;
+        let x234 = (e3 * x208 + x233 * x177) * m1;
+        let x235 = 2.0 * (x54 * e1) + 2.0 * (x104 * e3);
+        let x236 = d * x235;
+        let x237 = x236 + 2.0 * x185;
+        let x238 = m2 * (x183 * e2 + x173 * x237);
+        let x239 = x234 + x238;
+        let x240 = x239 * e2;
+        let x241 = (2.0 * x216 - 2.0 * x200 + 2.0 * x230 - 2.0 * x240) * x7;
+        let x242 = 2.0 * x68 + 2.0 * x71;
+        let x243 = 2.0 * x121 - 2.0 * x141;
+        let x244 = x39 * x242 + x106 * x243;
+        let x245 = x244 * x40;
+        let x246 = x106 * x242 - x243 * x39;
+        let x247 = x246 * x191;
+        let x248 = 2.0 * x245 + x247;
+        let x249 = x3 - x0 + x1 - x4;
+        let x250 = m1 * (x248 * e2 + x188 * x249);
+        let x251 = x54 * x249;
+        let x252 = x104 * x243;
+        let x253 = x252 - x251;
+        let x254 = x253 * x55;
+        let x255 = x104 * x249 + x243 * x54;
+        let x256 = x255 * x110;
+        let x257 = 2.0 * x254 - x256;
+        let x258 = m2 * (x257 * e3 - x242 * x176);
+        let x259 = x250 + x258;
+        let x260 = e3 * x259;
+        let x261 = -2.0 * x245 - x247;
+        let x262 = (x261 * e1 - x213 * x249) * m1;
+        let x263 = x256 - 2.0 * x254;
+        let x264 = m2 * (x263 * e0 + x242 * x205);
+        let x265 = x262 + x264;
         let x266 = x265 * e0;
-        let x267 = m2 * (e1 * x262 - x222 * x252);
-        let x268 = 2.0 * x255 + x257;
-        let x269 = (x268 * e0 - x227 * x243) * m1;
-        let x270 = x267 + x269;
-        let x271 = x270 * e1;
-        let x272 = m2 * (x251 * e3 - x178 * x252);
-        let x273 = (x268 * e2 + x199 * x243) * m1;
-        let x274 = x272 + x273;
-        let x275 = e3 * x274;
-        let x276 = x7 * (2.0 * x266 - 2.0 * x261 + 2.0 * x271 - 2.0 * x275);
-        let x277 = x92 + x19 * x58 + 48.0 * J2 + 32.0 * Izz + 16.0 * J1;
-        let x278 = x1 * x277;
-        let x279 = 24.0 * J2 + x19 * x60 + 16.0 * Izz + x90 + 8.0 * J1;
-        let x280 = x38 * x189;
-        let x281 = x280 + 2.0 * J2;
-        let x282 = -x280 - 2.0 * J2;
-        let x283 = (x281 * x119 - x282 * x144) * x7;
-        let x284 = x130 * e2;
-        let x285 = e3 * x148;
-        let x286 = x161 * e1;
-        let x287 = x171 * e0;
-        let x288 = x7 * (2.0 * x284 - 2.0 * x285 - 2.0 * x286 + 2.0 * x287);
-        let x289 = e3 * x240;
-        let x290 = x229 * e0;
-        let x291 = x201 * e2;
-        let x292 = e1 * x217;
-        let x293 = (2.0 * x290 - 2.0 * x289 + 2.0 * x291 - 2.0 * x292) * x7;
-        let x294 = x260 * e3;
+        let x267 = (x248 * e0 - x227 * x249) * m1;
+        let x268 = m2 * (e1 * x263 - x221 * x242);
+        let x269 = x267 + x268;
+        let x270 = x269 * e1;
+        let x271 = (x261 * e3 + x233 * x249) * m1;
+        let x272 = m2 * (x257 * e2 + x237 * x242);
+        let x273 = x271 + x272;
+        let x274 = x273 * e2;
+        let x275 = (2.0 * x266 - 2.0 * x260 + 2.0 * x270 - 2.0 * x274) * x7;
+        let x276 = x92 + x19 * x58 + 48.0 * J2 + 32.0 * Izz + 16.0 * J1;
+        let x277 = x1 * x276;
+        let x278 = 24.0 * J2 + x19 * x60 + 16.0 * Izz + x90 + 8.0 * J1;
+        let x279 = x38 * x191;
+        let x280 = x279 + 2.0 * J2;
+        let x281 = -x279 - 2.0 * J2;
+        let x282 = (x280 * x119 - x281 * x144) * x7;
+        let x283 = e3 * x148;
+        let x284 = x169 * e1;
+        let x285 = x130 * e2;
+        let x286 = x160 * e0;
+        let x287 = (2.0 * x285 - 2.0 * x283 - 2.0 * x284 + 2.0 * x286) * x7;
+        let x288 = x229 * e0;
+        let x289 = x215 * e1;
+        let x290 = x199 * e2;
+        let x291 = x239 * e3;
+        let x292 = (2.0 * x288 - 2.0 * x289 + 2.0 * x290 - 2.0 * x291) * x7;
+        let x293 = x259 * e2;
+        let x294 = e3 * x273;
         let x295 = x265 * e1;
-        let x296 = x270 * e0;
-        let x297 = e2 * x274;
-        let x298 = x7 * (2.0 * x296 - 2.0 * x294 - 2.0 * x295 + 2.0 * x297);
-        let x299 = x0 + x174 - x4;
-        let x300 = 2.0 * x126 - 2.0 * x134;
-        let x301 = x106 * x300 - x39 * x299;
-        let x302 = x38 * x301;
-        let x303 = x187 * x38;
-        let x304 = x38 * x256;
-        let x305 = 2.0 * x127 + 2.0 * x141;
-        let x306 = x54 * x299 + x104 * x305;
-        let x307 = x53 * x306;
-        let x308 = x53 * x181;
-        let x309 = x249 * x53;
-        let x310 = m2 + m1;
-        let x311 = m0
-            + (x3 * (x3 + x168) + x0 * (x0 + 2.0 * x1) + x36 + x4 * (x113 + x4)) * x310;
-        let x312 = e3_dot * e2;
-        let x313 = e0_dot * e1;
-        let x314 = e3 * e2_dot;
-        let x315 = e1_dot * e0;
-        let x316 = 2.0 * x314 - 2.0 * x312 - 2.0 * x313 + 2.0 * x315;
-        let x317 = e2_dot * e1;
-        let x318 = e2 * e1_dot;
-        let x319 = e3 * e0_dot;
-        let x320 = e3_dot * e0;
-        let x321 = (2.0 * x318 - 2.0 * x317) + (2.0 * x320 - 2.0 * x319);
+        let x296 = x269 * e0;
+        let x297 = x7 * (2.0 * x293 - 2.0 * x294 - 2.0 * x295 + 2.0 * x296);
+        let x298 = x0 + x172 - x4;
+        let x299 = 2.0 * x123 - 2.0 * x134;
+        let x300 = x106 * x299 - x39 * x298;
+        let x301 = x38 * x300;
+        let x302 = x189 * x38;
+        let x303 = x38 * x246;
+        let x304 = 2.0 * x121 + 2.0 * x141;
+        let x305 = x54 * x298 + x104 * x304;
+        let x306 = x53 * x305;
+        let x307 = x53 * x179;
+        let x308 = x255 * x53;
+        let x309 = m2 + m1;
+        let x310 = m0
+            + (x3 * (x3 + x152) + x0 * (x0 + 2.0 * x1) + x36 + x4 * (x113 + x4)) * x309;
+        let x311 = e3_dot * e2;
+        let x312 = e0_dot * e1;
+        let x313 = e3 * e2_dot;
+        let x314 = e1_dot * e0;
+        let x315 = 2.0 * x313 - 2.0 * x311 - 2.0 * x312 + 2.0 * x314;
+        let x316 = e2_dot * e1;
+        let x317 = e2 * e1_dot;
+        let x318 = e3 * e0_dot;
+        let x319 = e3_dot * e0;
+        let x320 = (2.0 * x317 - 2.0 * x316) + (2.0 * x319 - 2.0 * x318);
+        let x321 = x315 * x54 + x104 * x320;
         let x322 = e3 * e1_dot;
         let x323 = e2_dot * e0;
         let x324 = e3_dot * e1;
         let x325 = e0_dot * e2;
         let x326 = (2.0 * x323 - 2.0 * x322) + (2.0 * x324 - 2.0 * x325);
-        let x327 = Iyy * x326 - Ixy * x316 - Iyz * x321;
-        let x328 = x316 * x327;
-        let x329 = x316 * Ixx - Ixy * x326 - x321 * Ixz;
-        let x330 = x329 * x326;
-        let x331 = x328 - x330;
-        let x332 = x331 * e1;
-        let x333 = J2 - J1;
-        let x334 = x39 * x326;
-        let x335 = x106 * x316;
-        let x336 = x334 + x335;
-        let x337 = x333 * x336;
-        let x338 = gamma1_dot * J1;
-        let x339 = x338 * x197;
-        let x340 = x316 * x39;
-        let x341 = x106 * x326;
-        let x342 = x341 - x340;
-        let x343 = (2.0 * (x337 * e1) - x339) * x342;
-        let x344 = x321 * Izz - x316 * Ixz - Iyz * x326;
-        let x345 = x326 * x344;
-        let x346 = x321 * x327;
-        let x347 = x345 - x346;
-        let x348 = x347 * e3;
-        let x349 = x326 * x55;
-        let x350 = x349 * x326;
-        let x351 = x104 * x316;
-        let x352 = x54 * x321;
-        let x353 = x351 - x352;
-        let x354 = a_ * x321;
-        let x355 = x316 * x54 + x104 * x321;
-        let x356 = x355 * d;
-        let x357 = x354 + x356;
-        let x358 = x353 * x357;
-        let x359 = x350 - x358;
-        let x360 = x359 * x110;
-        let x361 = x109 * x326;
-        let x362 = gamma2_dot + x326;
-        let x363 = x362 * d;
-        let x364 = x361 + x363;
-        let x365 = x364 * x362;
-        let x366 = x355 * x357;
-        let x367 = gamma2_dot * x361;
-        let x368 = x365 + x366 - x367;
-        let x369 = x368 * x55;
-        let x370 = x360 - 2.0 * x369;
-        let x371 = x364 + gamma2_dot * d;
-        let x372 = -x355 * x349 - x353 * x371;
-        let x373 = m2 * (x370 * e0 + x207 * x372);
-        let x374 = J2 * gamma1_dot;
-        let x375 = gamma1_dot + x321;
-        let x376 = J1 - J2;
-        let x377 = x376 * x336;
-        let x378 = x375 * x377 - x336 * x374;
-        let x379 = x378 * x213;
-        let x380 = x316 * e2_dot;
-        let x381 = x316 * e2;
-        let x382 = x326 * e1;
-        let x383 = x321 * e0;
-        let x384 = e2_dot * e2;
-        let x385 = e1_dot * e1;
-        let x386 = e0_dot * e0;
-        let x387 = e3 * e3_dot;
-        let x388 = 8.0 * x384 + 8.0 * x385 + 8.0 * x386 + 8.0 * x387;
-        let x389 = x388 * x7;
-        let x390 = (2.0 * x381 - 2.0 * x382 - 2.0 * x383) * x389;
-        let x391 = e1_dot * x326;
-        let x392 = x321 * e0_dot;
-        let x393 = x390 - 2.0 * x380 + 2.0 * x391 + 2.0 * x392;
-        let x394 = Ixy * e2;
-        let x395 = Iyz * e0;
-        let x396 = 2.0 * x394 - 2.0 * x395 + 2.0 * (Iyy * e1);
-        let x397 = Ixz * e0;
-        let x398 = Ixx * e2;
-        let x399 = Ixy * e1;
-        let x400 = 2.0 * x397 + 2.0 * x398 + 2.0 * x399;
-        let x401 = Ixz * e2;
-        let x402 = Iyz * e1;
-        let x403 = 2.0 * x401 - 2.0 * x402 + 2.0 * (Izz * e0);
-        let x404 = x189 * x189;
-        let x405 = x40 * x40;
-        let x406 = -x404 - 4.0 * x405;
-        let x407 = x55 * x55;
-        let x408 = x110 * x110;
-        let x409 = 4.0 * x407 + x408;
-        let x410 = x225 * x213;
-        let x411 = x220 * x205;
-        let x412 = x231 * x197;
-        let x413 = x176 * x236;
-        let x414 = 2.0 * (x396 * e0) - 2.0 * (e3 * x400) - 2.0 * (x403 * e1)
-            + (x227 * x215 + x406 * x71) * m1 + m2 * (x409 * x71 - x222 * x207)
-            + J2 * (x410 + x411) + (x412 - x413) * J1;
-        let x415 = e0_dot * x326;
-        let x416 = x316 * e3_dot;
-        let x417 = x321 * e1;
-        let x418 = x326 * e0;
-        let x419 = x316 * e3;
-        let x420 = x389 * (2.0 * x417 - 2.0 * x418 - 2.0 * x419);
-        let x421 = x321 * e1_dot;
-        let x422 = 2.0 * x415 + 2.0 * x416 + x420 - 2.0 * x421;
-        let x423 = x404 + 4.0 * x405;
-        let x424 = Ixy * e0;
-        let x425 = Ixz * e1;
-        let x426 = e3 * Ixx;
-        let x427 = 2.0 * x425 - 2.0 * x424 + 2.0 * x426;
-        let x428 = Ixy * e3;
-        let x429 = 2.0 * (Iyy * e0) - 2.0 * x428 + 2.0 * x402;
-        let x430 = x236 * x236;
-        let x431 = x197 * x197;
-        let x432 = e3 * Ixz;
-        let x433 = 2.0 * (Izz * e1) + 2.0 * x432 + 2.0 * x395;
-        let x434 = x205 * x205;
-        let x435 = x213 * x213;
-        let x436 = (x215 * x215 + x0 * x423) * m1 + 2.0 * (x427 * e3) + 2.0 * (x429 * e0)
-            + (x409 * x1 + x207 * x207) * m2 + (x430 + x431) * J1 + 2.0 * (x433 * e1)
-            + (x434 + x435 + x2) * J2;
-        let x437 = x225 * x197;
-        let x438 = x236 * x205;
-        let x439 = x438;
-        let x440 = x213 * x231;
-        let x441 = -4.0 * x407 - x408;
-        let x442 = (x127 * x423 - x215 * x233) * m1 + 2.0 * (e3 * x433)
-            - 2.0 * (x429 * e2) + (x439 - x437) * J1
-            + J2 * (4.0 * x127 + x440 - 4.0 * x141 - x438)
-            + m2 * (x441 * x141 + x238 * x207) - 2.0 * (x427 * e1);
-        let x443 = x316 * e1_dot;
-        let x444 = e2_dot * x326;
-        let x445 = e2 * x326;
-        let x446 = x316 * e1;
-        let x447 = e3 * x321;
-        let x448 = x389 * (2.0 * x445 + 2.0 * x446 + 2.0 * x447);
-        let x449 = e3_dot * x321;
-        let x450 = x448 - 2.0 * x443 - 2.0 * x444 - 2.0 * x449;
-        let x451 = -4.0 * x126 - 4.0 * x134;
-        let x452 = x213 * x197;
-        let x453 = x176 * x205;
-        let x454 = x236 * x220;
-        let x455 = (x451 - x452 + x453) * J2 - 2.0 * (e3 * x429)
-            + m2 * (x441 * x134 - x178 * x207) + (x452 + x454) * J1
-            + (x406 * x126 - x215 * x199) * m1 - 2.0 * (x433 * e2) + 2.0 * (x427 * e0);
-        let x456 = e3_dot * x326;
-        let x457 = e3 * x326;
-        let x458 = x316 * e0;
-        let x459 = x321 * e2;
-        let x460 = x389 * (2.0 * x457 - 2.0 * x458 - 2.0 * x459);
-        let x461 = x316 * e0_dot;
-        let x462 = e2_dot * x321;
-        let x463 = x460 - 2.0 * x456 + 2.0 * x461 + 2.0 * x462;
-        let x464 = x7 * (x393 * x414 + x422 * x436 + x442 * x450 + x455 * x463);
-        let x465 = x316 * x344;
-        let x466 = x329 * x321;
-        let x467 = x466 - x465;
-        let x468 = x467 * e0;
-        let x469 = x321 * x40;
-        let x470 = d * gamma1_dot;
-        let x471 = x188 * x321;
-        let x472 = x375 * d;
-        let x473 = x471 + x472;
-        let x474 = x336 * x470 - x342 * x469 + x336 * x473;
-        let x475 = a_ * x326;
-        let x476 = d * x342;
-        let x477 = x475 + x476;
-        let x478 = x342 * x477;
-        let x479 = x471 * gamma1_dot;
-        let x480 = x375 * x473;
-        let x481 = x479 - x480;
-        let x482 = x481 - x478;
-        let x483 = x40 * x482;
-        let x484 = x321 * x469;
-        let x485 = x336 * x477;
-        let x486 = x484 + x485;
-        let x487 = x486 * x189;
-        let x488 = -2.0 * x483 - x487;
-        let x489 = m1 * (e1 * x488 - x215 * x474);
-        let x490 = 2.0 * gamma2_dot + x326;
-        let x491 = x490 * J2 - x362 * J1;
-        let x492 = x205 * x491;
-        let x493 = x355 * x376;
-        let x494 = (x492 + 2.0 * (e0 * x493)) * x353;
-        let x495 = gamma2_dot * J1;
-        let x496 = -(x355 * x495);
-        let x497 = x236 * x496;
-        let x498 = 2.0 * x332 + x343 - 2.0 * x348 - x373 - x379 - x464 - 2.0 * x468
-            - x489 - x494 - x497;
-        let x499 = e3 * x498;
-        let x500 = 2.0 * x483 + x487;
-        let x501 = (x199 * x474 + x500 * e2) * m1;
-        let x502 = x176 * x220;
-        let x503 = (x440 - x502) * J1 + m2 * (x127 * x441 + x222 * x178)
-            + 2.0 * (x403 * e2) + (x423 * x141 - x227 * x199) * m1
-            + J2 * (x502 - 4.0 * x127 - x437 + 4.0 * x141) - 2.0 * (x400 * e0)
-            - 2.0 * (x396 * e3);
-        let x504 = Ixx * e0;
-        let x505 = 2.0 * x428 + 2.0 * x504 - 2.0 * x401;
-        let x506 = Iyz * e3;
-        let x507 = 2.0 * (Izz * e2) - 2.0 * x397 + 2.0 * x506;
-        let x508 = Iyz * e2;
-        let x509 = 2.0 * x424 + 2.0 * (Iyy * e3) + 2.0 * x508;
-        let x510 = (x411 - x410) * J1 + (-x412 - x413) * J2
-            + m1 * (x233 * x199 + x406 * x68) + m2 * (x409 * x68 - x238 * x178)
-            - 2.0 * (x505 * e1) - 2.0 * (e3 * x507) + 2.0 * (e2 * x509);
-        let x511 = x176 * x176;
-        let x512 = x220 * x220;
-        let x513 = (x178 * x178 + x409 * x3) * m2 + 2.0 * (x507 * e2)
-            + (x5 + x431 + x511) * J2 + J1 * (x435 + x512)
-            + (x423 * x4 + x199 * x199) * m1 + 2.0 * (x505 * e0) + 2.0 * (e3 * x509);
-        let x514 = (x393 * x503 + x455 * x422 + x450 * x510 + x513 * x463) * x7;
-        let x515 = x378 * x197;
-        let x516 = x331 * e2;
-        let x517 = x220 * x496;
-        let x518 = x342 * (2.0 * (x337 * e2) + x338 * x213);
-        let x519 = 2.0 * x466 - 2.0 * x465;
-        let x520 = e3 * (2.0 * (x353 * x493) + x519);
-        let x521 = x347 * e0;
-        let x522 = 2.0 * x369 - x360;
-        let x523 = m2 * (e3 * x522 - x178 * x372);
-        let x524 = x353 * x491;
-        let x525 = x176 * x524;
-        let x526 = x515 - x501 - x514 - 2.0 * x516 - x517 - x518 + x520 - 2.0 * x521
-            - x523 - x525;
-        let x527 = x526 * e0;
-        let x528 = e3 * x331;
-        let x529 = x225 * x231;
-        let x530 = m2 * (x441 * x126 - x222 * x238) - 2.0 * (x396 * e2)
-            - 2.0 * (e3 * x403) + (-x529 - x453) * J1 + 2.0 * (x400 * e1)
-            + m1 * (x406 * x134 - x227 * x233) + J2 * (x451 + x529 - x454);
-        let x531 = 2.0 * x425 - 2.0 * (e3 * Izz) + 2.0 * x508;
-        let x532 = x225 * x225;
-        let x533 = 2.0 * x399 + 2.0 * x506 - 2.0 * (Iyy * e2);
-        let x534 = Ixx * e1;
-        let x535 = 2.0 * x394 + 2.0 * x432 - 2.0 * x534;
-        let x536 = x231 * x231;
-        let x537 = (x434 + x532) * J1 - 2.0 * (e3 * x531)
-            + (x423 * x3 + x233 * x233) * m1 - 2.0 * (x533 * e2)
-            + m2 * (x238 * x238 + x409 * x4) - 2.0 * (x535 * e1)
-            + J2 * (x5 + x430 + x536);
-        let x538 = x7 * (x442 * x422 + x393 * x530 + x510 * x463 + x450 * x537);
-        let x539 = x378 * x231;
-        let x540 = x496 * x205;
-        let x541 = x467 * e2;
-        let x542 = x347 * e1;
-        let x543 = m2 * (x238 * x372 + x522 * e2);
-        let x544 = x225 * x338;
-        let x545 = (2.0 * (x337 * e3) + x544) * x342;
-        let x546 = (x233 * x474 + e3 * x488) * m1;
-        let x547 = x353 * (x236 * x491 + 2.0 * (e2 * x493));
-        let x548 = 2.0 * x528 - x538 - x539 - x540 + 2.0 * x541 + 2.0 * x542 - x543
-            + x545 - x546 + x547;
-        let x549 = x548 * e1;
-        let x550 = x225 * x378;
-        let x551 = 2.0 * (x396 * e1) + m2 * (x0 * x409 + x222 * x222) + 2.0 * (x403 * e0)
-            + (x536 + x511) * J1 + 2.0 * (x400 * e2) + (x2 + x512 + x532) * J2
-            + m1 * (x227 * x227 + x423 * x1);
-        let x552 = (x422 * x414 + x551 * x393 + x450 * x530 + x503 * x463) * x7;
-        let x553 = (x370 * e1 - x222 * x372) * m2;
-        let x554 = x347 * e2;
-        let x555 = x220 * x491;
-        let x556 = x353 * (x555 + 2.0 * (e1 * x493));
-        let x557 = x176 * x496;
-        let x558 = x467 * e1;
-        let x559 = (x500 * e0 - x227 * x474) * m1;
-        let x560 = x331 * e0;
-        let x561 = x338 * x231;
-        let x562 = (2.0 * (x337 * e0) + x561) * x342;
-        let x563 = 2.0 * x554 - x550 - x552 - x553 - x556 + x557 - 2.0 * x558 - x559
-            - 2.0 * x560 - x562;
-        let x564 = x563 * e2;
-        let x565 = x498 * e0;
-        let x566 = x548 * e2;
-        let x567 = x563 * e1;
-        let x568 = x526 * e3;
-        let x569 = e3 * x548;
-        let x570 = x563 * e0;
-        let x571 = x498 * e1;
-        let x572 = x526 * e2;
-        let x573 = x463 * e2;
-        let x574 = x393 * e0;
-        let x575 = e3 * x450;
-        let x576 = x422 * e1;
-        let x577 = x450 * e2;
-        let x578 = e3 * x463;
-        let x579 = x422 * e0;
-        let x580 = x393 * e1;
-        let x581 = x333 * x355;
-        let x582 = x104 * x299 - x54 * x305;
-        let x583 = x39 * x300 + x106 * x299;
-        let x584 = x7 * e1;
-        let x585 = -(2.0 * x584);
-        let x586 = x7 * e2;
-        let x587 = -(2.0 * x586);
-        let x588 = e3 * x7;
-        let x589 = -(2.0 * x588);
-        let x590 = x7 * e0;
-        let x591 = 2.0 * x590;
-        let x592 = x8 * e0;
-        let x593 = 128.0 * x19 + 128.0 * x15;
-        let x594 = x593 - 256.0;
-        let x595 = 128.0 * x15 - 128.0;
-        let x596 = x593 + 256.0;
-        let x597 = J2 * x594 - 256.0 * Ixx
-            + (m2 * (128.0 * x19 - 128.0) + m1 * x595) * x21 - x596 * J1;
-        let x598 = 256.0 * x15 - 256.0;
-        let x599 = 256.0 * x19 + 256.0 * x15;
-        let x600 = x599 - 512.0;
-        let x601 = x599 + 512.0;
-        let x602 = 512.0 * x0 + 512.0 * x1;
-        let x603 = x602 + 256.0 * x4;
-        let x604 = 256.0 * x0 + 256.0 * x1;
-        let x605 = x604 + 128.0 * x4;
-        let x606 = -256.0 * x0 - 256.0 * x1;
-        let x607 = x606 - 128.0 * x4;
-        let x608 = x602 + (256.0 * x3 + 512.0 * x4);
-        let x609 = (-256.0 * x3 - 512.0 * x1) + (-512.0 * x0 - 512.0 * x4);
-        let x610 = x604 + (128.0 * x3 + 256.0 * x4);
-        let x611 = x19 * x610;
-        let x612 = x610 * x15;
-        let x613 = x606 + (-128.0 * x3 - 256.0 * x4);
-        let x614 = x612 + x613;
-        let x615 = x10 + 32.0 * x3;
-        let x616 = x615 * x15;
-        let x617 = 64.0 * x3 + x101;
-        let x618 = x19 * x615;
-        let x619 = x615 - x616;
-        let x620 = x7
-            * (x597 * f64::powi(e0, 4)
+        let x327 = x326 * x55;
+        let x328 = x104 * x315;
+        let x329 = x54 * x320;
+        let x330 = x328 - x329;
+        let x331 = x109 * x326;
+        let x332 = gamma2_dot + x326;
+        let x333 = x332 * d;
+        let x334 = x331 + x333;
+        let x335 = x334 + gamma2_dot * d;
+        let x336 = -x321 * x327 - x330 * x335;
+        let x337 = x327 * x326;
+        let x338 = a_ * x320;
+        let x339 = x321 * d;
+        let x340 = x338 + x339;
+        let x341 = x330 * x340;
+        let x342 = x337 - x341;
+        let x343 = x342 * x110;
+        let x344 = x334 * x332;
+        let x345 = x321 * x340;
+        let x346 = gamma2_dot * x331;
+        let x347 = x344 + x345 - x346;
+        let x348 = x347 * x55;
+        let x349 = x343 - 2.0 * x348;
+        let x350 = m2 * (x205 * x336 + x349 * e0);
+        let x351 = Iyy * x326 - Ixy * x315 - Iyz * x320;
+        let x352 = x315 * x351;
+        let x353 = x315 * Ixx - Ixy * x326 - x320 * Ixz;
+        let x354 = x353 * x326;
+        let x355 = x352 - x354;
+        let x356 = x355 * e1;
+        let x357 = x315 * x39;
+        let x358 = x106 * x326;
+        let x359 = x358 - x357;
+        let x360 = J2 - J1;
+        let x361 = x39 * x326;
+        let x362 = x106 * x315;
+        let x363 = x361 + x362;
+        let x364 = x360 * x363;
+        let x365 = gamma1_dot * J1;
+        let x366 = x186 * x365;
+        let x367 = x359 * (2.0 * (x364 * e1) - x366);
+        let x368 = J2 * gamma1_dot;
+        let x369 = gamma1_dot + x320;
+        let x370 = J1 - J2;
+        let x371 = x370 * x363;
+        let x372 = x369 * x371 - x363 * x368;
+        let x373 = x211 * x372;
+        let x374 = x320 * Izz - x315 * Ixz - Iyz * x326;
+        let x375 = x326 * x374;
+        let x376 = x320 * x351;
+        let x377 = x375 - x376;
+        let x378 = x377 * e3;
+        let x379 = x315 * x374;
+        let x380 = x353 * x320;
+        let x381 = x380 - x379;
+        let x382 = x381 * e0;
+        let x383 = x321 * x370;
+        let x384 = 2.0 * gamma2_dot + x326;
+        let x385 = x384 * J2 - x332 * J1;
+        let x386 = x203 * x385;
+        let x387 = (2.0 * (e0 * x383) + x386) * x330;
+        let x388 = gamma2_dot * J1;
+        let x389 = -(x321 * x388);
+        let x390 = x389 * x235;
+        let x391 = x315 * e1_dot;
+        let x392 = e2_dot * x326;
+        let x393 = e2_dot * e2;
+        let x394 = e1_dot * e1;
+        let x395 = e0_dot * e0;
+        let x396 = e3 * e3_dot;
+        let x397 = 8.0 * x393 + 8.0 * x394 + 8.0 * x395 + 8.0 * x396;
+        let x398 = x397 * x7;
+        let x399 = e2 * x326;
+        let x400 = x315 * e1;
+        let x401 = e3 * x320;
+        let x402 = x398 * (2.0 * x399 + 2.0 * x400 + 2.0 * x401);
+        let x403 = e3_dot * x320;
+        let x404 = x402 - 2.0 * x391 - 2.0 * x392 - 2.0 * x403;
+        let x405 = x55 * x55;
+        let x406 = x110 * x110;
+        let x407 = -4.0 * x405 - x406;
+        let x408 = e3 * Ixz;
+        let x409 = Iyz * e0;
+        let x410 = 2.0 * (Izz * e1) + 2.0 * x408 + 2.0 * x409;
+        let x411 = Ixy * e3;
+        let x412 = Iyz * e1;
+        let x413 = 2.0 * (Iyy * e0) - 2.0 * x411 + 2.0 * x412;
+        let x414 = x203 * x235;
+        let x415 = x414;
+        let x416 = x225 * x186;
+        let x417 = x211 * x231;
+        let x418 = x191 * x191;
+        let x419 = x40 * x40;
+        let x420 = x418 + 4.0 * x419;
+        let x421 = Ixy * e0;
+        let x422 = Ixz * e1;
+        let x423 = e3 * Ixx;
+        let x424 = 2.0 * x422 - 2.0 * x421 + 2.0 * x423;
+        let x425 = m2 * (x407 * x141 + x237 * x205) + 2.0 * (e3 * x410)
+            - 2.0 * (x413 * e2) + (x415 - x416) * J1
+            + (4.0 * x121 - x414 + x417 - 4.0 * x141) * J2
+            + (x121 * x420 - x233 * x213) * m1 - 2.0 * (x424 * e1);
+        let x426 = 4.0 * x405 + x406;
+        let x427 = Ixy * e2;
+        let x428 = 2.0 * x427 - 2.0 * x409 + 2.0 * (Iyy * e1);
+        let x429 = Ixz * e0;
+        let x430 = Ixx * e2;
+        let x431 = Ixy * e1;
+        let x432 = 2.0 * x429 + 2.0 * x430 + 2.0 * x431;
+        let x433 = x186 * x231;
+        let x434 = x174 * x235;
+        let x435 = Ixz * e2;
+        let x436 = 2.0 * x435 - 2.0 * x412 + 2.0 * (Izz * e0);
+        let x437 = -x418 - 4.0 * x419;
+        let x438 = x225 * x211;
+        let x439 = x203 * x219;
+        let x440 = m2 * (x426 * x71 - x221 * x205) + 2.0 * (x428 * e0)
+            - 2.0 * (e3 * x432) + (x433 - x434) * J1 - 2.0 * (x436 * e1)
+            + (x227 * x213 + x437 * x71) * m1 + J2 * (x438 + x439);
+        let x441 = x315 * e2_dot;
+        let x442 = x315 * e2;
+        let x443 = x326 * e1;
+        let x444 = x320 * e0;
+        let x445 = (2.0 * x442 - 2.0 * x443 - 2.0 * x444) * x398;
+        let x446 = e1_dot * x326;
+        let x447 = x320 * e0_dot;
+        let x448 = x445 - 2.0 * x441 + 2.0 * x446 + 2.0 * x447;
+        let x449 = x219 * x235;
+        let x450 = x186 * x211;
+        let x451 = -4.0 * x123 - 4.0 * x134;
+        let x452 = x203 * x174;
+        let x453 = m2 * (x407 * x134 - x176 * x205) - 2.0 * (e3 * x413)
+            + (x449 + x450) * J1 + m1 * (x437 * x123 - x188 * x213)
+            + (x451 - x450 + x452) * J2 - 2.0 * (x410 * e2) + 2.0 * (x424 * e0);
+        let x454 = e3_dot * x326;
+        let x455 = e3 * x326;
+        let x456 = x315 * e0;
+        let x457 = x320 * e2;
+        let x458 = x398 * (2.0 * x455 - 2.0 * x456 - 2.0 * x457);
+        let x459 = x315 * e0_dot;
+        let x460 = e2_dot * x320;
+        let x461 = x458 - 2.0 * x454 + 2.0 * x459 + 2.0 * x460;
+        let x462 = x235 * x235;
+        let x463 = x186 * x186;
+        let x464 = x203 * x203;
+        let x465 = x211 * x211;
+        let x466 = 2.0 * (x424 * e3) + 2.0 * (x413 * e0) + J1 * (x462 + x463)
+            + m2 * (x426 * x1 + x205 * x205) + (x2 + x464 + x465) * J2
+            + 2.0 * (x410 * e1) + (x0 * x420 + x213 * x213) * m1;
+        let x467 = e0_dot * x326;
+        let x468 = x315 * e3_dot;
+        let x469 = x320 * e1;
+        let x470 = x326 * e0;
+        let x471 = x315 * e3;
+        let x472 = x398 * (2.0 * x469 - 2.0 * x470 - 2.0 * x471);
+        let x473 = x320 * e1_dot;
+        let x474 = 2.0 * x467 + 2.0 * x468 + x472 - 2.0 * x473;
+        let x475 = x7 * (x404 * x425 + x440 * x448 + x453 * x461 + x466 * x474);
+        let x476 = a_ * x326;
+        let x477 = d * x359;
+        let x478 = x476 + x477;
+        let x479 = x359 * x478;
+        let x480 = x190 * x320;
+        let x481 = x480 * gamma1_dot;
+        let x482 = x369 * d;
+        let x483 = x480 + x482;
+        let x484 = x369 * x483;
+        let x485 = x481 - x484;
+        let x486 = x485 - x479;
+        let x487 = x40 * x486;
+        let x488 = x320 * x40;
+        let x489 = x320 * x488;
+        let x490 = x363 * x478;
+        let x491 = x489 + x490;
+        let x492 = x491 * x191;
+        let x493 = -2.0 * x487 - x492;
+        let x494 = d * gamma1_dot;
+        let x495 = x363 * x494 - x359 * x488 + x363 * x483;
+        let x496 = m1 * (e1 * x493 - x213 * x495);
+        let x497 = 2.0 * x356 - x350 + x367 - x373 - 2.0 * x378 - 2.0 * x382 - x387
+            - x390 - x475 - x496;
+        let x498 = x497 * e3;
+        let x499 = x186 * x372;
+        let x500 = x355 * e2;
+        let x501 = x389 * x219;
+        let x502 = Ixx * e0;
+        let x503 = 2.0 * x411 + 2.0 * x502 - 2.0 * x435;
+        let x504 = Iyz * e3;
+        let x505 = 2.0 * (Izz * e2) - 2.0 * x429 + 2.0 * x504;
+        let x506 = Iyz * e2;
+        let x507 = 2.0 * x421 + 2.0 * (Iyy * e3) + 2.0 * x506;
+        let x508 = m1 * (x437 * x68 + x233 * x188) + m2 * (x426 * x68 - x237 * x176)
+            + (x439 - x438) * J1 + J2 * (-x433 - x434) - 2.0 * (x503 * e1)
+            - 2.0 * (e3 * x505) + 2.0 * (e2 * x507);
+        let x509 = x174 * x174;
+        let x510 = x219 * x219;
+        let x511 = (x5 + x509 + x463) * J2 + (x426 * x3 + x176 * x176) * m2
+            + m1 * (x420 * x4 + x188 * x188) + 2.0 * (x505 * e2) + (x510 + x465) * J1
+            + 2.0 * (x503 * e0) + 2.0 * (e3 * x507);
+        let x512 = x174 * x219;
+        let x513 = 2.0 * (x436 * e2) + (x420 * x141 - x227 * x188) * m1
+            + (x512 - 4.0 * x121 - x416 + 4.0 * x141) * J2
+            + m2 * (x221 * x176 + x121 * x407) + (x417 - x512) * J1 - 2.0 * (x432 * e0)
+            - 2.0 * (x428 * e3);
+        let x514 = (x453 * x474 + x404 * x508 + x511 * x461 + x513 * x448) * x7;
+        let x515 = x359 * (2.0 * (x364 * e2) + x365 * x211);
+        let x516 = 2.0 * x380 - 2.0 * x379;
+        let x517 = e3 * (2.0 * (x330 * x383) + x516);
+        let x518 = x377 * e0;
+        let x519 = 2.0 * x348 - x343;
+        let x520 = m2 * (e3 * x519 - x176 * x336);
+        let x521 = x330 * x385;
+        let x522 = x174 * x521;
+        let x523 = 2.0 * x487 + x492;
+        let x524 = m1 * (x188 * x495 + x523 * e2);
+        let x525 = x499 - 2.0 * x500 - x501 - x514 - x515 + x517 - 2.0 * x518 - x520
+            - x522 - x524;
+        let x526 = x525 * e0;
+        let x527 = x174 * x389;
+        let x528 = x225 * x372;
+        let x529 = x365 * x231;
+        let x530 = x359 * (2.0 * (x364 * e0) + x529);
+        let x531 = x377 * e2;
+        let x532 = x231 * x231;
+        let x533 = x225 * x225;
+        let x534 = (x532 + x509) * J1 + 2.0 * (x428 * e1)
+            + (x420 * x1 + x227 * x227) * m1 + (x533 + x2 + x510) * J2
+            + m2 * (x221 * x221 + x0 * x426) + 2.0 * (x436 * e0) + 2.0 * (x432 * e2);
+        let x535 = x225 * x231;
+        let x536 = J2 * (x535 - x449 + x451) - 2.0 * (x428 * e2) - 2.0 * (e3 * x436)
+            + m1 * (x437 * x134 - x227 * x233) + (x407 * x123 - x237 * x221) * m2
+            + (-x535 - x452) * J1 + 2.0 * (x432 * e1);
+        let x537 = x7 * (x534 * x448 + x440 * x474 + x513 * x461 + x404 * x536);
+        let x538 = x219 * x385;
+        let x539 = (2.0 * (e1 * x383) + x538) * x330;
+        let x540 = x381 * e1;
+        let x541 = (x523 * e0 - x227 * x495) * m1;
+        let x542 = m2 * (x349 * e1 - x221 * x336);
+        let x543 = x355 * e0;
+        let x544 = x527 - x528 - x530 + 2.0 * x531 - x537 - x539 - 2.0 * x540 - x541
+            - x542 - 2.0 * x543;
+        let x545 = x544 * e2;
+        let x546 = e3 * x355;
+        let x547 = 2.0 * x422 - 2.0 * (e3 * Izz) + 2.0 * x506;
+        let x548 = 2.0 * x431 + 2.0 * x504 - 2.0 * (Iyy * e2);
+        let x549 = Ixx * e1;
+        let x550 = 2.0 * x427 + 2.0 * x408 - 2.0 * x549;
+        let x551 = J2 * (x462 + x5 + x532) - 2.0 * (e3 * x547)
+            + (x233 * x233 + x420 * x3) * m1 + m2 * (x237 * x237 + x426 * x4)
+            + (x533 + x464) * J1 - 2.0 * (x548 * e2) - 2.0 * (x550 * e1);
+        let x552 = (x404 * x551 + x425 * x474 + x461 * x508 + x536 * x448) * x7;
+        let x553 = m1 * (e3 * x493 + x233 * x495);
+        let x554 = (x235 * x385 + 2.0 * (e2 * x383)) * x330;
+        let x555 = x225 * x365;
+        let x556 = (x555 + 2.0 * (x364 * e3)) * x359;
+        let x557 = m2 * (x237 * x336 + x519 * e2);
+        let x558 = x381 * e2;
+        let x559 = x377 * e1;
+        let x560 = x372 * x231;
+        let x561 = x203 * x389;
+        let x562 = 2.0 * x546 - x552 - x553 + x554 + x556 - x557 + 2.0 * x558
+            + 2.0 * x559 - x560 - x561;
+        let x563 = x562 * e1;
+        let x564 = x497 * e0;
+        let x565 = x544 * e1;
+        let x566 = x562 * e2;
+        let x567 = e3 * x525;
+        let x568 = x497 * e1;
+        let x569 = e3 * x562;
+        let x570 = x544 * e0;
+        let x571 = e2 * x525;
+        let x572 = x461 * e2;
+        let x573 = x448 * e0;
+        let x574 = e3 * x404;
+        let x575 = x474 * e1;
+        let x576 = x404 * e2;
+        let x577 = e3 * x461;
+        let x578 = x474 * e0;
+        let x579 = x448 * e1;
+        let x580 = x360 * x321;
+        let x581 = x104 * x298 - x54 * x304;
+        let x582 = x39 * x299 + x106 * x298;
+        let x583 = x7 * e1;
+        let x584 = -(2.0 * x583);
+        let x585 = x7 * e2;
+        let x586 = -(2.0 * x585);
+        let x587 = e3 * x7;
+        let x588 = -(2.0 * x587);
+        let x589 = x7 * e0;
+        let x590 = 2.0 * x589;
+        let x591 = x8 * e0;
+        let x592 = 128.0 * x19 + 128.0 * x15;
+        let x593 = x592 - 256.0;
+        let x594 = 128.0 * x15 - 128.0;
+        let x595 = x592 + 256.0;
+        let x596 = J2 * x593 - 256.0 * Ixx
+            + (m2 * (128.0 * x19 - 128.0) + m1 * x594) * x21 - x595 * J1;
+        let x597 = 256.0 * x15 - 256.0;
+        let x598 = 256.0 * x19 + 256.0 * x15;
+        let x599 = x598 - 512.0;
+        let x600 = x598 + 512.0;
+        let x601 = 512.0 * x0 + 512.0 * x1;
+        let x602 = x601 + 256.0 * x4;
+        let x603 = 256.0 * x0 + 256.0 * x1;
+        let x604 = x603 + 128.0 * x4;
+        let x605 = -256.0 * x0 - 256.0 * x1;
+        let x606 = x605 - 128.0 * x4;
+        let x607 = x601 + (256.0 * x3 + 512.0 * x4);
+        let x608 = (-256.0 * x3 - 512.0 * x1) + (-512.0 * x0 - 512.0 * x4);
+        let x609 = x603 + (128.0 * x3 + 256.0 * x4);
+        let x610 = x19 * x609;
+        let x611 = x609 * x15;
+        let x612 = x605 + (-128.0 * x3 - 256.0 * x4);
+        let x613 = x611 + x612;
+        let x614 = x10 + 32.0 * x3;
+        let x615 = x614 * x15;
+        let x616 = 64.0 * x3 + x101;
+        let x617 = x19 * x614;
+        let x618 = x614 - x615;
+        let x619 = x7
+            * (x596 * f64::powi(e0, 4)
                 + x0
-                    * (x0 * x597
+                    * (x0 * x596
                         + x1
-                            * ((m2 * (256.0 * x19 - 256.0) + m1 * x598) * x21
-                                - 512.0 * Ixx + J2 * x600 - x601 * J1))
-                + ((-x0 * x601 - x1 * x601 - x596 * x4) * J1 - Ixx * x603
-                    + J2 * (x4 * x594 + x0 * x600 + x600 * x1)
-                    + (m2 * (x19 * x605 + x607) + (x605 * x15 + x607) * m1) * x21) * x4
-                + ((x609 - x611 - x612) * J1 - Ixx * x608 + J2 * (x609 + x611 + x612)
-                    + (m2 * (x611 + x613) + x614 * m1) * x21) * x3)
-            + (x616 + x617 + x618) * J1 + J2 * (x617 - x616 - x618)
-            + (m2 * (x615 - x618) + x619 * m1) * x21 + Ixx * x617;
-        let x621 = x4 * x603;
-        let x622 = x0 * (256.0 * x0 + 512.0 * x1);
-        let x623 = x3 * x608;
-        let x624 = x621 + x622 + 256.0 * x36 + x623;
-        let x625 = 128.0 * x44 + 128.0 * J2 - 128.0 * J1;
-        let x626 = x605 * J2;
-        let x627 = x605 * J1;
-        let x628 = J2 * x610;
-        let x629 = x610 * J1;
-        let x630 = J2 * x615;
-        let x631 = x615 * J1;
-        let x632 = x7
-            * (Ixy * x624 + x41 * x624
-                + (x0 * ((256.0 * x44 + 256.0 * J2 - 256.0 * J1) * x1 + x0 * x625)
-                    + (x626 - x627 + x605 * x44) * x4 + x625 * f64::powi(e0, 4)
-                    + x3 * (x628 + x44 * x610 - x629)) * x42) - Ixy * x617 - x41 * x617
-            + x42 * (x631 - x630 - x44 * x615);
-        let x633 = x592 * x632;
-        let x634 = x630 - x631;
-        let x635 = 128.0 * J1 - 128.0 * J2;
-        let x636 = x635 - 128.0 * x57;
-        let x637 = x629 - x628;
-        let x638 = 256.0 * J1 - 256.0 * J2;
-        let x639 = -x621 - x622 - 256.0 * x36 - x623;
-        let x640 = x617 * x56 - x617 * Ixz + (x57 * x615 + x634) * x63
-            + ((x4 * (x627 - x626 - x605 * x57) + x636 * f64::powi(e0, 4)
-                + x3 * (x637 - x57 * x610)
-                + x0 * (x0 * x636 + x1 * (x638 - 256.0 * x57))) * x63 + x624 * Ixz
-                + x639 * x56) * x7;
-        let x641 = x592 * x640;
-        let x642 = x72 + 8.0 * x4;
-        let x643 = 64.0 * x1 + 64.0 * x4;
-        let x644 = (e3
-            * ((-64.0 * x70 - x67 * (x643 + 64.0 * x3)) * e0
-                + (x67 * (64.0 * x68 - 64.0 * x71) - x69 * x617) * e1)
-            + e2 * ((x67 * x101 - 64.0 * x76) * e1 - x643 * x74)) * x7;
-        let x645 = (16.0 * x127 + 24.0 * x141) * x69 + x644;
-        let x646 = x67 * (24.0 * x134 - 16.0 * x126);
-        let x647 = x69 * e2;
-        let x648 = x77
-            * (e3 * (8.0 * x70 + x67 * x642) + (x645 + x646) * e0
-                + x647 * (8.0 * x0 + 8.0 * x4));
-        let x649 = 16.0 * x1 + 16.0 * x4;
-        let x650 = x101 * x71;
-        let x651 = x617 * e2;
-        let x652 = x7
+                            * ((m2 * (256.0 * x19 - 256.0) + m1 * x597) * x21
+                                - 512.0 * Ixx + J2 * x599 - x600 * J1))
+                + ((-x0 * x600 - x1 * x600 - x595 * x4) * J1 - Ixx * x602
+                    + J2 * (x4 * x593 + x0 * x599 + x599 * x1)
+                    + (m2 * (x19 * x604 + x606) + (x604 * x15 + x606) * m1) * x21) * x4
+                + ((x608 - x610 - x611) * J1 - Ixx * x607 + J2 * (x608 + x610 + x611)
+                    + (m2 * (x610 + x612) + x613 * m1) * x21) * x3)
+            + (x615 + x616 + x617) * J1 + J2 * (x616 - x615 - x617)
+            + (m2 * (x614 - x617) + x618 * m1) * x21 + Ixx * x616;
+        let x620 = x4 * x602;
+        let x621 = x0 * (256.0 * x0 + 512.0 * x1);
+        let x622 = x3 * x607;
+        let x623 = x620 + x621 + 256.0 * x36 + x622;
+        let x624 = 128.0 * x44 + 128.0 * J2 - 128.0 * J1;
+        let x625 = x604 * J2;
+        let x626 = x604 * J1;
+        let x627 = J2 * x609;
+        let x628 = x609 * J1;
+        let x629 = J2 * x614;
+        let x630 = x614 * J1;
+        let x631 = x7
+            * (Ixy * x623 + x41 * x623
+                + (x0 * ((256.0 * x44 + 256.0 * J2 - 256.0 * J1) * x1 + x0 * x624)
+                    + (x625 - x626 + x604 * x44) * x4 + x624 * f64::powi(e0, 4)
+                    + x3 * (x627 + x44 * x609 - x628)) * x42) - Ixy * x616 - x41 * x616
+            + x42 * (x630 - x629 - x44 * x614);
+        let x632 = x591 * x631;
+        let x633 = x629 - x630;
+        let x634 = 128.0 * J1 - 128.0 * J2;
+        let x635 = x634 - 128.0 * x57;
+        let x636 = x628 - x627;
+        let x637 = 256.0 * J1 - 256.0 * J2;
+        let x638 = -x620 - x621 - 256.0 * x36 - x622;
+        let x639 = x616 * x56 - x616 * Ixz + (x57 * x614 + x633) * x63
+            + ((x4 * (x626 - x625 - x604 * x57) + x635 * f64::powi(e0, 4)
+                + x3 * (x636 - x57 * x609)
+                + x0 * (x0 * x635 + x1 * (x637 - 256.0 * x57))) * x63 + x623 * Ixz
+                + x638 * x56) * x7;
+        let x640 = x591 * x639;
+        let x641 = x72 + 8.0 * x4;
+        let x642 = 64.0 * x1 + 64.0 * x4;
+        let x643 = (e3
+            * ((-64.0 * x70 - x67 * (x642 + 64.0 * x3)) * e0
+                + (x67 * (64.0 * x68 - 64.0 * x71) - x69 * x616) * e1)
+            + e2 * ((x67 * x101 - 64.0 * x76) * e1 - x642 * x74)) * x7;
+        let x644 = (16.0 * x121 + 24.0 * x141) * x69 + x643;
+        let x645 = x67 * (24.0 * x134 - 16.0 * x123);
+        let x646 = x69 * e2;
+        let x647 = x77
+            * (e3 * (8.0 * x70 + x67 * x641) + (x644 + x645) * e0
+                + x646 * (8.0 * x0 + 8.0 * x4));
+        let x648 = 16.0 * x1 + 16.0 * x4;
+        let x649 = x101 * x71;
+        let x650 = x616 * e2;
+        let x651 = x7
             * (x67
                 * ((64.0 * x1 + 32.0 * x4) * x4 - 32.0 * x79
                     - x3 * (64.0 * x0 + 32.0 * x3) + 32.0 * x36)
-                + x69 * (x650 + e3 * (64.0 * x82 - x651)));
-        let x653 = x652 - x67 * x649;
-        let x654 = (16.0 * x68 - 24.0 * x71) * x69;
-        let x655 = -(e1 * x642);
-        let x656 = x77 * ((x653 + x654) * e0 + x655 * x69);
-        let x657 = x7
+                + x69 * (x649 + e3 * (64.0 * x82 - x650)));
+        let x652 = x651 - x67 * x648;
+        let x653 = (16.0 * x68 - 24.0 * x71) * x69;
+        let x654 = -(e1 * x641);
+        let x655 = x77 * ((x652 + x653) * e0 + x654 * x69);
+        let x656 = x7
             * ((32.0 * x79 - (32.0 * x3 + 64.0 * x1) * x3 - 32.0 * x36
                 + x4 * (64.0 * x0 + 32.0 * x4)) * x69
-                + x67 * (e3 * (64.0 * x82 + x651) + x650));
-        let x658 = x657 - x67 * (16.0 * x68 + 24.0 * x71);
-        let x659 = (16.0 * x3 + 16.0 * x1) * x69;
-        let x660 = (x67 * x655 + (x658 + x659) * e0) * x77;
-        let x661 = (96.0 * x3 + 96.0 * x1) + (96.0 * x0 + 96.0 * x4);
-        let x662 = (256.0 * m2 + 256.0 * m1) * x89;
-        let x663 = x595 * J1 - 256.0 * Iyy + J2 * (-128.0 * x15 - 384.0) - x662;
-        let x664 = (512.0 * m2 + 512.0 * m1) * x89;
-        let x665 = x598 * J1 - 512.0 * Iyy + J2 * (-256.0 * x15 - 768.0) - x664;
-        let x666 = x665 * x1;
-        let x667 = x89 * (-m2 * x608 - m1 * x608);
-        let x668 = 1024.0 * x0 + 1024.0 * x1;
-        let x669 = -(x668 + 512.0 * x4) * x4 - x0 * (512.0 * x0 + 1024.0 * x1)
-            - 512.0 * x36 - (512.0 * x3 + x668 + 1024.0 * x4) * x3;
-        let x670 = (-x605 * x4 - x0 * (128.0 * x0 + 256.0 * x1))
-            + (-128.0 * x36 - x3 * x610);
-        let x671 = 128.0 * x0 + 128.0 * x3 + 128.0 * x1 + 128.0 * x4;
-        let x672 = m2 * x617;
-        let x673 = (x617 * m1 + x672) * x89;
-        let x674 = (x616 + x661) * J2
-            + ((x663 * x4 + x666 + x0 * x665) * x4
+                + x67 * (e3 * (64.0 * x82 + x650) + x649));
+        let x657 = x656 - x67 * (16.0 * x68 + 24.0 * x71);
+        let x658 = (16.0 * x3 + 16.0 * x1) * x69;
+        let x659 = (x67 * x654 + (x657 + x658) * e0) * x77;
+        let x660 = (96.0 * x3 + 96.0 * x1) + (96.0 * x0 + 96.0 * x4);
+        let x661 = (256.0 * m2 + 256.0 * m1) * x89;
+        let x662 = x594 * J1 - 256.0 * Iyy + J2 * (-128.0 * x15 - 384.0) - x661;
+        let x663 = (512.0 * m2 + 512.0 * m1) * x89;
+        let x664 = x597 * J1 - 512.0 * Iyy + J2 * (-256.0 * x15 - 768.0) - x663;
+        let x665 = x664 * x1;
+        let x666 = x89 * (-m2 * x607 - m1 * x607);
+        let x667 = 1024.0 * x0 + 1024.0 * x1;
+        let x668 = -(x667 + 512.0 * x4) * x4 - x0 * (512.0 * x0 + 1024.0 * x1)
+            - 512.0 * x36 - (512.0 * x3 + x667 + 1024.0 * x4) * x3;
+        let x669 = (-x604 * x4 - x0 * (128.0 * x0 + 256.0 * x1))
+            + (-128.0 * x36 - x3 * x609);
+        let x670 = 128.0 * x0 + 128.0 * x3 + 128.0 * x1 + 128.0 * x4;
+        let x671 = m2 * x616;
+        let x672 = (x616 * m1 + x671) * x89;
+        let x673 = (x615 + x660) * J2
+            + ((x662 * x4 + x665 + x0 * x664) * x4
                 + x3
-                    * (x667
+                    * (x666
                         + J2
-                            * (-768.0 * x0 - 384.0 * x3 - 768.0 * x1 - 768.0 * x4 - x612)
-                        + x614 * J1 - Iyy * x608) + x663 * f64::powi(e0, 4)
-                + (a_ * (x669 * x105 + x669 * x107)
-                    + (m1 * (x670 * x15 + x670) + m2 * x639) * d) * d
-                + (x0 * x663 + x666) * x0) * x7 + x619 * J1
-            + ((x671 * x107 + x671 * x105) * a_ + (x672 + (x616 + x615) * m1) * d) * d
-            + x673 + Iyy * x617;
-        let x675 = Iyz * (x7 * x624 - 64.0 * x0 - 64.0 * x3 - 64.0 * x1 - 64.0 * x4);
-        let x676 = x592 * x675;
-        let x677 = 4.0 * x111
+                            * (-768.0 * x0 - 384.0 * x3 - 768.0 * x1 - 768.0 * x4 - x611)
+                        + x613 * J1 - Iyy * x607) + x662 * f64::powi(e0, 4)
+                + (a_ * (x668 * x105 + x668 * x107)
+                    + (m1 * (x669 * x15 + x669) + m2 * x638) * d) * d
+                + (x0 * x662 + x665) * x0) * x7 + x618 * J1
+            + ((x670 * x107 + x670 * x105) * a_ + (x671 + (x615 + x614) * m1) * d) * d
+            + x672 + Iyy * x616;
+        let x674 = Iyz * (x7 * x623 - 64.0 * x0 - 64.0 * x3 - 64.0 * x1 - 64.0 * x4);
+        let x675 = x591 * x674;
+        let x676 = 4.0 * x111
             + (8.0 * J2 + (x112 * (16.0 * x3 + 16.0 * x4) - x114 * x12) * x7);
-        let x678 = x590 * x677;
-        let x679 = 4.0 * x127 + 4.0 * x141;
-        let x680 = x54 * x679;
-        let x681 = a_ * x5;
-        let x682 = 4.0 * x134 - 4.0 * x126;
-        let x683 = x39 * x682;
-        let x684 = m2 * ((-x104 * x5 - x680) * d - x681)
-            + (x681 + (x106 * x5 + x683) * d) * m1;
-        let x685 = x684 * e2;
-        let x686 = d * x54;
-        let x687 = x71 * x686;
-        let x688 = m2 * (4.0 * x687 + (d * (8.0 * x143 - 4.0 * x219) + 8.0 * x132) * e3);
-        let x689 = e3 * x132;
-        let x690 = (d * (x39 * (x163 - 6.0 * x1) - 8.0 * x135) - 8.0 * x689) * m1;
-        let x691 = x688 + x690;
-        let x692 = x69 * x679;
-        let x693 = d * (x692 + x67 * x682);
-        let x694 = x7 * (16.0 * x131 + 16.0 * x149 - 16.0 * x162 - 16.0 * x172);
-        let x695 = x104 * x141;
-        let x696 = a_ * x141;
-        let x697 = m2
-            * (d * ((6.0 * x1 - 2.0 * x4 + x144) * x54 + 8.0 * x695) + 8.0 * x696);
-        let x698 = x39 * (4.0 * x68 + 4.0 * x71);
-        let x699 = x106 * x141;
-        let x700 = ((x698 - 8.0 * x699) * d - 8.0 * x696) * m1;
-        let x701 = (2.0 * x156 - 2.0 * x685 + 2.0 * (x691 * e1) + 2.0 * x160
-            - 2.0 * (x693 * e3) + (x694 + 2.0 * x697 + 2.0 * x700) * e0) * x7;
-        let x702 = e2 * x189;
-        let x703 = d * x179;
-        let x704 = x199 * e1;
-        let x705 = x236 * x55;
-        let x706 = x205 * x110;
-        let x707 = 2.0 * x705 - x706;
-        let x708 = e3 * x707 - 2.0 * (x178 * e0);
-        let x709 = (x702 * x213 + (2.0 * (x154 * x197) + 2.0 * x703) * x39 - 2.0 * x704)
-            * m1 + m2 * (x708 - 2.0 * (x175 * x686));
-        let x710 = x706 - 2.0 * x705;
-        let x711 = x222 * e0;
+        let x677 = x589 * x676;
+        let x678 = x7 * (16.0 * x131 + 16.0 * x149 - 16.0 * x161 - 16.0 * x170);
+        let x679 = x132 * e2;
+        let x680 = x39 * (4.0 * x68 + 4.0 * x71);
+        let x681 = x106 * x141;
+        let x682 = ((x680 - 8.0 * x681) * d - 8.0 * x679) * m1;
+        let x683 = x104 * x141;
+        let x684 = m2
+            * (d * ((6.0 * x1 - 2.0 * x4 + x144) * x54 + 8.0 * x683) + 8.0 * x679);
+        let x685 = a_ * x5;
+        let x686 = 4.0 * x134 - 4.0 * x123;
+        let x687 = x39 * x686;
+        let x688 = 4.0 * x121 + 4.0 * x141;
+        let x689 = x54 * x688;
+        let x690 = (x685 + (x128 + x687) * d) * m1 + m2 * (d * (x143 - x689) - x685);
+        let x691 = x690 * e2;
+        let x692 = x69 * x688;
+        let x693 = d * (x692 + x67 * x686);
+        let x694 = e3 * x132;
+        let x695 = (d * (x39 * (x157 - 6.0 * x1) - 8.0 * x135) - 8.0 * x694) * m1;
+        let x696 = d * x54;
+        let x697 = x71 * x696;
+        let x698 = m2 * (4.0 * x697 + e3 * (8.0 * x132 + d * (8.0 * x217 - 4.0 * x218)));
+        let x699 = x695 + x698;
+        let x700 = x7
+            * ((x678 + 2.0 * x682 + 2.0 * x684) * e0 + 2.0 * x166 - 2.0 * x691
+                - 2.0 * (x693 * e3) + 2.0 * (x699 * e1) + 2.0 * x168);
+        let x701 = x235 * x55;
+        let x702 = x203 * x110;
+        let x703 = 2.0 * x701 - x702;
+        let x704 = x703 * e3 - 2.0 * (x176 * e0);
+        let x705 = e2 * x191;
+        let x706 = d * x177;
+        let x707 = x188 * e1;
+        let x708 = m2 * (x704 - 2.0 * (x173 * x696))
+            + (x705 * x211 + x39 * (2.0 * x706 + 2.0 * (x164 * x186)) - 2.0 * x707) * m1;
+        let x709 = 2.0 * x193 + 2.0 * x194;
+        let x710 = x227 * e1;
+        let x711 = ((x709 + 2.0 * (x186 * e0)) * x40 + 2.0 * x710
+            + (x189 + x211 * e0) * x191) * m1;
         let x712 = 2.0 * a_ + 2.0 * (x104 * d);
-        let x713 = x175 * x712;
-        let x714 = m2 * (e1 * x710 - 2.0 * x711 - x713);
-        let x715 = x227 * e1;
-        let x716 = 2.0 * x191 + 2.0 * x192;
-        let x717 = m1
-            * ((x187 + x213 * e0) * x189 + 2.0 * x715
-                + (x716 + 2.0 * (x197 * e0)) * x40);
-        let x718 = x714 + x717;
-        let x719 = x238 * e0;
-        let x720 = x213 * x189;
-        let x721 = x40 * x197;
-        let x722 = -x720 - 2.0 * x721;
-        let x723 = e3 * x722 - 2.0 * (x233 * e1);
-        let x724 = m2 * (2.0 * x719 + x707 * e2) + m1 * x723;
-        let x725 = (4.0 * x116 - 2.0 * x206 + x710) * e0;
-        let x726 = m2 * (x725 + x208);
-        let x727 = 2.0 * a_ + 2.0 * (x106 * d);
-        let x728 = x727 * x179;
-        let x729 = (2.0 * x214 + 4.0 * x132 + x722) * e1;
-        let x730 = (x729 - x728) * m1;
-        let x731 = x7 * (16.0 * x202 - 16.0 * x218 - 16.0 * x230 + 16.0 * x241);
-        let x732 = x7
-            * (2.0 * (x718 * e1) - 2.0 * (x709 * e3) - 2.0 * (x724 * e2)
-                + (2.0 * x726 + 2.0 * x730 + x731) * e0 + 2.0 * x209 + 2.0 * x216);
-        let x733 = x176 * x55;
-        let x734 = x220 * x110;
-        let x735 = -2.0 * x733 - x734;
-        let x736 = x178 * e1;
-        let x737 = x199 * e0;
-        let x738 = d * x243;
-        let x739 = m2 * (e3 * x735 - 2.0 * x736 - 2.0 * (x252 * x686))
-            + (x225 * x702 + 2.0 * x737 + x39 * (2.0 * x738 + 2.0 * (x154 * x231))) * m1;
-        let x740 = x252 * x712;
-        let x741 = m2 * ((2.0 * x733 - 4.0 * x132 - 2.0 * x221 + x734) * e1 - x740);
-        let x742 = x40 * x231;
-        let x743 = x225 * x189;
-        let x744 = ((2.0 * x742 - 4.0 * x116 - 2.0 * x226 + x743) * e0 + x268) * m1;
-        let x745 = x741 + x744;
-        let x746 = x207 * e1;
-        let x747 = 2.0 * x244 - 2.0 * x246;
-        let x748 = m2
-            * (2.0 * x746 + (x249 + x220 * e0) * x110
-                + (2.0 * (x176 * e0) + x747) * x55);
-        let x749 = x727 * x243;
-        let x750 = x215 * e0;
-        let x751 = -2.0 * x742 - x743;
-        let x752 = (x751 * e1 - x749 - 2.0 * x750) * m1;
-        let x753 = x7 * (16.0 * x261 - 16.0 * x266 - 16.0 * x271 + 16.0 * x275);
-        let x754 = x233 * e0;
-        let x755 = x238 * e1;
-        let x756 = (x751 * e3 + 2.0 * x754) * m1 + m2 * (2.0 * x755 + e2 * x735);
-        let x757 = x7
-            * (2.0 * (e1 * x745) - 2.0 * (e3 * x739)
-                + (2.0 * x748 + 2.0 * x752 + x753) * e0 + 2.0 * x263 - 2.0 * (x756 * e2)
-                + 2.0 * x264);
-        let x758 = x19 * x635 - 384.0 * J2 - 256.0 * Izz - 128.0 * J1 - x662;
-        let x759 = x19 * x638 - 768.0 * J2 - 512.0 * Izz - x664 - 256.0 * J1;
-        let x760 = x1 * x759;
-        let x761 = x7
-            * ((x667 - J2 * (768.0 * x0 + 384.0 * x3 + 768.0 * x1 + 768.0 * x4)
-                + x19 * x637 - Izz * x608 - x629) * x3 + x758 * f64::powi(e0, 4)
+        let x713 = x173 * x712;
+        let x714 = x221 * e0;
+        let x715 = x702 - 2.0 * x701;
+        let x716 = m2 * (x715 * e1 - x713 - 2.0 * x714);
+        let x717 = x711 + x716;
+        let x718 = x211 * x191;
+        let x719 = x186 * x40;
+        let x720 = -x718 - 2.0 * x719;
+        let x721 = e3 * x720 - 2.0 * (x233 * e1);
+        let x722 = x237 * e0;
+        let x723 = x721 * m1 + m2 * (2.0 * x722 + x703 * e2);
+        let x724 = x7 * (16.0 * x200 - 16.0 * x216 - 16.0 * x230 + 16.0 * x240);
+        let x725 = 2.0 * a_ + 2.0 * (x106 * d);
+        let x726 = x725 * x177;
+        let x727 = (2.0 * x212 + 4.0 * x132 + x720) * e1;
+        let x728 = (x727 - x726) * m1;
+        let x729 = (4.0 * x116 + x715 - 2.0 * x204) * e0;
+        let x730 = m2 * (x206 + x729);
+        let x731 = (2.0 * (x717 * e1) - 2.0 * (e3 * x708) + 2.0 * x207 + 2.0 * x214
+            - 2.0 * (x723 * e2) + (x724 + 2.0 * x728 + 2.0 * x730) * e0) * x7;
+        let x732 = x213 * e0;
+        let x733 = x725 * x249;
+        let x734 = x40 * x231;
+        let x735 = x225 * x191;
+        let x736 = -2.0 * x734 - x735;
+        let x737 = m1 * (x736 * e1 - 2.0 * x732 - x733);
+        let x738 = x205 * e1;
+        let x739 = 2.0 * x251 - 2.0 * x252;
+        let x740 = m2
+            * ((x255 + x219 * e0) * x110 + 2.0 * x738
+                + (2.0 * (x174 * e0) + x739) * x55);
+        let x741 = (16.0 * x260 - 16.0 * x266 - 16.0 * x270 + 16.0 * x274) * x7;
+        let x742 = d * x249;
+        let x743 = x188 * e0;
+        let x744 = x219 * x110;
+        let x745 = x174 * x55;
+        let x746 = -x744 - 2.0 * x745;
+        let x747 = x176 * e1;
+        let x748 = m1
+            * (x225 * x705 + (2.0 * x742 + 2.0 * (x164 * x231)) * x39 + 2.0 * x743)
+            + m2 * (x746 * e3 - 2.0 * x747 - 2.0 * (x242 * x696));
+        let x749 = ((2.0 * x734 - 4.0 * x116 - 2.0 * x226 + x735) * e0 + x248) * m1;
+        let x750 = x242 * x712;
+        let x751 = m2 * ((x744 + 2.0 * x745 - 4.0 * x132 - 2.0 * x220) * e1 - x750);
+        let x752 = x749 + x751;
+        let x753 = x233 * e0;
+        let x754 = x237 * e1;
+        let x755 = (x736 * e3 + 2.0 * x753) * m1 + m2 * (2.0 * x754 + x746 * e2);
+        let x756 = x7
+            * ((2.0 * x737 + 2.0 * x740 + x741) * e0 + 2.0 * x262 + 2.0 * x264
+                - 2.0 * (e3 * x748) + 2.0 * (x752 * e1) - 2.0 * (x755 * e2));
+        let x757 = x19 * x634 - 384.0 * J2 - 256.0 * Izz - 128.0 * J1 - x661;
+        let x758 = x19 * x637 - 768.0 * J2 - 512.0 * Izz - x663 - 256.0 * J1;
+        let x759 = x1 * x758;
+        let x760 = x7
+            * ((x666 - J2 * (768.0 * x0 + 384.0 * x3 + 768.0 * x1 + 768.0 * x4)
+                + x19 * x636 - Izz * x607 - x628) * x3 + x757 * f64::powi(e0, 4)
                 + d
-                    * ((x188 * x669 + d * x639) * m1
-                        + m2 * (d * (x670 + x19 * x670) + x109 * x669))
-                + x0 * (x760 + x0 * x758) + (x760 + x4 * x758 + x0 * x759) * x4)
-            + x617 * Izz + x631 + J2 * x661 + x673
-            + (m1 * (x188 * x671 + d * x617) + m2 * (x109 * x671 + (x615 + x618) * d))
-                * d + x19 * x634;
-        let x762 = 16.0 * x0 + 16.0 * x3;
-        let x763 = 4.0 * x280 + (8.0 * J2 + (x762 * x282 - x281 * x649) * x7);
-        let x764 = x590 * x763;
-        let x765 = x697 + x700;
-        let x766 = 2.0 * x170 + (2.0 * x167 - 2.0 * (x684 * e3));
-        let x767 = (16.0 * x285 - 16.0 * x284 + 16.0 * x286 - 16.0 * x287) * x7;
-        let x768 = x7
-            * (2.0 * (x693 * e2) - 2.0 * (x765 * e1) + x766
-                + (2.0 * x688 + 2.0 * x690 + x767) * e0);
-        let x769 = (16.0 * x289 - 16.0 * x290 - 16.0 * x291 + 16.0 * x292) * x7;
-        let x770 = x726 + x730;
-        let x771 = 2.0 * x223 + 2.0 * x228;
-        let x772 = x7
-            * ((2.0 * x714 + 2.0 * x717 + x769) * e0 - 2.0 * (x724 * e3)
-                + 2.0 * (x709 * e2) - 2.0 * (x770 * e1) + x771);
-        let x773 = 2.0 * x267 + 2.0 * x269;
-        let x774 = x748 + x752;
-        let x775 = x7 * (16.0 * x294 + 16.0 * x295 - 16.0 * x296 - 16.0 * x297);
-        let x776 = (x773 - 2.0 * (x774 * e1) + 2.0 * (x739 * e2)
-            + (2.0 * x741 + x775 + 2.0 * x744) * e0 - 2.0 * (x756 * e3)) * x7;
-        let x777 = -(x38 * x197);
-        let x778 = x38 * x213;
-        let x779 = x38 * x225;
-        let x780 = x176 * x53;
-        let x781 = x205 * x53;
-        let x782 = x220 * x53;
-        let x783 = x6 * x310;
-        let x784 = x783 * e0;
-        let x785 = 2.0 * (x39 * e2_dot) + 2.0 * (x106 * e1_dot);
-        let x786 = x785 * x375;
-        let x787 = e3_dot * x336;
-        let x788 = (x786 + 2.0 * x787) * J1
-            + J2 * (-x786 - x785 * gamma1_dot - 2.0 * x787);
-        let x789 = x788 * x213;
-        let x790 = x106 * e2_dot;
-        let x791 = x39 * e1_dot;
-        let x792 = 2.0 * x790 - 2.0 * x791;
-        let x793 = x337 * x792;
-        let x794 = x333 * x342;
-        let x795 = x794 * x785;
-        let x796 = x327 * e1_dot;
-        let x797 = x329 * e2_dot;
-        let x798 = Ixy * e1_dot;
-        let x799 = Iyz * e3_dot;
-        let x800 = 2.0 * (Iyy * e2_dot) - 2.0 * x798 - 2.0 * x799;
-        let x801 = x316 * x800;
-        let x802 = Ixy * e2_dot;
-        let x803 = e3_dot * Ixz;
-        let x804 = 2.0 * (Ixx * e1_dot) - 2.0 * x802 - 2.0 * x803;
-        let x805 = x804 * x326;
-        let x806 = 2.0 * x793 + 2.0 * x795 + 4.0 * x796 - 4.0 * x797 + 2.0 * x801
-            - 2.0 * x805;
-        let x807 = x806 * e1;
-        let x808 = x39 * x342;
-        let x809 = x355 * x353;
-        let x810 = 2.0 * (x104 * e3_dot) + 2.0 * (x54 * e1_dot);
-        let x811 = gamma2_dot * x236;
-        let x812 = (x810 * x811 - (2.0 * x808 + x792 * x197) * gamma1_dot - 2.0 * x809)
+                    * ((x190 * x668 + d * x638) * m1
+                        + m2 * (d * (x669 + x19 * x669) + x109 * x668))
+                + x0 * (x759 + x0 * x757) + (x759 + x4 * x757 + x0 * x758) * x4)
+            + x616 * Izz + x630 + J2 * x660 + x672
+            + (m1 * (x190 * x670 + d * x616) + m2 * (x109 * x670 + (x614 + x617) * d))
+                * d + x19 * x633;
+        let x761 = 16.0 * x0 + 16.0 * x3;
+        let x762 = 4.0 * x279 + (8.0 * J2 + (x761 * x281 - x280 * x648) * x7);
+        let x763 = x589 * x762;
+        let x764 = 2.0 * x154 + (2.0 * x159 - 2.0 * (e3 * x690));
+        let x765 = x682 + x684;
+        let x766 = x7 * (16.0 * x283 + 16.0 * x284 - 16.0 * x285 - 16.0 * x286);
+        let x767 = (2.0 * (x693 * e2) + x764 - 2.0 * (x765 * e1)
+            + (2.0 * x695 + 2.0 * x698 + x766) * e0) * x7;
+        let x768 = x728 + x730;
+        let x769 = 2.0 * x222 + 2.0 * x228;
+        let x770 = x7 * (16.0 * x289 - 16.0 * x288 - 16.0 * x290 + 16.0 * x291);
+        let x771 = x7
+            * (x769 - 2.0 * (e1 * x768) + 2.0 * (x708 * e2)
+                + (2.0 * x711 + 2.0 * x716 + x770) * e0 - 2.0 * (e3 * x723));
+        let x772 = x7 * (16.0 * x294 - 16.0 * x293 + 16.0 * x295 - 16.0 * x296);
+        let x773 = x737 + x740;
+        let x774 = 2.0 * x267 + 2.0 * x268;
+        let x775 = ((x772 + 2.0 * x749 + 2.0 * x751) * e0 - 2.0 * (e3 * x755)
+            + 2.0 * (x748 * e2) - 2.0 * (x773 * e1) + x774) * x7;
+        let x776 = -(x186 * x38);
+        let x777 = x38 * x211;
+        let x778 = x225 * x38;
+        let x779 = x174 * x53;
+        let x780 = x203 * x53;
+        let x781 = x53 * x219;
+        let x782 = x6 * x309;
+        let x783 = x782 * e0;
+        let x784 = ((-4.0 * x500 - 2.0 * x524) + (2.0 * x499 + 2.0 * x517))
+            + (((-2.0 * x514 - 2.0 * x522) + (-2.0 * x501 - 2.0 * x515))
+                + (-4.0 * x518 - 2.0 * x520));
+        let x785 = x104 * e1_dot;
+        let x786 = x54 * e3_dot;
+        let x787 = 2.0 * x785 - 2.0 * x786;
+        let x788 = x787 * x383;
+        let x789 = e1_dot * x374;
+        let x790 = x353 * e3_dot;
+        let x791 = Iyz * e2_dot;
+        let x792 = Ixz * e1_dot;
+        let x793 = 2.0 * (e3_dot * Izz) - 2.0 * x791 - 2.0 * x792;
+        let x794 = x315 * x793;
+        let x795 = 2.0 * (x104 * e3_dot) + 2.0 * (x54 * e1_dot);
+        let x796 = x330 * x370;
+        let x797 = x795 * x796;
+        let x798 = Ixy * e2_dot;
+        let x799 = e3_dot * Ixz;
+        let x800 = 2.0 * (Ixx * e1_dot) - 2.0 * x798 - 2.0 * x799;
+        let x801 = x800 * x320;
+        let x802 = 2.0 * x788 - 4.0 * x789 + 4.0 * x790 - 2.0 * x794 + 2.0 * x797
+            + 2.0 * x801;
+        let x803 = x330 * e2_dot;
+        let x804 = J2 * (2.0 * x803 + x384 * x787) - (x332 * x787 + 2.0 * x803) * J1;
+        let x805 = (8.0 * x319 - 8.0 * x318 - 8.0 * x316 + 8.0 * x317) * x40;
+        let x806 = a_ * e2_dot;
+        let x807 = x106 * e2_dot;
+        let x808 = x39 * e1_dot;
+        let x809 = 2.0 * x807 - 2.0 * x808;
+        let x810 = 2.0 * x806 + d * x809;
+        let x811 = 2.0 * (x39 * e2_dot) + 2.0 * (x106 * e1_dot);
+        let x812 = x811 * x478;
+        let x813 = x805 * e3_dot + x810 * x363 + x812;
+        let x814 = x478 * x809;
+        let x815 = x190 * gamma1_dot;
+        let x816 = x369 * x191;
+        let x817 = 2.0 * x815 - 2.0 * x480 - 2.0 * x482 - x816;
+        let x818 = e3_dot * x817 - x810 * x359 - x814;
+        let x819 = -x813 * x191 - 2.0 * (x40 * x818);
+        let x820 = e3_dot * x363;
+        let x821 = x820 * x191 + x811 * x483
+            - (x320 * x809 + 2.0 * (e3_dot * x359)) * x40 + x811 * x494;
+        let x822 = e0_dot * e1_dot;
+        let x823 = 32.0 * x456 - 32.0 * x455 + 32.0 * x457;
+        let x824 = x7 * x823 - 4.0 * e1_dot;
+        let x825 = 16.0 * x454 - 16.0 * x460;
+        let x826 = 16.0 * x455 - 16.0 * x457;
+        let x827 = 4.0 * x822
+            + ((4.0 * x312 - 4.0 * x314 + x824 * e0) * x397 + x825 * e0
+                + e0_dot * (x826 - 32.0 * x456)) * x7;
+        let x828 = -(x725 * m1);
+        let x829 = m2 * x407 - 4.0 * Iyy - 4.0 * J2;
+        let x830 = x106 * J2;
+        let x831 = x830 * x231;
+        let x832 = x39 * J1;
+        let x833 = x832 * x225;
+        let x834 = x233 * x828 + x829 * e2 + 2.0 * x831 + 4.0 * x431 + 4.0 * x504
+            - 2.0 * x833;
+        let x835 = 16.0 * x469 - 16.0 * x471;
+        let x836 = 32.0 * x470 - 32.0 * x469 + 32.0 * x471;
+        let x837 = x836 * x7 - 4.0 * e2_dot;
+        let x838 = 16.0 * x473 - 16.0 * x468;
+        let x839 = e2_dot * e0_dot;
+        let x840 = ((x835 - 32.0 * x470) * e0_dot
+            + x397 * (x837 * e0 - 4.0 * x323 + 4.0 * x325) + x838 * e0) * x7
+            + 4.0 * x839;
+        let x841 = 4.0 * x393 + 4.0 * x394;
+        let x842 = x841 + 4.0 * x396;
+        let x843 = 32.0 * x399 + 32.0 * x400 + 32.0 * x401;
+        let x844 = 16.0 * x399 + 16.0 * x401;
+        let x845 = 16.0 * x400 + x844;
+        let x846 = 16.0 * x391 + 16.0 * x403;
+        let x847 = e1_dot * e1_dot;
+        let x848 = e2_dot * e2_dot;
+        let x849 = -4.0 * x847 - 4.0 * x848;
+        let x850 = e3_dot * e3_dot;
+        let x851 = (x397 * (x842 - x589 * x843) + x845 * e0_dot
+            + (16.0 * x392 + x846) * e0) * x7 + x849 - 4.0 * x850;
+        let x852 = x104 * J2;
+        let x853 = x235 * x852;
+        let x854 = -(m2 * x712);
+        let x855 = x54 * J1;
+        let x856 = x203 * x855;
+        let x857 = x437 * m1 - 4.0 * J2 - 4.0 * Izz;
+        let x858 = 4.0 * x422 - 2.0 * x853 + x237 * x854 - 2.0 * x856 + e3 * x857
+            + 4.0 * x506;
+        let x859 = 16.0 * x441 - 16.0 * x446;
+        let x860 = 16.0 * x442 - 16.0 * x443;
+        let x861 = 32.0 * x443 - 32.0 * x442 + 32.0 * x444;
+        let x862 = x7 * x861 - 4.0 * e3_dot;
+        let x863 = e3_dot * e0_dot;
+        let x864 = x7
+            * (x859 * e0 + e0_dot * (x860 - 32.0 * x444)
+                + (4.0 * x318 + x862 * e0 - 4.0 * x319) * x397) + 4.0 * x863;
+        let x865 = x54 * x235;
+        let x866 = x39 * x231;
+        let x867 = -2.0 * x865 - 2.0 * x866;
+        let x868 = x104 * x203;
+        let x869 = x106 * x225;
+        let x870 = 2.0 * x868 - 2.0 * x869;
+        let x871 = x67 * x237;
+        let x872 = x233 * x69;
+        let x873 = J2 * x867 + x870 * J1 + 4.0 * x427 + 4.0 * x408 - 4.0 * x549
+            + d * (2.0 * x872 - 2.0 * x871);
+        let x874 = x364 * x809;
+        let x875 = x360 * x359;
+        let x876 = x875 * x811;
+        let x877 = x351 * e1_dot;
+        let x878 = x353 * e2_dot;
+        let x879 = Ixy * e1_dot;
+        let x880 = Iyz * e3_dot;
+        let x881 = 2.0 * (Iyy * e2_dot) - 2.0 * x879 - 2.0 * x880;
+        let x882 = x315 * x881;
+        let x883 = x800 * x326;
+        let x884 = 2.0 * x874 + 2.0 * x876 + 4.0 * x877 - 4.0 * x878 + 2.0 * x882
+            - 2.0 * x883;
+        let x885 = -(2.0 * (x321 * e2_dot) + x795 * x326) * x55 - x803 * x110
+            - x787 * x335;
+        let x886 = gamma2_dot * x109;
+        let x887 = x332 * x110;
+        let x888 = 2.0 * x331 - 2.0 * x886 + x887 + 2.0 * x333;
+        let x889 = a_ * e3_dot;
+        let x890 = 2.0 * x889 + x795 * d;
+        let x891 = x795 * x340;
+        let x892 = e2_dot * x888 + x321 * x890 + x891;
+        let x893 = x892 * x55;
+        let x894 = (8.0 * x323 - 8.0 * x322 + 8.0 * x324 - 8.0 * x325) * x55;
+        let x895 = x340 * x787;
+        let x896 = x894 * e2_dot - x330 * x890 - x895;
+        let x897 = x896 * x110;
+        let x898 = 2.0 * x893 - x897;
+        let x899 = x811 * x369;
+        let x900 = (x899 + 2.0 * x820) * J1
+            + J2 * (-x899 - x811 * gamma1_dot - 2.0 * x820);
+        let x901 = -(x225 * gamma1_dot);
+        let x902 = gamma2_dot * x203;
+        let x903 = e2_dot * x374;
+        let x904 = e3_dot * x351;
+        let x905 = 2.0 * x903 - 2.0 * x904 + x793 * x326 - x881 * x320;
+        let x906 = x802 * e2 + x235 * x804 - (e3 * x819 + x233 * x821) * m1
+            - x7
+                * (x827 * x508 + x834 * x474 + x840 * x425 + x551 * x851 + x858 * x448
+                    + x864 * x536 + x873 * x461) + x884 * e3
+            - m2 * (x885 * x237 + e2 * x898) - x900 * x231
+            - (x809 * x901 - x795 * x902) * J1 + 2.0 * (x905 * e1);
+        let x907 = x39 * x211;
+        let x908 = x106 * x186;
+        let x909 = x203 * x54;
+        let x910 = x104 * x235;
+        let x911 = 2.0 * x910 + 2.0 * x908;
+        let x912 = x188 * x725;
+        let x913 = x39 * d;
+        let x914 = x913 * x213;
+        let x915 = x205 * x696;
+        let x916 = 4.0 * Ixx - 4.0 * Iyy;
+        let x917 = J2 * (2.0 * x909 - 2.0 * x907 - 4.0 * e3 - 2.0 * x908) - 8.0 * x421
+            + (2.0 * x907 + x911) * J1 + 4.0 * x422 + (-x912 - 2.0 * x914) * m1
+            + m2 * (e3 * x407 - 2.0 * x915) + e3 * x916 - 4.0 * x506;
+        let x918 = x227 * x725;
+        let x919 = 4.0 * Iyy - 4.0 * Izz;
+        let x920 = x712 * x205;
+        let x921 = (2.0 * x868 + 2.0 * x869) * J2 + 4.0 * x427 - 4.0 * x408
+            + (x918 + x437 * e1) * m1 + (2.0 * x866 - 2.0 * x865) * J1 - 8.0 * x409
+            + x919 * e1 + (x426 * e1 - x920) * m2;
+        let x922 = m2 * (8.0 * x405 + 2.0 * x406) + (8.0 * Iyy + 8.0 * J2);
+        let x923 = x832 * x186;
+        let x924 = x830 * x211;
+        let x925 = (x425 * x851 + x917 * x461 + x827 * x453 + x840 * x466 + x864 * x440
+            + x448 * x921
+            + (x922 * e0 - 8.0 * x411 - 2.0 * (x213 * x828) + 4.0 * x923 + 8.0 * x412
+                + 4.0 * x924) * x474 + x834 * x404) * x7;
+        let x926 = x884 * e1;
+        let x927 = x900 * x211;
+        let x928 = x39 * x359;
+        let x929 = x321 * x330;
+        let x930 = gamma2_dot * x235;
+        let x931 = (x795 * x930 - (2.0 * x928 + x186 * x809) * gamma1_dot - 2.0 * x929)
             * J1;
-        let x813 = a_ * e3_dot;
-        let x814 = 2.0 * x813 + x810 * d;
-        let x815 = (8.0 * x323 - 8.0 * x322 + 8.0 * x324 - 8.0 * x325) * x55;
-        let x816 = x104 * e1_dot;
-        let x817 = x54 * e3_dot;
-        let x818 = 2.0 * x816 - 2.0 * x817;
-        let x819 = x357 * x818;
-        let x820 = x815 * e2_dot - x353 * x814 - x819;
-        let x821 = (-2.0 * x365 - 2.0 * x366) + 2.0 * x367;
-        let x822 = gamma2_dot * x109;
-        let x823 = x362 * x110;
-        let x824 = 2.0 * x361 - 2.0 * x822 + x823 + 2.0 * x363;
-        let x825 = x810 * x357;
-        let x826 = e2_dot * x824 + x355 * x814 + x825;
-        let x827 = x353 * x110;
-        let x828 = -e2_dot * x827 - (2.0 * (x355 * e2_dot) + x810 * x326) * x55
-            - x818 * x371;
-        let x829 = m2
-            * ((x359 + x820 * e0) * x110 + (x821 - 2.0 * (x826 * e0)) * x55
-                + x828 * x207);
-        let x830 = x727 * x474;
-        let x831 = (8.0 * x320 - 8.0 * x319 - 8.0 * x317 + 8.0 * x318) * x40;
-        let x832 = a_ * e2_dot;
-        let x833 = 2.0 * x832 + d * x792;
-        let x834 = x785 * x477;
-        let x835 = x831 * e3_dot + x833 * x336 + x834;
-        let x836 = x477 * x792;
-        let x837 = x188 * gamma1_dot;
-        let x838 = x375 * x189;
-        let x839 = 2.0 * x837 - 2.0 * x471 - 2.0 * x472 - x838;
-        let x840 = e3_dot * x839 - x833 * x342 - x836;
-        let x841 = -x835 * x189 - 2.0 * (x40 * x840);
-        let x842 = x336 * x189;
-        let x843 = x785 * x473 + e3_dot * x842
-            - (x321 * x792 + 2.0 * (e3_dot * x342)) * x40 + x785 * x470;
-        let x844 = (x841 * e1 - x830 - x843 * x215) * m1;
-        let x845 = x818 * x493;
-        let x846 = e1_dot * x344;
-        let x847 = x329 * e3_dot;
-        let x848 = Iyz * e2_dot;
-        let x849 = Ixz * e1_dot;
-        let x850 = 2.0 * (e3_dot * Izz) - 2.0 * x848 - 2.0 * x849;
-        let x851 = x316 * x850;
-        let x852 = x353 * x376;
-        let x853 = x810 * x852;
-        let x854 = x804 * x321;
-        let x855 = 4.0 * x846 - 2.0 * x845 - 4.0 * x847 + 2.0 * x851 - 2.0 * x853
-            - 2.0 * x854;
-        let x856 = e0 * x855;
-        let x857 = 16.0 * x417 - 16.0 * x419;
-        let x858 = 32.0 * x418 - 32.0 * x417 + 32.0 * x419;
-        let x859 = x858 * x7 - 4.0 * e2_dot;
-        let x860 = 16.0 * x421 - 16.0 * x416;
-        let x861 = e2_dot * e0_dot;
-        let x862 = ((x857 - 32.0 * x418) * e0_dot
-            + x388 * (x859 * e0 - 4.0 * x323 + 4.0 * x325) + x860 * e0) * x7
-            + 4.0 * x861;
-        let x863 = x39 * J1;
-        let x864 = x863 * x197;
-        let x865 = m2 * (8.0 * x407 + 2.0 * x408) + (8.0 * Iyy + 8.0 * J2);
-        let x866 = -(x727 * m1);
-        let x867 = x106 * J2;
-        let x868 = x867 * x213;
-        let x869 = x39 * x213;
-        let x870 = x106 * x197;
-        let x871 = x104 * x236;
-        let x872 = 2.0 * x870 + 2.0 * x871;
-        let x873 = x39 * d;
-        let x874 = x873 * x215;
-        let x875 = x727 * x199;
-        let x876 = x207 * x686;
-        let x877 = 4.0 * Ixx - 4.0 * Iyy;
-        let x878 = x205 * x54;
-        let x879 = (2.0 * x869 + x872) * J1 - 8.0 * x424 + m1 * (-2.0 * x874 - x875)
-            + 4.0 * x425 + (e3 * x441 - 2.0 * x876) * m2 + e3 * x877 - 4.0 * x508
-            + J2 * (2.0 * x878 - 2.0 * x869 - 4.0 * e3 - 2.0 * x870);
-        let x880 = 4.0 * x384 + 4.0 * x385;
-        let x881 = x880 + 4.0 * x387;
-        let x882 = 32.0 * x445 + 32.0 * x446 + 32.0 * x447;
-        let x883 = 16.0 * x445 + 16.0 * x447;
-        let x884 = 16.0 * x446 + x883;
-        let x885 = 16.0 * x443 + 16.0 * x449;
-        let x886 = e1_dot * e1_dot;
-        let x887 = e2_dot * e2_dot;
-        let x888 = -4.0 * x886 - 4.0 * x887;
-        let x889 = e3_dot * e3_dot;
-        let x890 = (x388 * (x881 - x590 * x882) + x884 * e0_dot
-            + (16.0 * x444 + x885) * e0) * x7 + x888 - 4.0 * x889;
-        let x891 = m2 * x441 - 4.0 * Iyy - 4.0 * J2;
-        let x892 = x863 * x225;
-        let x893 = x867 * x231;
-        let x894 = x891 * e2 - 2.0 * x892 + 4.0 * x399 + 4.0 * x506 + 2.0 * x893
-            + x233 * x866;
-        let x895 = e0_dot * e1_dot;
-        let x896 = 32.0 * x458 - 32.0 * x457 + 32.0 * x459;
-        let x897 = x7 * x896 - 4.0 * e1_dot;
-        let x898 = 16.0 * x456 - 16.0 * x462;
-        let x899 = 16.0 * x457 - 16.0 * x459;
-        let x900 = 4.0 * x895
-            + ((4.0 * x313 - 4.0 * x315 + x897 * e0) * x388 + x898 * e0
-                + e0_dot * (x899 - 32.0 * x458)) * x7;
-        let x901 = x106 * x225;
-        let x902 = x104 * x205;
-        let x903 = x236 * x54;
-        let x904 = x39 * x231;
-        let x905 = x227 * x727;
-        let x906 = 4.0 * Iyy - 4.0 * Izz;
-        let x907 = x207 * x712;
-        let x908 = J2 * (2.0 * x901 + 2.0 * x902) + 4.0 * x394 - 4.0 * x432
-            + (2.0 * x904 - 2.0 * x903) * J1 + (x905 + x406 * e1) * m1 - 8.0 * x395
-            + x906 * e1 + m2 * (x409 * e1 - x907);
-        let x909 = 16.0 * x380 - 16.0 * x391;
-        let x910 = 16.0 * x381 - 16.0 * x382;
-        let x911 = 32.0 * x382 - 32.0 * x381 + 32.0 * x383;
-        let x912 = x7 * x911 - 4.0 * e3_dot;
-        let x913 = e3_dot * e0_dot;
-        let x914 = x7
-            * (x909 * e0 + e0_dot * (x910 - 32.0 * x383)
-                + (4.0 * x319 + x912 * e0 - 4.0 * x320) * x388) + 4.0 * x913;
-        let x915 = (x862 * x436
-            + (4.0 * x864 - 8.0 * x428 + x865 * e0 + 8.0 * x402 - 2.0 * (x215 * x866)
-                + 4.0 * x868) * x422 + x879 * x463 + x442 * x890 + x450 * x894
-            + x455 * x900 + x908 * x393 + x914 * x414) * x7;
-        let x916 = x353 * e2_dot;
-        let x917 = J2 * (2.0 * x916 + x490 * x818) - (2.0 * x916 + x362 * x818) * J1;
-        let x918 = x205 * x917;
-        let x919 = x106 * x378;
-        let x920 = J2 * x809;
-        let x921 = (2.0 * x920 - 2.0 * x919) + (2.0 * x465 - 2.0 * x466);
-        let x922 = e2_dot * x344;
-        let x923 = e3_dot * x327;
-        let x924 = 2.0 * x922 - 2.0 * x923 + x850 * x326 - x800 * x321;
-        let x925 = e3 * x924;
-        let x926 = x807 - x789 + x812 - x829 - x844 + x856 - x915 - x918 + x921
-            - 2.0 * x925;
-        let x927 = x225 * x788;
-        let x928 = x104 * x524;
-        let x929 = x336 * x342;
-        let x930 = x929 * J2;
-        let x931 = (-2.0 * x928 - 2.0 * x328) + (2.0 * x330 - 2.0 * x930);
-        let x932 = x712 * x372;
-        let x933 = x826 * x55;
-        let x934 = x820 * x110;
-        let x935 = m2 * ((x934 - 2.0 * x933) * e1 - x222 * x828 - x932);
-        let x936 = e2 * x924;
-        let x937 = x54 * J1;
-        let x938 = x176 * x937;
-        let x939 = x104 * J2;
-        let x940 = x220 * x939;
-        let x941 = m1 * (2.0 * x404 + 8.0 * x405) + (8.0 * J2 + 8.0 * Izz);
-        let x942 = -(m2 * x712);
-        let x943 = x178 * x712;
-        let x944 = -(x227 * d);
-        let x945 = 4.0 * Izz - 4.0 * Ixx;
-        let x946 = x176 * x104;
-        let x947 = x220 * x54;
-        let x948 = x39 * x225;
-        let x949 = 2.0 * x947 - 2.0 * x948;
+        let x932 = (-2.0 * x344 - 2.0 * x345) + 2.0 * x346;
+        let x933 = m2
+            * (x885 * x205 + (x342 + x896 * e0) * x110
+                + (x932 - 2.0 * (x892 * e0)) * x55);
+        let x934 = 4.0 * x789 - 2.0 * x788 - 4.0 * x790 + 2.0 * x794 - 2.0 * x797
+            - 2.0 * x801;
+        let x935 = e0 * x934;
+        let x936 = x203 * x804;
+        let x937 = x725 * x495;
+        let x938 = m1 * (x819 * e1 - x937 - x213 * x821);
+        let x939 = x106 * x372;
+        let x940 = J2 * x929;
+        let x941 = (2.0 * x940 - 2.0 * x939) + (2.0 * x379 - 2.0 * x380);
+        let x942 = e3 * x905;
+        let x943 = x926 - x925 - x927 + x931 - x933 + x935 - x936 - x938 + x941
+            - 2.0 * x942;
+        let x944 = x219 * x804;
+        let x945 = x219 * x852;
+        let x946 = x174 * x855;
+        let x947 = m1 * (2.0 * x418 + 8.0 * x419) + (8.0 * J2 + 8.0 * Izz);
+        let x948 = x219 * x54;
+        let x949 = x104 * x174;
         let x950 = x106 * x231;
-        let x951 = 2.0 * x950 - 2.0 * x946;
-        let x952 = (x943 + 2.0 * (x222 * x686)) * m2
-            + (x702 * x189 + (2.0 * x944 + 4.0 * (x154 * x40)) * x39) * m1 - 8.0 * x397
-            + x945 * e2 + (2.0 * x946 + x949 + 4.0 * e2) * J2 - 4.0 * x399 + 4.0 * x506
-            + (x951 - 2.0 * x947) * J1;
-        let x953 = x236 * x939;
-        let x954 = x205 * x937;
-        let x955 = x406 * m1 - 4.0 * J2 - 4.0 * Izz;
-        let x956 = 4.0 * x425 - 2.0 * x953 - 2.0 * x954 + e3 * x955 + x238 * x942
-            + 4.0 * x508;
-        let x957 = (x530 * x890
-            + x393
-                * (8.0 * x401 + 4.0 * x938 - 8.0 * x402 + 4.0 * x940 + x941 * e0
-                    - 2.0 * (x222 * x942)) + x914 * x551 + x900 * x503 + x952 * x463
-            + x862 * x414 + x450 * x956 + x908 * x422) * x7;
-        let x958 = gamma1_dot * x231;
-        let x959 = x355 * x54;
-        let x960 = (2.0 * x929 - x792 * x958 + gamma2_dot * (-2.0 * x959 - x176 * x810))
+        let x951 = 2.0 * x950 - 2.0 * x949;
+        let x952 = 4.0 * Izz - 4.0 * Ixx;
+        let x953 = x176 * x712;
+        let x954 = x225 * x39;
+        let x955 = 2.0 * x948 - 2.0 * x954;
+        let x956 = J1 * (x951 - 2.0 * x948) - 8.0 * x429 + x952 * e2
+            + m2 * (2.0 * (x221 * x696) + x953) - 4.0 * x431 + 4.0 * x504
+            + J2 * (2.0 * x949 + x955 + 4.0 * e2)
+            + (x705 * x191 + x39 * (4.0 * (x164 * x40) - 2.0 * (x227 * d))) * m1;
+        let x957 = x7
+            * (x448
+                * (4.0 * x945 + 8.0 * x435 + 4.0 * x946 - 2.0 * (x221 * x854)
+                    - 8.0 * x412 + x947 * e0) + x921 * x474 + x513 * x827 + x440 * x840
+                + x461 * x956 + x536 * x851 + x858 * x404 + x864 * x534);
+        let x958 = (-2.0 * x479 - 2.0 * x484) + 2.0 * x481;
+        let x959 = ((x813 * e0 + x491) * x191 - x227 * x821
+            + x40 * (2.0 * (e0 * x818) + x958)) * m1;
+        let x960 = x104 * x521;
+        let x961 = x363 * x359;
+        let x962 = x961 * J2;
+        let x963 = (-2.0 * x960 - 2.0 * x352) + (2.0 * x354 - 2.0 * x962);
+        let x964 = x712 * x336;
+        let x965 = m2 * ((x897 - 2.0 * x893) * e1 - x885 * x221 - x964);
+        let x966 = e2 * x905;
+        let x967 = x900 * x225;
+        let x968 = x321 * x54;
+        let x969 = gamma1_dot * x231;
+        let x970 = (2.0 * x961 + gamma2_dot * (-2.0 * x968 - x795 * x174) - x809 * x969)
             * J1;
-        let x961 = x220 * x917;
-        let x962 = (-2.0 * x478 - 2.0 * x480) + 2.0 * x479;
-        let x963 = m1
-            * ((x835 * e0 + x486) * x189 + x40 * (2.0 * (e0 * x840) + x962)
-                - x843 * x227);
-        let x964 = e1 * x855;
-        let x965 = 4.0 * x797 - 2.0 * x793 - 2.0 * x795 - 4.0 * x796 - 2.0 * x801
-            + 2.0 * x805;
-        let x966 = x965 * e0;
-        let x967 = x931 - x927 - x935 + 2.0 * x936 - x957 + x960 - x961 - x963 + x964
-            + x966;
-        let x968 = ((2.0 * x515 + 2.0 * x520) + (-2.0 * x501 - 4.0 * x516))
-            + ((-4.0 * x521 - 2.0 * x523)
-                + ((-2.0 * x517 - 2.0 * x518) + (-2.0 * x514 - 2.0 * x525)));
-        let x969 = 2.0 * x845 - 4.0 * x846 + 4.0 * x847 - 2.0 * x851 + 2.0 * x853
-            + 2.0 * x854;
-        let x970 = e3 * x969;
-        let x971 = x176 * x917;
-        let x972 = 2.0 * x933 - x934;
-        let x973 = m2 * (e3 * x972 - x828 * x178 - 2.0 * (x372 * x686));
-        let x974 = x788 * x197;
-        let x975 = x965 * e2;
-        let x976 = -2.0 * x903 - 2.0 * x904;
-        let x977 = 2.0 * x902 - 2.0 * x901;
-        let x978 = x233 * x69;
-        let x979 = x67 * x238;
-        let x980 = 4.0 * x394 + 4.0 * x432 - 4.0 * x534 + J2 * x976 + x977 * J1
-            + d * (2.0 * x978 - 2.0 * x979);
-        let x981 = x69 * x199;
-        let x982 = x67 * x178;
-        let x983 = x39 * x197;
-        let x984 = x176 * x54;
-        let x985 = x106 * x213;
-        let x986 = x104 * x220;
-        let x987 = x7
-            * (x450 * x980 + x513 * x900 + x879 * x422 + x952 * x393 + x455 * x862
-                + x510 * x890
-                + (8.0 * x428 + d * (4.0 * x981 + 4.0 * x982)
-                    + (4.0 * x983 + 4.0 * x984) * J2 + 8.0 * x504 - 8.0 * x401
-                    + (4.0 * x985 + 4.0 * x986) * J1) * x463 + x914 * x503);
-        let x988 = x104 * x355;
-        let x989 = x106 * x342;
-        let x990 = (-gamma2_dot * (-x810 * x220 - 2.0 * x988)
-            - gamma1_dot * (2.0 * x989 + x213 * x792)) * J1;
-        let x991 = d * x474;
-        let x992 = (x835 * x702 + (2.0 * x991 + 2.0 * (x154 * x840)) * x39 + x843 * x199)
+        let x971 = e1 * x934;
+        let x972 = 4.0 * x878 - 2.0 * x874 - 2.0 * x876 - 4.0 * x877 - 2.0 * x882
+            + 2.0 * x883;
+        let x973 = x972 * e0;
+        let x974 = x963 - x944 - x957 - x959 - x965 + 2.0 * x966 - x967 + x970 + x971
+            + x973;
+        let x975 = e3 * x802;
+        let x976 = x106 * x359;
+        let x977 = x104 * x321;
+        let x978 = (-gamma1_dot * (x211 * x809 + 2.0 * x976)
+            - gamma2_dot * (-2.0 * x977 - x795 * x219)) * J1;
+        let x979 = m2 * (e3 * x898 - x885 * x176 - 2.0 * (x336 * x696));
+        let x980 = x174 * x804;
+        let x981 = x972 * e2;
+        let x982 = x900 * x186;
+        let x983 = d * x495;
+        let x984 = (x813 * x705 + x188 * x821 + (2.0 * (x164 * x818) + 2.0 * x983) * x39)
             * m1;
-        let x993 = x924 * e0;
-        let x994 = x39 * x378;
-        let x995 = x54 * x524;
-        let x996 = ((16.0 * x549 - 16.0 * x499 - 16.0 * x527 + 16.0 * x564) * x7
-            + 4.0 * x994) + (4.0 * x346 + (-4.0 * x345 - 4.0 * x995));
-        let x997 = gamma2_dot * x205;
-        let x998 = -(gamma1_dot * x225);
-        let x999 = x969 * e2 + x806 * e3 + x236 * x917 - (x843 * x233 + e3 * x841) * m1
-            - x788 * x231
-            - (x862 * x442 + x900 * x510 + x537 * x890 + x914 * x530 + x422 * x894
-                + x980 * x463 + x393 * x956) * x7 - (x998 * x792 - x810 * x997) * J1
-            + 2.0 * (x924 * e1) - m2 * (e2 * x972 + x238 * x828);
-        let x1000 = (2.0 * x346 + 2.0 * x994) + (-2.0 * x345 - 2.0 * x995);
-        let x1001 = x970 - x971 - x973 + x974 + x975 - x987 + x990 + x1000 - x992
-            - 2.0 * x993;
-        let x1002 = ((-4.0 * x348 - 2.0 * x373)
-            + ((-4.0 * x468 - 2.0 * x489) + (4.0 * x332 - 2.0 * x379)))
-            + ((2.0 * x343 - 2.0 * x494) + (-2.0 * x464 - 2.0 * x497));
-        let x1003 = (((16.0 * x566 - 16.0 * x565 - 16.0 * x567 + 16.0 * x568) * x7
-            - 4.0 * x919) - 4.0 * x466) + (4.0 * x465 + 4.0 * x920);
-        let x1004 = ((4.0 * x330 - 4.0 * x930)
-            + (16.0 * x569 - 16.0 * x570 + 16.0 * x571 - 16.0 * x572) * x7)
-            + (-4.0 * x928 - 4.0 * x328);
-        let x1005 = ((-2.0 * x552 - 2.0 * x553) + (4.0 * x554 - 4.0 * x560))
-            + (((2.0 * x557 - 2.0 * x550) + (-4.0 * x558 - 2.0 * x559))
-                + (-2.0 * x556 - 2.0 * x562));
-        let x1006 = (-2.0 * x391 - 2.0 * x392) + (2.0 * x380 - x390);
-        let x1007 = x376 * x342;
-        let x1008 = (2.0 * x421 - 2.0 * x415) + (-2.0 * x416 - x420);
-        let x1009 = x333 * x353;
-        let x1010 = e2 * x474;
-        let x1011 = x486 * x197;
-        let x1012 = x213 * x482 + (2.0 * x1010 - x1011);
-        let x1013 = x176 * x359;
-        let x1014 = e3 * x372;
-        let x1015 = x1013 + (x368 * x220 - 2.0 * x1014);
-        let x1016 = x368 * x236;
-        let x1017 = x372 * e0;
-        let x1018 = (x205 * x359 + x1016) + 2.0 * x1017;
-        let x1019 = x482 * x197;
-        let x1020 = e1 * x474;
-        let x1021 = x1019 + (x486 * x213 - 2.0 * x1020);
-        let x1022 = x176 * x368;
-        let x1023 = e1 * x372;
-        let x1024 = (x220 * x359 - x1022) + 2.0 * x1023;
-        let x1025 = x486 * x225;
-        let x1026 = x474 * e0;
-        let x1027 = x482 * x231 + (x1025 + 2.0 * x1026);
-        let x1028 = x8 * x71;
-        let x1029 = 16.0 * x1028;
-        let x1030 = x8 * x141;
+        let x985 = x905 * e0;
+        let x986 = x54 * x521;
+        let x987 = x39 * x372;
+        let x988 = (4.0 * x376 + (-4.0 * x375 - 4.0 * x986))
+            + ((16.0 * x545 - 16.0 * x498 - 16.0 * x526 + 16.0 * x563) * x7
+                + 4.0 * x987);
+        let x989 = x106 * x211;
+        let x990 = x104 * x219;
+        let x991 = x67 * x176;
+        let x992 = x69 * x188;
+        let x993 = x174 * x54;
+        let x994 = x186 * x39;
+        let x995 = (x864 * x513 + x917 * x474 + x508 * x851 + x448 * x956 + x840 * x453
+            + x404 * x873 + x827 * x511
+            + (8.0 * x411 + (4.0 * x989 + 4.0 * x990) * J1 + 8.0 * x502 - 8.0 * x435
+                + (4.0 * x991 + 4.0 * x992) * d + J2 * (4.0 * x993 + 4.0 * x994)) * x461)
+            * x7;
+        let x996 = (2.0 * x376 + 2.0 * x987) + (-2.0 * x375 - 2.0 * x986);
+        let x997 = x975 + x978 - x979 - x980 + x981 + x982 - x984 + x996 - 2.0 * x985
+            - x995;
+        let x998 = (4.0 * x379 + 4.0 * x940)
+            + (((16.0 * x566 - 16.0 * x564 - 16.0 * x565 + 16.0 * x567) * x7
+                - 4.0 * x939) - 4.0 * x380);
+        let x999 = ((-2.0 * x350 - 4.0 * x378)
+            + ((-4.0 * x382 - 2.0 * x496) + (4.0 * x356 - 2.0 * x373)))
+            + ((2.0 * x367 - 2.0 * x387) + (-2.0 * x390 - 2.0 * x475));
+        let x1000 = ((-2.0 * x537 - 2.0 * x542) + (4.0 * x531 - 4.0 * x543))
+            + ((-2.0 * x530 - 2.0 * x539)
+                + ((2.0 * x527 - 2.0 * x528) + (-4.0 * x540 - 2.0 * x541)));
+        let x1001 = (-4.0 * x960 - 4.0 * x352)
+            + ((4.0 * x354 - 4.0 * x962)
+                + x7 * (16.0 * x568 + 16.0 * x569 - 16.0 * x570 - 16.0 * x571));
+        let x1002 = (-2.0 * x446 - 2.0 * x447) + (2.0 * x441 - x445);
+        let x1003 = x370 * x359;
+        let x1004 = (2.0 * x473 - 2.0 * x467) + (-2.0 * x468 - x472);
+        let x1005 = x360 * x330;
+        let x1006 = e3 * x336;
+        let x1007 = x174 * x342;
+        let x1008 = (x347 * x219 - 2.0 * x1006) + x1007;
+        let x1009 = e2 * x495;
+        let x1010 = x491 * x186;
+        let x1011 = (2.0 * x1009 - x1010) + x211 * x486;
+        let x1012 = x347 * x235;
+        let x1013 = x336 * e0;
+        let x1014 = (x203 * x342 + x1012) + 2.0 * x1013;
+        let x1015 = x186 * x486;
+        let x1016 = e1 * x495;
+        let x1017 = x1015 + (x491 * x211 - 2.0 * x1016);
+        let x1018 = x495 * e0;
+        let x1019 = x225 * x491;
+        let x1020 = (2.0 * x1018 + x1019) + x486 * x231;
+        let x1021 = x347 * x174;
+        let x1022 = e1 * x336;
+        let x1023 = (x219 * x342 - x1021) + 2.0 * x1022;
+        let x1024 = x8 * x71;
+        let x1025 = 16.0 * x1024;
+        let x1026 = x8 * e2;
+        let x1027 = x1026 * e0;
+        let x1028 = 16.0 * x1027;
+        let x1029 = x8 * e3;
+        let x1030 = x1029 * e0;
         let x1031 = 16.0 * x1030;
-        let x1032 = x8 * e3;
-        let x1033 = x1032 * e0;
-        let x1034 = 16.0 * x1033;
-        let x1035 = x7 * (2.0 - 16.0 * (x1 * x7));
-        let x1036 = -(16.0 * x1030);
-        let x1037 = -(16.0 * x1033);
-        let x1038 = -(16.0 * x1028);
-        let x1039 = x8 * e1;
-        let x1040 = x1039 * x632;
-        let x1041 = x1039 * x640;
-        let x1042 = x67 * (16.0 * x134 - 24.0 * x126);
-        let x1043 = x644 + (24.0 * x127 + 16.0 * x141) * x69;
-        let x1044 = x67 * e2;
-        let x1045 = ((x1042 + x1043) * e1 + e3 * (x66 * x69 - 8.0 * (x67 * x68))
-            - x1044 * x65) * x77;
-        let x1046 = x762 * x67 + x652;
-        let x1047 = (e1 * (x1046 + x654) - x66 * x74) * x77;
-        let x1048 = (16.0 * x0 + 16.0 * x4) * x69;
-        let x1049 = x67 * e0;
-        let x1050 = ((x658 - x1048) * e1 - x1049 * x66) * x77;
-        let x1051 = x1039 * x675;
-        let x1052 = x584 * x677;
-        let x1053 = x104 * x126;
-        let x1054 = a_ * x126;
-        let x1055 = m2
-            * (d * (8.0 * x1053 + (4.0 * x71 - 4.0 * x68) * x54) + 8.0 * x1054);
-        let x1056 = x106 * x126;
-        let x1057 = (d * (x39 * (6.0 * x0 + 2.0 * x3 + x136) - 8.0 * x1056)
-            - 8.0 * x1054) * m1;
-        let x1058 = x1055 + x1057;
-        let x1059 = x116 * e3;
-        let x1060 = m2
-            * (((6.0 * x0 - 2.0 * x3 + x119) * x54 + 8.0 * x128) * d + 8.0 * x1059);
-        let x1061 = d * (4.0 * x224 + 8.0 * x122);
-        let x1062 = x873 * x71;
-        let x1063 = m1 * (e3 * (-8.0 * x116 - x1061) - 4.0 * x1062);
-        let x1064 = d * (x67 * (4.0 * x126 - 4.0 * x134) - x692);
-        let x1065 = (2.0 * (x1058 * e0) + (x694 + 2.0 * x1060 + 2.0 * x1063) * e1 + x766
-            - 2.0 * (e2 * x1064)) * x7;
-        let x1066 = 2.0 * x140 - 2.0 * x139;
-        let x1067 = x1066 * x40;
-        let x1068 = 2.0 * x1067 - x743;
-        let x1069 = ((4.0 * x116 + x1068 + 2.0 * x226) * e0 - x728) * m1;
-        let x1070 = 2.0 * x219 - 2.0 * x143;
-        let x1071 = x1070 * x110;
-        let x1072 = x1071 - 2.0 * x733;
-        let x1073 = m2 * ((x1072 + 4.0 * x132 + 2.0 * x221) * e1 + x208);
-        let x1074 = x175 * d;
-        let x1075 = -(e2 * x110);
-        let x1076 = ((x743 - 2.0 * x1067) * e3 - 2.0 * (x873 * x179) - 2.0 * x754) * m1
+        let x1032 = x7 * (2.0 - 16.0 * (x1 * x7));
+        let x1033 = -(16.0 * x1027);
+        let x1034 = -(16.0 * x1030);
+        let x1035 = -(16.0 * x1024);
+        let x1036 = x8 * e1;
+        let x1037 = x1036 * x631;
+        let x1038 = x1036 * x639;
+        let x1039 = x67 * (16.0 * x134 - 24.0 * x123);
+        let x1040 = x643 + (24.0 * x121 + 16.0 * x141) * x69;
+        let x1041 = x67 * e2;
+        let x1042 = ((x1039 + x1040) * e1 + e3 * (x66 * x69 - 8.0 * (x67 * x68))
+            - x1041 * x65) * x77;
+        let x1043 = x761 * x67 + x651;
+        let x1044 = (e1 * (x1043 + x653) - x66 * x74) * x77;
+        let x1045 = (16.0 * x0 + 16.0 * x4) * x69;
+        let x1046 = x67 * e0;
+        let x1047 = ((x657 - x1045) * e1 - x1046 * x66) * x77;
+        let x1048 = x1036 * x674;
+        let x1049 = x583 * x676;
+        let x1050 = x106 * x123;
+        let x1051 = x116 * e2;
+        let x1052 = (d * (x39 * (6.0 * x0 + 2.0 * x3 + x136) - 8.0 * x1050)
+            - 8.0 * x1051) * m1;
+        let x1053 = x104 * x123;
+        let x1054 = m2
+            * (d * (8.0 * x1053 + (4.0 * x71 - 4.0 * x68) * x54) + 8.0 * x1051);
+        let x1055 = x1052 + x1054;
+        let x1056 = x116 * e3;
+        let x1057 = m2
+            * (((6.0 * x0 - 2.0 * x3 + x119) * x54 + 8.0 * x122) * d + 8.0 * x1056);
+        let x1058 = (4.0 * x223 + 8.0 * x224) * d;
+        let x1059 = x913 * x71;
+        let x1060 = m1 * (e3 * (-8.0 * x116 - x1058) - 4.0 * x1059);
+        let x1061 = d * (x67 * (4.0 * x123 - 4.0 * x134) - x692);
+        let x1062 = (2.0 * (x1055 * e0) + (x678 + 2.0 * x1057 + 2.0 * x1060) * e1 + x764
+            - 2.0 * (e2 * x1061)) * x7;
+        let x1063 = 2.0 * x139 - 2.0 * x140;
+        let x1064 = x1063 * x40;
+        let x1065 = 2.0 * x1064 - x735;
+        let x1066 = 2.0 * x218 - 2.0 * x217;
+        let x1067 = x1066 * x110;
+        let x1068 = m1 * (x1065 * e2 - 2.0 * x743)
+            + (2.0 * x747 + (2.0 * x745 - x1067) * e3) * m2;
+        let x1069 = -(e2 * x110);
+        let x1070 = x173 * d;
+        let x1071 = ((x735 - 2.0 * x1064) * e3 - 2.0 * x753 - 2.0 * (x913 * x177)) * m1
             + m2
-                * ((2.0 * (x176 * x154) + 2.0 * x1074) * x54 - 2.0 * x755
-                    + x1070 * x1075);
-        let x1077 = (x1068 * e2 - 2.0 * x737) * m1
-            + m2 * (2.0 * x736 + e3 * (2.0 * x733 - x1071));
-        let x1078 = m2 * (x713 + x1072 * e0 - 2.0 * x746);
-        let x1079 = m1
-            * (2.0 * x750 - (x187 - x225 * e1) * x189
-                - (x716 + 2.0 * (x1066 * e1)) * x40);
-        let x1080 = x1078 + x1079;
-        let x1081 = ((2.0 * x1069 + 2.0 * x1073 + x731) * e1 - 2.0 * (x1076 * e2)
-            - 2.0 * (e3 * x1077) + 2.0 * (x1080 * e0) + x771) * x7;
-        let x1082 = x720 + 2.0 * x721;
-        let x1083 = (x1082 * e2 - 2.0 * x704) * m1 + m2 * x708;
-        let x1084 = (2.0 * x715 - x749 + x1082 * e0) * m1;
-        let x1085 = m2
-            * ((x249 + x205 * e1) * x110 - 2.0 * x711
-                + (x747 - 2.0 * (x236 * e1)) * x55);
-        let x1086 = d * x252;
-        let x1087 = (x723 - 2.0 * (x873 * x243)) * m1
+                * (x1069 * x1066 - 2.0 * x754
+                    + x54 * (2.0 * x1070 + 2.0 * (x164 * x174)));
+        let x1072 = x1067 - 2.0 * x745;
+        let x1073 = m2 * (x1072 * e0 + x713 - 2.0 * x738);
+        let x1074 = m1
+            * (2.0 * x732 - (x709 + 2.0 * (x1063 * e1)) * x40
+                - (x189 - x225 * e1) * x191);
+        let x1075 = x1073 + x1074;
+        let x1076 = ((4.0 * x116 + 2.0 * x226 + x1065) * e0 - x726) * m1;
+        let x1077 = m2 * (x206 + (4.0 * x132 + x1072 + 2.0 * x220) * e1);
+        let x1078 = x7
+            * (x769 - 2.0 * (e3 * x1068) - 2.0 * (e2 * x1071) + 2.0 * (x1075 * e0)
+                + (2.0 * x1076 + x724 + 2.0 * x1077) * e1);
+        let x1079 = m1 * (x261 + x727);
+        let x1080 = m2 * (x750 + x729);
+        let x1081 = x1079 + x1080;
+        let x1082 = x718 + 2.0 * x719;
+        let x1083 = m2 * x704 + (x1082 * e2 - 2.0 * x707) * m1;
+        let x1084 = d * x242;
+        let x1085 = m1 * (x721 - 2.0 * (x913 * x249))
             + m2
-                * (2.0 * x719 + (2.0 * (x154 * x236) + 2.0 * x1086) * x54
-                    + x205 * x1075);
-        let x1088 = (x258 + x729) * m1;
-        let x1089 = m2 * (x725 + x740);
-        let x1090 = x1088 + x1089;
-        let x1091 = (x773 - 2.0 * (e3 * x1083) + (2.0 * x1084 + 2.0 * x1085 + x753) * e1
-            - 2.0 * (x1087 * e2) + 2.0 * (x1090 * e0)) * x7;
-        let x1092 = x584 * x763;
-        let x1093 = x1060 + x1063;
-        let x1094 = (2.0 * x685 + 2.0 * (x1093 * e0) - 2.0 * x156 - 2.0 * x160
-            - 2.0 * (e3 * x1064) + (x767 - 2.0 * x1055 - 2.0 * x1057) * e1) * x7;
-        let x1095 = x1069 + x1073;
-        let x1096 = x7
-            * ((x769 - 2.0 * x1078 - 2.0 * x1079) * e1 + 2.0 * (x1077 * e2)
-                - 2.0 * (e3 * x1076) + 2.0 * (x1095 * e0) - 2.0 * x209 - 2.0 * x216);
-        let x1097 = x1084 + x1085;
-        let x1098 = x7
-            * ((x775 - 2.0 * x1088 - 2.0 * x1089) * e1 + 2.0 * (x1083 * e2) - 2.0 * x263
-                + 2.0 * (x1097 * e0) - 2.0 * (e3 * x1087) - 2.0 * x264);
-        let x1099 = x1066 * x38;
-        let x1100 = -(x38 * x225);
-        let x1101 = x236 * x53;
-        let x1102 = x53 * x1070;
-        let x1103 = x783 * e1;
-        let x1104 = x39 * e3_dot;
-        let x1105 = x106 * e0_dot;
-        let x1106 = 2.0 * x1104 - 2.0 * x1105;
-        let x1107 = x794 * x1106;
-        let x1108 = e0_dot * x327;
-        let x1109 = 2.0 * (x106 * e3_dot) + 2.0 * (x39 * e0_dot);
-        let x1110 = x337 * x1109;
-        let x1111 = Ixy * e3_dot;
-        let x1112 = e2_dot * Ixz;
-        let x1113 = 2.0 * x1112 - 2.0 * (Ixx * e0_dot) - 2.0 * x1111;
-        let x1114 = x1113 * x326;
-        let x1115 = Ixy * e0_dot;
-        let x1116 = 2.0 * x848 + 2.0 * x1115 + 2.0 * (Iyy * e3_dot);
-        let x1117 = x1116 * x316;
-        let x1118 = 4.0 * x847 - 2.0 * x1107 + 4.0 * x1108 - 2.0 * x1110 + 2.0 * x1114
-            - 2.0 * x1117;
-        let x1119 = x1118 * e0;
-        let x1120 = 2.0 * (x54 * e0_dot) + 2.0 * (x104 * e2_dot);
-        let x1121 = d * x1120 + 2.0 * x832;
-        let x1122 = x1120 * x357;
-        let x1123 = e3_dot * x824 - x1121 * x355 - x1122;
-        let x1124 = x104 * e0_dot;
-        let x1125 = e2_dot * x54;
-        let x1126 = 2.0 * x1125 - 2.0 * x1124;
-        let x1127 = x1126 * x357;
-        let x1128 = x815 * e3_dot + x1121 * x353 - x1127;
-        let x1129 = -(2.0 * (x355 * e3_dot) - x1120 * x326) * x55 - e3_dot * x827
-            - x1126 * x371;
-        let x1130 = m2
-            * ((x821 - 2.0 * (x1123 * e1)) * x55 + (x359 + x1128 * e1) * x110
-                - x1129 * x222);
-        let x1131 = Ixz * e0_dot;
-        let x1132 = 2.0 * x1131 - 2.0 * (e2_dot * Izz) - 2.0 * x799;
-        let x1133 = e3_dot * x344;
-        let x1134 = e2_dot * x327;
-        let x1135 = x1132 * x326 - x1116 * x321 + 2.0 * x1133 + 2.0 * x1134;
-        let x1136 = x1135 * e2;
-        let x1137 = (2.0 * J2 - 2.0 * J1) * x353 * e3_dot + x1126 * x491;
-        let x1138 = x220 * x1137;
-        let x1139 = -(x176 * gamma2_dot);
-        let x1140 = J1
-            * (-x1139 * x1120 - 2.0 * x809 - gamma1_dot * (2.0 * x808 + x1109 * x231));
-        let x1141 = e0_dot * e0_dot;
-        let x1142 = -4.0 * x889 - 4.0 * x1141;
-        let x1143 = 4.0 * x386 + 4.0 * x387;
-        let x1144 = 4.0 * x384 + x1143;
-        let x1145 = x899 - 16.0 * x458;
-        let x1146 = x1142 - 4.0 * x887
+                * (2.0 * x722 + x54 * (2.0 * (x164 * x235) + 2.0 * x1084)
+                    + x203 * x1069);
+        let x1086 = m2
+            * ((x739 - 2.0 * (x235 * e1)) * x55 - 2.0 * x714
+                + (x255 + x203 * e1) * x110);
+        let x1087 = (2.0 * x710 - x733 + x1082 * e0) * m1;
+        let x1088 = x7
+            * (2.0 * (x1081 * e0) - 2.0 * (e3 * x1083) - 2.0 * (x1085 * e2)
+                + (2.0 * x1086 + x741 + 2.0 * x1087) * e1 + x774);
+        let x1089 = x583 * x762;
+        let x1090 = x1057 + x1060;
+        let x1091 = (2.0 * (x1090 * e0) - 2.0 * x166 + 2.0 * x691
+            + (x766 - 2.0 * x1052 - 2.0 * x1054) * e1 - 2.0 * (e3 * x1061) - 2.0 * x168)
+            * x7;
+        let x1092 = x1076 + x1077;
+        let x1093 = ((x770 - 2.0 * x1073 - 2.0 * x1074) * e1 + 2.0 * (x1092 * e0)
+            - 2.0 * x207 - 2.0 * (e3 * x1071) - 2.0 * x214 + 2.0 * (e2 * x1068)) * x7;
+        let x1094 = x1086 + x1087;
+        let x1095 = x7
+            * (2.0 * (x1094 * e0) - 2.0 * x262 - 2.0 * x264 + 2.0 * (e2 * x1083)
+                + (x772 - 2.0 * x1079 - 2.0 * x1080) * e1 - 2.0 * (e3 * x1085));
+        let x1096 = x1063 * x38;
+        let x1097 = -(x225 * x38);
+        let x1098 = x53 * x235;
+        let x1099 = x53 * x1066;
+        let x1100 = x782 * e1;
+        let x1101 = x104 * e0_dot;
+        let x1102 = e2_dot * x54;
+        let x1103 = 2.0 * x1102 - 2.0 * x1101;
+        let x1104 = x330 * e3_dot;
+        let x1105 = x1103 * x385 + (2.0 * J2 - 2.0 * J1) * x1104;
+        let x1106 = x1105 * x235;
+        let x1107 = 2.0 * (x54 * e0_dot) + 2.0 * (x104 * e2_dot);
+        let x1108 = d * x1107 + 2.0 * x806;
+        let x1109 = x1103 * x340;
+        let x1110 = x894 * e3_dot + x1108 * x330 - x1109;
+        let x1111 = x1107 * x340;
+        let x1112 = e3_dot * x888 - x1108 * x321 - x1111;
+        let x1113 = d * x336;
+        let x1114 = -(2.0 * (x321 * e3_dot) - x1107 * x326) * x55 - x1103 * x335
+            - x1104 * x110;
+        let x1115 = m2
+            * (x1110 * x1069 + x54 * (2.0 * (x164 * x1112) + 2.0 * x1113)
+                + x237 * x1114);
+        let x1116 = 2.0 * (x106 * e3_dot) + 2.0 * (x39 * e0_dot);
+        let x1117 = (gamma2_dot * (-2.0 * x977 - x203 * x1107)
+            + gamma1_dot * (2.0 * x976 + x225 * x1116)) * J1;
+        let x1118 = x39 * e3_dot;
+        let x1119 = x106 * e0_dot;
+        let x1120 = 2.0 * x1118 - 2.0 * x1119;
+        let x1121 = x369 * x1120;
+        let x1122 = e2_dot * x363;
+        let x1123 = 2.0 * x1119 - 2.0 * x1118;
+        let x1124 = (x1121 - 2.0 * x1122) * J1
+            + J2 * (2.0 * x1122 - x1121 + x1123 * gamma1_dot);
+        let x1125 = x1124 * x231;
+        let x1126 = -(x363 * x191);
+        let x1127 = e2_dot * x1126 + (2.0 * (e2_dot * x359) - x1116 * x320) * x40
+            - x1123 * x494 + x1120 * x483;
+        let x1128 = 2.0 * x480 + 2.0 * x482 - 2.0 * x815 + x816;
+        let x1129 = 2.0 * x889 + d * x1116;
+        let x1130 = x1116 * x478;
+        let x1131 = e2_dot * x1128 - x1129 * x359 - x1130;
+        let x1132 = x1131 * x40;
+        let x1133 = x478 * x1120;
+        let x1134 = x40 * (8.0 * x318 - 8.0 * x319 + 8.0 * x316 - 8.0 * x317);
+        let x1135 = x1133 + e2_dot * x1134 + x1129 * x363;
+        let x1136 = x1135 * x191;
+        let x1137 = m1
+            * (x1127 * x233 - 2.0 * (x913 * x495) + e3 * (-2.0 * x1132 - x1136));
+        let x1138 = Ixy * e3_dot;
+        let x1139 = e2_dot * Ixz;
+        let x1140 = 2.0 * x1139 - 2.0 * (Ixx * e0_dot) - 2.0 * x1138;
+        let x1141 = x1140 * x320;
+        let x1142 = x1103 * x383;
+        let x1143 = x1107 * x796;
+        let x1144 = Ixz * e0_dot;
+        let x1145 = 2.0 * x1144 - 2.0 * (e2_dot * Izz) - 2.0 * x880;
+        let x1146 = x315 * x1145;
+        let x1147 = e0_dot * x374;
+        let x1148 = 2.0 * x1141 - 4.0 * x878 + 2.0 * x1142 - 2.0 * x1143 - 2.0 * x1146
+            + 4.0 * x1147;
+        let x1149 = x1148 * e2;
+        let x1150 = x875 * x1120;
+        let x1151 = e0_dot * x351;
+        let x1152 = x364 * x1116;
+        let x1153 = x1140 * x326;
+        let x1154 = Ixy * e0_dot;
+        let x1155 = 2.0 * x791 + 2.0 * x1154 + 2.0 * (Iyy * e3_dot);
+        let x1156 = x1155 * x315;
+        let x1157 = 2.0 * x1150 - 4.0 * x790 - 4.0 * x1151 + 2.0 * x1152 - 2.0 * x1153
+            + 2.0 * x1156;
+        let x1158 = e3 * x1157;
+        let x1159 = e3_dot * x374;
+        let x1160 = e2_dot * x351;
+        let x1161 = x1145 * x326 - x1155 * x320 + 2.0 * x1159 + 2.0 * x1160;
+        let x1162 = x1161 * e1;
+        let x1163 = 2.0 * x989 + 2.0 * x990;
+        let x1164 = -2.0 * x993 - 2.0 * x994;
+        let x1165 = (-2.0 * x991 - 2.0 * x992) * d - 4.0 * x411 - x1163 * J1 + x1164 * J2
+            - 4.0 * x502 + 4.0 * x435;
+        let x1166 = e3_dot * e1_dot;
+        let x1167 = 4.0 * x1166
+            + ((4.0 * x322 + x862 * e1 - 4.0 * x324) * x397
+                + e1_dot * (16.0 * x442 - 32.0 * x443 - 16.0 * x444)
+                + (16.0 * x441 - 16.0 * x447) * e1) * x7;
+        let x1168 = e2_dot * e1_dot;
+        let x1169 = (e1_dot * (32.0 * x469 - 16.0 * x470 - 16.0 * x471)
+            - (16.0 * x467 + 16.0 * x468) * e1
+            + (x837 * e1 - 4.0 * x316 + 4.0 * x317) * x397) * x7 + 4.0 * x1168;
+        let x1170 = -x7 * x843 - 4.0 * e0_dot;
+        let x1171 = ((16.0 * x392 + 16.0 * x403) * e1 + (32.0 * x400 + x844) * e1_dot
+            + x397 * (x1170 * e1 - 4.0 * x312 + 4.0 * x314)) * x7 + 4.0 * x822;
+        let x1172 = x233 * x725;
+        let x1173 = (2.0 * (x227 * x913) - x1172) * m1 + 4.0 * x429 + 8.0 * x431
+            + x916 * e2 + (2.0 * x949 - 2.0 * x954 - 2.0 * x950) * J1 + 4.0 * x504
+            + J2 * (2.0 * x954 + 2.0 * x950 - 2.0 * x948 - 4.0 * e2)
+            + (x54 * (-4.0 * (x164 * x55) - 2.0 * (d * x221)) + x1069 * x110) * m2;
+        let x1174 = 2.0 * x907 - 2.0 * x909;
+        let x1175 = x237 * x712;
+        let x1176 = 4.0 * x421 + e3 * x952 - 8.0 * x422 + m1 * (2.0 * x914 + x420 * e3)
+            + J2 * (x1174 + 2.0 * x910 + 4.0 * e3)
+            + J1 * (2.0 * x909 - 2.0 * x910 - 2.0 * x908) + m2 * (2.0 * x915 + x1175)
+            - 4.0 * x506;
+        let x1177 = e0_dot * e0_dot;
+        let x1178 = -4.0 * x850 - 4.0 * x1177;
+        let x1179 = 4.0 * x395 + 4.0 * x396;
+        let x1180 = 4.0 * x393 + x1179;
+        let x1181 = x826 - 16.0 * x456;
+        let x1182 = x1178 - 4.0 * x848
             + x7
-                * ((x584 * x896 + x1144) * x388 + (x898 - 16.0 * x461) * e1
-                    + e1_dot * x1145);
-        let x1147 = x867 * x225;
-        let x1148 = x863 * x231;
-        let x1149 = x222 * x712;
-        let x1150 = x215 * x727;
-        let x1151 = (2.0 * x985 - 2.0 * x986) * J2 - 4.0 * x428
-            + m2 * (x409 * e0 - x1149) + (2.0 * x983 - 2.0 * x984) * J1 + x906 * e0
-            - 4.0 * x401 + 8.0 * x402 + (x406 * e0 + x1150) * m1;
-        let x1152 = -x7 * x882 - 4.0 * e0_dot;
-        let x1153 = ((16.0 * x444 + 16.0 * x449) * e1 + (32.0 * x446 + x883) * e1_dot
-            + x388 * (x1152 * e1 - 4.0 * x313 + 4.0 * x315)) * x7 + 4.0 * x895;
-        let x1154 = x863 * x213;
-        let x1155 = x867 * x197;
-        let x1156 = 2.0 * x1154 - 4.0 * x424 - 2.0 * x1155 + x199 * x866 - 4.0 * x508
-            + e3 * x891;
-        let x1157 = e2_dot * e1_dot;
-        let x1158 = (e1_dot * (32.0 * x417 - 16.0 * x418 - 16.0 * x419)
-            - (16.0 * x415 + 16.0 * x416) * e1
-            + (x859 * e1 - 4.0 * x317 + 4.0 * x318) * x388) * x7 + 4.0 * x1157;
-        let x1159 = -(x222 * d);
-        let x1160 = x233 * x727;
-        let x1161 = m2 * ((2.0 * x1159 - 4.0 * (x154 * x55)) * x54 + x1075 * x110)
-            + 4.0 * x397 + (2.0 * (x873 * x227) - x1160) * m1
-            + (2.0 * x946 - 2.0 * x950 - 2.0 * x948) * J1
-            + (2.0 * x950 - 4.0 * e2 - 2.0 * x947 + 2.0 * x948) * J2 + 8.0 * x399
-            + x877 * e2 + 4.0 * x506;
-        let x1162 = e3_dot * e1_dot;
-        let x1163 = 4.0 * x1162
-            + ((4.0 * x322 + x912 * e1 - 4.0 * x324) * x388
-                + e1_dot * (16.0 * x381 - 32.0 * x382 - 16.0 * x383)
-                + (16.0 * x380 - 16.0 * x392) * e1) * x7;
-        let x1164 = x7
-            * (x1146 * x503
-                + (8.0 * x394 + 4.0 * x1147 + x865 * e1 - 8.0 * x395
-                    - 2.0 * (x227 * x866) + 4.0 * x1148) * x393 + x422 * x1151
-                + x1153 * x530 + x1156 * x463 + x1158 * x414 + x1161 * x450
-                + x1163 * x551);
-        let x1165 = -(x336 * x189);
-        let x1166 = 2.0 * x1105 - 2.0 * x1104;
-        let x1167 = e2_dot * x1165 + (2.0 * (e2_dot * x342) - x1109 * x321) * x40
-            - x1166 * x470 + x1106 * x473;
-        let x1168 = 2.0 * x471 + 2.0 * x472 - 2.0 * x837 + x838;
-        let x1169 = 2.0 * x813 + d * x1109;
-        let x1170 = x1109 * x477;
-        let x1171 = e2_dot * x1168 - x1169 * x342 - x1170;
-        let x1172 = x1171 * x40;
-        let x1173 = x477 * x1106;
-        let x1174 = x40 * (8.0 * x319 - 8.0 * x320 + 8.0 * x317 - 8.0 * x318);
-        let x1175 = x1173 + e2_dot * x1174 + x1169 * x336;
-        let x1176 = x1175 * x189;
-        let x1177 = 2.0 * x1172 + x1176;
-        let x1178 = (x1177 * e0 - x830 - x1167 * x227) * m1;
-        let x1179 = x1113 * x321;
-        let x1180 = x1126 * x493;
-        let x1181 = x1120 * x852;
-        let x1182 = x316 * x1132;
-        let x1183 = e0_dot * x344;
-        let x1184 = 4.0 * x797 - 2.0 * x1179 - 2.0 * x1180 + 2.0 * x1181 + 2.0 * x1182
-            - 4.0 * x1183;
-        let x1185 = x1184 * e1;
-        let x1186 = x375 * x1106;
-        let x1187 = e2_dot * x336;
-        let x1188 = (x1186 - 2.0 * x1187) * J1
-            + J2 * (2.0 * x1187 - x1186 + x1166 * gamma1_dot);
-        let x1189 = x1188 * x225;
-        let x1190 = x1119 - x1130 + 2.0 * x1136 - x1138 + x1140 - x1164 - x1178 + x921
-            + x1185 - x1189;
-        let x1191 = x205 * x1137;
-        let x1192 = 2.0 * x1107 - 4.0 * x847 - 4.0 * x1108 + 2.0 * x1110 - 2.0 * x1114
-            + 2.0 * x1117;
-        let x1193 = x1192 * e1;
-        let x1194 = gamma1_dot * x197;
-        let x1195 = x1194;
-        let x1196 = (-x1109 * x1195 - gamma2_dot * (x236 * x1120 - 2.0 * x959)
-            - 2.0 * x929) * J1;
-        let x1197 = x1188 * x213;
-        let x1198 = (2.0 * x478 + 2.0 * x480) - 2.0 * x479;
-        let x1199 = m1
-            * ((x1198 - 2.0 * (x1171 * e1)) * x40 - x1167 * x215
-                - (x1175 * e1 + x486) * x189);
-        let x1200 = x1184 * e0;
-        let x1201 = x1128 * x110;
-        let x1202 = x1123 * x55;
-        let x1203 = m2 * ((x1201 - 2.0 * x1202) * e0 + x1129 * x207 + x932);
-        let x1204 = x220 * x937;
-        let x1205 = x176 * x939;
-        let x1206 = m2 * x712;
-        let x1207 = 4.0 * x397 + x955 * e2 + 2.0 * x1204 - 2.0 * x1205 - 4.0 * x506
-            - x1206 * x178;
-        let x1208 = x238 * x712;
-        let x1209 = 2.0 * x869 - 2.0 * x878;
-        let x1210 = m2 * (2.0 * x876 + x1208) + 4.0 * x424 + e3 * x945 - 8.0 * x425
-            + (4.0 * e3 + x1209 + 2.0 * x871) * J2
-            + (2.0 * x878 - 2.0 * x870 - 2.0 * x871) * J1 + (2.0 * x874 + x423 * e3) * m1
-            - 4.0 * x508;
-        let x1211 = x205 * x939;
-        let x1212 = x236 * x937;
-        let x1213 = x7
-            * (x455 * x1146 + x1207 * x463 + x450 * x1210 + x1158 * x436
-                + (8.0 * x432 + 2.0 * (x1206 * x207) + 8.0 * x395 + x941 * e1
-                    - 4.0 * x1211 + 4.0 * x1212) * x422 + x393 * x1151 + x442 * x1153
-                + x1163 * x414);
-        let x1214 = x1135 * e3;
-        let x1215 = (2.0 * x928 + 2.0 * x328) + (2.0 * x930 - 2.0 * x330);
-        let x1216 = x1193 - x1191 + x1196 - x1197 - x1199 + x1200 - x1203 - x1213
-            - 2.0 * x1214 + x1215;
-        let x1217 = (gamma2_dot * (-x205 * x1120 - 2.0 * x988)
-            + (x225 * x1109 + 2.0 * x989) * gamma1_dot) * J1;
-        let x1218 = (x1167 * x233 - 2.0 * (x873 * x474) + e3 * (-2.0 * x1172 - x1176))
-            * m1;
-        let x1219 = 2.0 * x985 + 2.0 * x986;
-        let x1220 = -2.0 * x983 - 2.0 * x984;
-        let x1221 = (-2.0 * x981 - 2.0 * x982) * d - 4.0 * x428 - x1219 * J1 - 4.0 * x504
-            + 4.0 * x401 + J2 * x1220;
-        let x1222 = x7
-            * (x510 * x1146 + x442 * x1158
-                + x450
-                    * (d * (4.0 * x979 - 4.0 * x978) - 8.0 * x394 - 8.0 * x432
-                        + 8.0 * x534 + (4.0 * x903 + 4.0 * x904) * J2
-                        - (4.0 * x902 - 4.0 * x901) * J1) + x1163 * x530 + x1161 * x393
-                + x1153 * x537 + x1210 * x422 + x1221 * x463);
-        let x1223 = d * x372;
-        let x1224 = (x1128 * x1075 + x1129 * x238
-            + (2.0 * (x154 * x1123) + 2.0 * x1223) * x54) * m2;
-        let x1225 = x236 * x1137;
-        let x1226 = x1188 * x231;
-        let x1227 = 2.0 * x1179 - 4.0 * x797 + 2.0 * x1180 - 2.0 * x1181 - 2.0 * x1182
-            + 4.0 * x1183;
-        let x1228 = x1227 * e2;
-        let x1229 = e3 * x1192;
-        let x1230 = x1135 * e1;
-        let x1231 = ((-2.0 * x545 - 2.0 * x547) + (2.0 * x538 + 2.0 * x539))
-            + (((2.0 * x540 - 4.0 * x528) + (-4.0 * x541 - 4.0 * x542))
-                + (2.0 * x543 + 2.0 * x546));
-        let x1232 = gamma1_dot * x213;
-        let x1233 = gamma2_dot * x220;
-        let x1234 = x1118 * e2 - x176 * x1137 + x1188 * x197
-            - (x1207 * x422 + x1153 * x510 + x1221 * x450 + x455 * x1158 + x513 * x1146
-                + x1163 * x503 + x1156 * x393) * x7 - m1 * (x1177 * e2 + x1167 * x199)
-            - m2 * (e3 * (2.0 * x1202 - x1201) - x1129 * x178) - 2.0 * (x1135 * e0)
-            + x1227 * e3 - (x1109 * x1232 + x1233 * x1120) * J1;
-        let x1235 = (-2.0 * x346 - 2.0 * x994) + (2.0 * x345 + 2.0 * x995);
-        let x1236 = x1217 - x1218 - x1222 + x1235 - x1224 + x1225 - x1226 + x1228 + x1229
-            + 2.0 * x1230;
-        let x1237 = 2.0 * x204 - 2.0 * x203;
-        let x1238 = 2.0 * (e2 * x372) + (x368 * x1237 + x236 * x359);
-        let x1239 = (x1066 * x486 + 2.0 * (e3 * x474)) + x225 * x482;
-        let x1240 = x0 * x7;
-        let x1241 = (16.0 * x1240 - 2.0) * x7;
-        let x1242 = x8 * x126;
-        let x1243 = 16.0 * x1242;
-        let x1244 = x1032 * e1;
-        let x1245 = 16.0 * x1244;
-        let x1246 = -(16.0 * x1242);
-        let x1247 = -(16.0 * x1244);
-        let x1248 = x8 * e2;
-        let x1249 = x1248 * x632;
-        let x1250 = x1248 * x640;
-        let x1251 = x72 + 8.0 * x1;
-        let x1252 = -(x1251 * x67);
-        let x1253 = x77
-            * ((x645 + x1042) * e2 + (8.0 * x76 + x1252) * e1
+                * ((x583 * x823 + x1180) * x397 + (x825 - 16.0 * x459) * e1
+                    + e1_dot * x1181);
+        let x1183 = ((8.0 * x549 - 8.0 * x427 - 8.0 * x408
+            + (4.0 * x871 - 4.0 * x872) * d + J2 * (4.0 * x865 + 4.0 * x866)
+            - J1 * (4.0 * x868 - 4.0 * x869)) * x404 + x461 * x1165 + x1167 * x536
+            + x1169 * x425 + x1171 * x551 + x1173 * x448 + x474 * x1176 + x1182 * x508)
+            * x7;
+        let x1184 = 4.0 * x790 - 2.0 * x1150 + 4.0 * x1151 - 2.0 * x1152 + 2.0 * x1153
+            - 2.0 * x1156;
+        let x1185 = x1184 * e0;
+        let x1186 = m2
+            * ((x932 - 2.0 * (x1112 * e1)) * x55 + (x342 + x1110 * e1) * x110
+                - x221 * x1114);
+        let x1187 = 2.0 * x1132 + x1136;
+        let x1188 = (x1187 * e0 - x937 - x1127 * x227) * m1;
+        let x1189 = x832 * x211;
+        let x1190 = x830 * x186;
+        let x1191 = x188 * x828 - 4.0 * x421 + 2.0 * x1189 - 2.0 * x1190 - 4.0 * x506
+            + e3 * x829;
+        let x1192 = x830 * x225;
+        let x1193 = x832 * x231;
+        let x1194 = x213 * x725;
+        let x1195 = x221 * x712;
+        let x1196 = m1 * (x437 * e0 + x1194) - 4.0 * x411 + x919 * e0 - 4.0 * x435
+            + m2 * (x426 * e0 - x1195) + 8.0 * x412 + (2.0 * x989 - 2.0 * x990) * J2
+            + (2.0 * x994 - 2.0 * x993) * J1;
+        let x1197 = x7
+            * (x440 * x1169 + x1191 * x461
+                + (8.0 * x427 - 2.0 * (x227 * x828) + 4.0 * x1192 + x922 * e1
+                    - 8.0 * x409 + 4.0 * x1193) * x448 + x474 * x1196 + x1173 * x404
+                + x534 * x1167 + x513 * x1182 + x1171 * x536);
+        let x1198 = x1161 * e2;
+        let x1199 = x1105 * x219;
+        let x1200 = x1124 * x225;
+        let x1201 = 4.0 * x878 - 2.0 * x1141 - 2.0 * x1142 + 2.0 * x1143 + 2.0 * x1146
+            - 4.0 * x1147;
+        let x1202 = x1201 * e1;
+        let x1203 = -(gamma2_dot * x174);
+        let x1204 = (-gamma1_dot * (x1116 * x231 + 2.0 * x928) - 2.0 * x929
+            - x1107 * x1203) * J1;
+        let x1205 = x1185 - x1186 - x1188 - x1197 + 2.0 * x1198 - x1199 - x1200 + x941
+            + x1202 + x1204;
+        let x1206 = (((2.0 * x561 - 4.0 * x546) + (-4.0 * x558 - 4.0 * x559))
+            + (2.0 * x553 + 2.0 * x557))
+            + ((-2.0 * x554 - 2.0 * x556) + (2.0 * x552 + 2.0 * x560));
+        let x1207 = (2.0 * x479 + 2.0 * x484) - 2.0 * x481;
+        let x1208 = ((x1207 - 2.0 * (x1131 * e1)) * x40 - x1127 * x213
+            - (x1135 * e1 + x491) * x191) * m1;
+        let x1209 = x1110 * x110;
+        let x1210 = x1112 * x55;
+        let x1211 = m2 * ((x1209 - 2.0 * x1210) * e0 + x964 + x205 * x1114);
+        let x1212 = x1157 * e1;
+        let x1213 = x186 * gamma1_dot;
+        let x1214 = x1213;
+        let x1215 = (-x1116 * x1214 - 2.0 * x961
+            - (x235 * x1107 - 2.0 * x968) * gamma2_dot) * J1;
+        let x1216 = x1201 * e0;
+        let x1217 = x1124 * x211;
+        let x1218 = x203 * x852;
+        let x1219 = m2 * x712;
+        let x1220 = x235 * x855;
+        let x1221 = x219 * x855;
+        let x1222 = x174 * x852;
+        let x1223 = 2.0 * x1221 + 4.0 * x429 + x857 * e2 - 2.0 * x1222 - 4.0 * x504
+            - x1219 * x176;
+        let x1224 = x7
+            * (x1171 * x425 + x453 * x1182
+                + (8.0 * x408 - 4.0 * x1218 + 2.0 * (x1219 * x205) + 8.0 * x409
+                    + 4.0 * x1220 + x947 * e1) * x474 + x448 * x1196 + x1169 * x466
+                + x440 * x1167 + x404 * x1176 + x461 * x1223);
+        let x1225 = x203 * x1105;
+        let x1226 = x1161 * e3;
+        let x1227 = (2.0 * x960 + 2.0 * x352) + (2.0 * x962 - 2.0 * x354);
+        let x1228 = x1212 - x1208 - x1211 + x1215 + x1216 - x1217 - x1224 - x1225
+            - 2.0 * x1226 + x1227;
+        let x1229 = gamma1_dot * x211;
+        let x1230 = gamma2_dot * x219;
+        let x1231 = x1184 * e2 + x1124 * x186
+            - m2 * (e3 * (2.0 * x1210 - x1209) - x176 * x1114)
+            - (x1127 * x188 + x1187 * e2) * m1
+            - x7
+                * (x404 * x1165 + x474 * x1223 + x1171 * x508 + x1182 * x511
+                    + x1191 * x448 + x453 * x1169 + x513 * x1167) - x174 * x1105
+            - 2.0 * (x1161 * e0) + x1148 * e3 - (x1116 * x1229 + x1230 * x1107) * J1;
+        let x1232 = (-2.0 * x376 - 2.0 * x987) + (2.0 * x375 + 2.0 * x986);
+        let x1233 = x1106 - x1115 + x1117 + x1232 - x1125 - x1137 + x1149 + x1158
+            + 2.0 * x1162 - x1183;
+        let x1234 = 2.0 * x202 - 2.0 * x201;
+        let x1235 = (x1234 * x347 + x235 * x342) + 2.0 * (e2 * x336);
+        let x1236 = x225 * x486 + (x1063 * x491 + 2.0 * (e3 * x495));
+        let x1237 = x0 * x7;
+        let x1238 = (16.0 * x1237 - 2.0) * x7;
+        let x1239 = x1026 * e1;
+        let x1240 = 16.0 * x1239;
+        let x1241 = x1029 * e1;
+        let x1242 = 16.0 * x1241;
+        let x1243 = -(16.0 * x1239);
+        let x1244 = -(16.0 * x1241);
+        let x1245 = x1026 * x631;
+        let x1246 = x1026 * x639;
+        let x1247 = x72 + 8.0 * x1;
+        let x1248 = -(x1247 * x67);
+        let x1249 = x77
+            * ((x644 + x1039) * e2 + (8.0 * x76 + x1248) * e1
                 + (8.0 * x3 + 8.0 * x1) * x74);
-        let x1254 = (24.0 * x68 - 16.0 * x71) * x69;
-        let x1255 = ((x653 + x1254) * e2 + x1251 * e3 * x69) * x77;
-        let x1256 = x657 - (24.0 * x68 + 16.0 * x71) * x67;
-        let x1257 = (e3 * x1252 + (x1256 - x1048) * e2) * x77;
-        let x1258 = x1248 * x675;
-        let x1259 = x586 * x677;
-        let x1260 = (d * (8.0 * x1056 + x39 * (x118 + 2.0 * x1 + 6.0 * x4))
-            + 8.0 * x1054) * m1;
-        let x1261 = m2
-            * (d * ((4.0 * x68 - 4.0 * x71) * x54 - 8.0 * x1053) - 8.0 * x1054);
-        let x1262 = x1260 + x1261;
-        let x1263 = m1 * (8.0 * x696 + (8.0 * x699 - x698) * d);
-        let x1264 = m2 * (d * ((x145 + 6.0 * x4) * x54 - 8.0 * x695) - 8.0 * x696);
-        let x1265 = a_ * x2;
-        let x1266 = m1 * (d * (x157 + x683) - x1265) + m2 * (x1265 + d * (x150 - x680));
-        let x1267 = (2.0 * (x1266 * e0) - 2.0 * x147) - 2.0 * x142;
-        let x1268 = x7
-            * ((x694 - 2.0 * x1263 - 2.0 * x1264) * e2 - 2.0 * (x1262 * e3)
-                + 2.0 * (e1 * x1064) + x1267);
-        let x1269 = -2.0 * x234 - 2.0 * x239;
-        let x1270 = x189 * e0;
-        let x1271 = e3 * x227;
-        let x1272 = x222 * e2;
-        let x1273 = e1 * x110;
-        let x1274 = ((2.0 * (x132 * x225) - 2.0 * x703) * x39 + x1066 * x1270
-            - 2.0 * x1271) * m1
-            + m2
-                * (x236 * x1273 - 2.0 * x1272
-                    + x54 * (2.0 * x1074 - 2.0 * (x116 * x1237)));
-        let x1275 = x236 * x110;
-        let x1276 = x1237 * x55;
-        let x1277 = x1275 - 2.0 * x1276;
-        let x1278 = x207 * e2;
-        let x1279 = x225 * x40;
-        let x1280 = x1066 * x189;
-        let x1281 = -2.0 * x1279 - x1280;
-        let x1282 = e3 * x215;
-        let x1283 = m2 * (x1277 * e0 + 2.0 * x1278) + (x1281 * e1 - 2.0 * x1282) * m1;
-        let x1284 = 2.0 * x1276 - x1275;
-        let x1285 = (4.0 * x165 + 2.0 * x237 + x1284) * e2;
-        let x1286 = m2 * (x185 + x1285);
-        let x1287 = e3 * (x1281 + 4.0 * x154 - 2.0 * x232);
-        let x1288 = m1 * (x728 + x1287);
-        let x1289 = x178 * e2;
-        let x1290 = m2 * (e3 * x1284 - x713 - 2.0 * x1289);
-        let x1291 = e3 * x199;
-        let x1292 = (2.0 * x1291 + x40 * (2.0 * (x225 * e2) + x716)
-            + x189 * (x187 + x1066 * e2)) * m1;
-        let x1293 = x1290 + x1292;
-        let x1294 = (x1269 + 2.0 * (x1274 * e1) + 2.0 * (x1283 * e0)
-            + e2 * (x731 - 2.0 * x1286 - 2.0 * x1288) - 2.0 * (e3 * x1293)) * x7;
-        let x1295 = -2.0 * x253 - 2.0 * x259;
-        let x1296 = x222 * e3;
-        let x1297 = x227 * e2;
-        let x1298 = 2.0 * x212 - 2.0 * x211;
-        let x1299 = m2
-            * ((2.0 * x1086 - 2.0 * (x116 * x1070)) * x54 - x176 * x1273 - 2.0 * x1296)
-            + (2.0 * x1297 + x1270 * x197 + x39 * (2.0 * (x1298 * x132) - 2.0 * x738))
+        let x1250 = (24.0 * x68 - 16.0 * x71) * x69;
+        let x1251 = ((x652 + x1250) * e2 + x1247 * e3 * x69) * x77;
+        let x1252 = x656 - (24.0 * x68 + 16.0 * x71) * x67;
+        let x1253 = (e3 * x1248 + (x1252 - x1045) * e2) * x77;
+        let x1254 = x1026 * x674;
+        let x1255 = x585 * x676;
+        let x1256 = m2
+            * (d * ((4.0 * x68 - 4.0 * x71) * x54 - 8.0 * x1053) - 8.0 * x1051);
+        let x1257 = (d * (8.0 * x1050 + x39 * (x118 + 2.0 * x1 + 6.0 * x4))
+            + 8.0 * x1051) * m1;
+        let x1258 = x1256 + x1257;
+        let x1259 = (8.0 * x679 + (8.0 * x681 - x680) * d) * m1;
+        let x1260 = m2 * (d * ((x145 + 6.0 * x4) * x54 - 8.0 * x683) - 8.0 * x679);
+        let x1261 = a_ * x2;
+        let x1262 = ((x687 - x106 * x2) * d - x1261) * m1
+            + m2 * (x1261 + (x104 * x2 - x689) * d);
+        let x1263 = (2.0 * (x1262 * e0) - 2.0 * x147) - 2.0 * x142;
+        let x1264 = x7
+            * (e2 * (x678 - 2.0 * x1259 - 2.0 * x1260) - 2.0 * (e3 * x1258) + x1263
+                + 2.0 * (e1 * x1061));
+        let x1265 = x221 * e2;
+        let x1266 = e1 * x110;
+        let x1267 = x227 * e3;
+        let x1268 = x191 * e0;
+        let x1269 = m2
+            * ((2.0 * x1070 - 2.0 * (x116 * x1234)) * x54 - 2.0 * x1265 + x235 * x1266)
+            + ((2.0 * (x225 * x132) - 2.0 * x706) * x39 - 2.0 * x1267 + x1063 * x1268)
                 * m1;
-        let x1300 = x1070 * x55;
-        let x1301 = x176 * x110;
-        let x1302 = e3 * x207;
-        let x1303 = x1298 * x40;
-        let x1304 = x197 * x189;
-        let x1305 = -2.0 * x1303 - x1304;
-        let x1306 = x215 * e2;
-        let x1307 = m2 * ((-2.0 * x1300 - x1301) * e0 + 2.0 * x1302)
-            + (x1305 * e1 + 2.0 * x1306) * m1;
-        let x1308 = x233 * e2;
-        let x1309 = (e3 * x1305 - 2.0 * x1308 + x749) * m1;
-        let x1310 = x238 * e3;
-        let x1311 = 2.0 * x246 - 2.0 * x244;
-        let x1312 = m2
-            * (2.0 * x1310 - (x249 - x176 * e2) * x110
-                + (2.0 * (x1070 * e2) + x1311) * x55);
-        let x1313 = m2 * (e3 * (2.0 * x1300 - 4.0 * x154 - 2.0 * x177 + x1301) - x740);
-        let x1314 = ((2.0 * x1303 - 4.0 * x165 + x1304 + 2.0 * x198) * e2 + x268) * m1;
-        let x1315 = x1313 + x1314;
-        let x1316 = (x1295 + 2.0 * (x1299 * e1) + 2.0 * (x1307 * e0)
-            + (x753 - 2.0 * x1309 - 2.0 * x1312) * e2 - 2.0 * (e3 * x1315)) * x7;
-        let x1317 = x763 * x586;
-        let x1318 = x1266 * e1;
-        let x1319 = x1263 + x1264;
-        let x1320 = ((2.0 * x1260 + 2.0 * x1261 + x767) * e2 - 2.0 * x1318
-            + 2.0 * (x1064 * e0) + 2.0 * x123 + 2.0 * x129 - 2.0 * (e3 * x1319)) * x7;
-        let x1321 = x1286 + x1288;
-        let x1322 = x7
-            * (2.0 * x186 - 2.0 * (x1283 * e1) + 2.0 * x200
-                + (2.0 * x1290 + x769 + 2.0 * x1292) * e2 - 2.0 * (x1321 * e3)
-                + 2.0 * (x1274 * e0));
-        let x1323 = x1309 + x1312;
-        let x1324 = ((2.0 * x1313 + x775 + 2.0 * x1314) * e2 + 2.0 * (x1299 * e0)
-            - 2.0 * (e3 * x1323) + 2.0 * x272 - 2.0 * (x1307 * e1) + 2.0 * x273) * x7;
-        let x1325 = x38 * x197;
-        let x1326 = -(x176 * x53);
-        let x1327 = x783 * e2;
-        let x1328 = x7
-            * (e2 * (16.0 * x456 - 16.0 * x461)
-                + x388 * (e2 * x897 + 4.0 * x317 - 4.0 * x318)
-                + (16.0 * x457 - 16.0 * x458 - 32.0 * x459) * e2_dot) + 4.0 * x1157;
-        let x1329 = x955 * e1 - 4.0 * x432 - 4.0 * x395 + x207 * x942 + 2.0 * x1211
-            - 2.0 * x1212;
-        let x1330 = 4.0 * x385 + x1143;
-        let x1331 = x857 - 16.0 * x418;
-        let x1332 = x7
-            * (x388 * (x858 * x586 + x1330) + (x860 - 16.0 * x415) * e2 + x1331 * e2_dot)
-            + x1142 - 4.0 * x886;
-        let x1333 = (x885 * e2 + e2_dot * (32.0 * x445 + 16.0 * x446 + 16.0 * x447)
-            + x388 * (4.0 * x323 - 4.0 * x325 + x1152 * e2)) * x7 + 4.0 * x861;
-        let x1334 = x67 * x207;
-        let x1335 = x215 * x69;
-        let x1336 = 4.0 * x424 - 4.0 * x425 + J2 * x1209 - 4.0 * x426
-            + d * (2.0 * x1334 + 2.0 * x1335) - x872 * J1;
-        let x1337 = e2_dot * e3_dot;
-        let x1338 = x7
-            * (x388 * (4.0 * x314 - 4.0 * x312 + x912 * e2)
-                - e2 * (16.0 * x391 + 16.0 * x392)
-                + e2_dot * (32.0 * x381 - 16.0 * x382 - 16.0 * x383)) + 4.0 * x1337;
-        let x1339 = x727 * m1;
-        let x1340 = 4.0 * x428 - x215 * x1339 - 2.0 * x864 + x891 * e0 - 4.0 * x402
-            - 2.0 * x868;
-        let x1341 = e1_dot * x842 - x1109 * x473 - x1109 * x470
-            - (x321 * x1106 + 2.0 * (x342 * e1_dot)) * x40;
-        let x1342 = a_ * e0_dot;
-        let x1343 = 2.0 * x1342 - d * x1106;
-        let x1344 = x831 * e1_dot - x1170 - x1343 * x336;
-        let x1345 = x839 * e1_dot - x1173 + x1343 * x342;
-        let x1346 = -x1344 * x189 - 2.0 * (x1345 * x40);
-        let x1347 = x375 * x1109;
-        let x1348 = x336 * e1_dot;
-        let x1349 = J1 * (2.0 * x1348 - x1347)
-            + J2 * (x1347 - 2.0 * x1348 + gamma1_dot * x1109);
-        let x1350 = a_ * e1_dot;
-        let x1351 = d * x818 + 2.0 * x1350;
-        let x1352 = (8.0 * x322 - 8.0 * x323 - 8.0 * x324 + 8.0 * x325) * x55;
-        let x1353 = x1352 * e0_dot - x353 * x1351 + x825;
-        let x1354 = x1353 * x110;
-        let x1355 = 2.0 * x822 - 2.0 * x361 - x823 - 2.0 * x363;
-        let x1356 = x355 * x1351 + x1355 * e0_dot + x819;
-        let x1357 = x55 * x1356;
-        let x1358 = -(x353 * x110);
-        let x1359 = x810 * x371 - x1358 * e0_dot
-            + (2.0 * (x355 * e0_dot) - x818 * x326) * x55;
-        let x1360 = (2.0 * J1 - 2.0 * J2) * x353;
-        let x1361 = x1360 * e0_dot - x810 * x491;
-        let x1362 = Iyz * e0_dot;
-        let x1363 = 2.0 * (Izz * e1_dot) + 2.0 * x1362 + 2.0 * x803;
-        let x1364 = Iyz * e1_dot;
-        let x1365 = 2.0 * x1111 - 2.0 * x1364 - 2.0 * (Iyy * e0_dot);
-        let x1366 = x326 * x1363 - 2.0 * x796 - x321 * x1365 - 2.0 * x1183;
-        let x1367 = 2.0 * x1115 - 2.0 * (Ixx * e3_dot) - 2.0 * x849;
-        let x1368 = x1367 * x326;
-        let x1369 = x316 * x1365;
-        let x1370 = x337 * x1106;
-        let x1371 = x794 * x1109;
-        let x1372 = x329 * e0_dot;
-        let x1373 = 2.0 * x1369 - 2.0 * x1368 + 2.0 * x1370 - 4.0 * x923 - 2.0 * x1371
-            + 4.0 * x1372;
-        let x1374 = x818 * x852;
-        let x1375 = x810 * x493;
-        let x1376 = x1367 * x321;
-        let x1377 = x316 * x1363;
-        let x1378 = x329 * e1_dot;
-        let x1379 = 2.0 * x1375 - 2.0 * x1374 - 2.0 * x1376 - 4.0 * x1133 + 2.0 * x1377
-            - 4.0 * x1378;
-        let x1380 = 2.0 * x817 - 2.0 * x816;
-        let x1381 = x1373 * e1
+        let x1270 = -2.0 * x234 - 2.0 * x238;
+        let x1271 = x225 * x40;
+        let x1272 = x1063 * x191;
+        let x1273 = -2.0 * x1271 - x1272;
+        let x1274 = e3 * (4.0 * x164 + x1273 - 2.0 * x232);
+        let x1275 = (x726 + x1274) * m1;
+        let x1276 = x1234 * x55;
+        let x1277 = x235 * x110;
+        let x1278 = 2.0 * x1276 - x1277;
+        let x1279 = (x1278 + 2.0 * x236 + 4.0 * x185) * e2;
+        let x1280 = (x183 + x1279) * m2;
+        let x1281 = e3 * x213;
+        let x1282 = x1277 - 2.0 * x1276;
+        let x1283 = x205 * e2;
+        let x1284 = m1 * (e1 * x1273 - 2.0 * x1281) + m2 * (x1282 * e0 + 2.0 * x1283);
+        let x1285 = x176 * e2;
+        let x1286 = m2 * (x1278 * e3 - x713 - 2.0 * x1285);
+        let x1287 = e3 * x188;
+        let x1288 = (2.0 * x1287 + (x189 + x1063 * e2) * x191
+            + (2.0 * (x225 * e2) + x709) * x40) * m1;
+        let x1289 = x1286 + x1288;
+        let x1290 = (2.0 * (x1269 * e1) + x1270 + (x724 - 2.0 * x1275 - 2.0 * x1280) * e2
+            + 2.0 * (x1284 * e0) - 2.0 * (e3 * x1289)) * x7;
+        let x1291 = x227 * e2;
+        let x1292 = 2.0 * x210 - 2.0 * x209;
+        let x1293 = e3 * x221;
+        let x1294 = m1
+            * (2.0 * x1291 + x186 * x1268 + x39 * (2.0 * (x132 * x1292) - 2.0 * x742))
+            + m2
+                * (x54 * (2.0 * x1084 - 2.0 * (x116 * x1066)) - x174 * x1266
+                    - 2.0 * x1293);
+        let x1295 = e3 * x205;
+        let x1296 = x174 * x110;
+        let x1297 = x1066 * x55;
+        let x1298 = x213 * e2;
+        let x1299 = x40 * x1292;
+        let x1300 = x186 * x191;
+        let x1301 = -2.0 * x1299 - x1300;
+        let x1302 = m2 * (2.0 * x1295 + (-x1296 - 2.0 * x1297) * e0)
+            + (2.0 * x1298 + x1301 * e1) * m1;
+        let x1303 = -2.0 * x271 - 2.0 * x272;
+        let x1304 = 2.0 * x252 - 2.0 * x251;
+        let x1305 = e3 * x237;
+        let x1306 = m2
+            * ((x1304 + 2.0 * (x1066 * e2)) * x55 - (x255 - x174 * e2) * x110
+                + 2.0 * x1305);
+        let x1307 = x233 * e2;
+        let x1308 = (x733 + e3 * x1301 - 2.0 * x1307) * m1;
+        let x1309 = m1 * ((2.0 * x1299 + x1300 - 4.0 * x185 + 2.0 * x187) * e2 + x248);
+        let x1310 = m2 * (e3 * (x1296 - 2.0 * x175 - 4.0 * x164 + 2.0 * x1297) - x750);
+        let x1311 = x1309 + x1310;
+        let x1312 = x7
+            * (2.0 * (e1 * x1294) + 2.0 * (x1302 * e0) + x1303
+                + e2 * (x741 - 2.0 * x1306 - 2.0 * x1308) - 2.0 * (e3 * x1311));
+        let x1313 = x762 * x585;
+        let x1314 = x1259 + x1260;
+        let x1315 = x1262 * e1;
+        let x1316 = x7
+            * ((2.0 * x1256 + 2.0 * x1257 + x766) * e2 - 2.0 * (e3 * x1314) - 2.0 * x1315
+                + 2.0 * x126 + 2.0 * (x1061 * e0) + 2.0 * x129);
+        let x1317 = x1275 + x1280;
+        let x1318 = x7
+            * (2.0 * (x1269 * e0) + 2.0 * x184 + (2.0 * x1286 + 2.0 * x1288 + x770) * e2
+                - 2.0 * (x1284 * e1) + 2.0 * x198 - 2.0 * (e3 * x1317));
+        let x1319 = x1306 + x1308;
+        let x1320 = x7
+            * (2.0 * x250 - 2.0 * (x1302 * e1) + 2.0 * x258
+                + (x772 + 2.0 * x1309 + 2.0 * x1310) * e2 + 2.0 * (x1294 * e0)
+                - 2.0 * (e3 * x1319));
+        let x1321 = x186 * x38;
+        let x1322 = -(x174 * x53);
+        let x1323 = x782 * e2;
+        let x1324 = 2.0 * x786 - 2.0 * x785;
+        let x1325 = a_ * e1_dot;
+        let x1326 = d * x787 + 2.0 * x1325;
+        let x1327 = (8.0 * x322 - 8.0 * x323 - 8.0 * x324 + 8.0 * x325) * x55;
+        let x1328 = x1327 * e0_dot - x330 * x1326 + x891;
+        let x1329 = x1328 * x110;
+        let x1330 = 2.0 * x886 - 2.0 * x331 - x887 - 2.0 * x333;
+        let x1331 = x321 * x1326 + x1330 * e0_dot + x895;
+        let x1332 = x55 * x1331;
+        let x1333 = -(x330 * x110);
+        let x1334 = x795 * x335 - x1333 * e0_dot
+            + (2.0 * (x321 * e0_dot) - x787 * x326) * x55;
+        let x1335 = (2.0 * J1 - 2.0 * J2) * x330;
+        let x1336 = x1335 * e0_dot - x795 * x385;
+        let x1337 = x369 * x1116;
+        let x1338 = x363 * e1_dot;
+        let x1339 = J2 * (x1337 + gamma1_dot * x1116 - 2.0 * x1338)
+            + (2.0 * x1338 - x1337) * J1;
+        let x1340 = Iyz * e0_dot;
+        let x1341 = 2.0 * (Izz * e1_dot) + 2.0 * x1340 + 2.0 * x799;
+        let x1342 = Iyz * e1_dot;
+        let x1343 = 2.0 * x1138 - 2.0 * x1342 - 2.0 * (Iyy * e0_dot);
+        let x1344 = x326 * x1341 - 2.0 * x877 - x320 * x1343 - 2.0 * x1147;
+        let x1345 = x69 * x213;
+        let x1346 = x67 * x205;
+        let x1347 = 4.0 * x421 - 4.0 * x422 - x911 * J1 + d * (2.0 * x1345 + 2.0 * x1346)
+            + x1174 * J2 - 4.0 * x423;
+        let x1348 = 4.0 * x394 + x1179;
+        let x1349 = x835 - 16.0 * x470;
+        let x1350 = x7
+            * (x397 * (x836 * x585 + x1348) + (x838 - 16.0 * x467) * e2 + x1349 * e2_dot)
+            + x1178 - 4.0 * x847;
+        let x1351 = x725 * m1;
+        let x1352 = 4.0 * x411 - x213 * x1351 + x829 * e0 - 2.0 * x923 - 4.0 * x412
+            - 2.0 * x924;
+        let x1353 = x7
+            * (e2 * (16.0 * x454 - 16.0 * x459)
+                + x397 * (e2 * x824 + 4.0 * x316 - 4.0 * x317)
+                + (16.0 * x455 - 16.0 * x456 - 32.0 * x457) * e2_dot) + 4.0 * x1168;
+        let x1354 = (x846 * e2 + e2_dot * (32.0 * x399 + 16.0 * x400 + 16.0 * x401)
+            + x397 * (4.0 * x323 - 4.0 * x325 + x1170 * e2)) * x7 + 4.0 * x839;
+        let x1355 = 2.0 * x1218 - 4.0 * x408 + x857 * e1 - 4.0 * x409 - 2.0 * x1220
+            + x205 * x854;
+        let x1356 = e2_dot * e3_dot;
+        let x1357 = x7
+            * (x397 * (4.0 * x313 - 4.0 * x311 + x862 * e2)
+                - e2 * (16.0 * x446 + 16.0 * x447)
+                + e2_dot * (32.0 * x442 - 16.0 * x443 - 16.0 * x444)) + 4.0 * x1356;
+        let x1358 = x1338 * x191 - x1116 * x483 - x1116 * x494
+            - (x320 * x1120 + 2.0 * (x359 * e1_dot)) * x40;
+        let x1359 = a_ * e0_dot;
+        let x1360 = 2.0 * x1359 - d * x1120;
+        let x1361 = x805 * e1_dot - x1130 - x1360 * x363;
+        let x1362 = x817 * e1_dot - x1133 + x1360 * x359;
+        let x1363 = -x1361 * x191 - 2.0 * (x1362 * x40);
+        let x1364 = 2.0 * x1154 - 2.0 * (Ixx * e3_dot) - 2.0 * x792;
+        let x1365 = x1364 * x326;
+        let x1366 = x315 * x1343;
+        let x1367 = x364 * x1120;
+        let x1368 = x875 * x1116;
+        let x1369 = x353 * e0_dot;
+        let x1370 = 2.0 * x1366 - 2.0 * x1365 + 2.0 * x1367 - 4.0 * x904 - 2.0 * x1368
+            + 4.0 * x1369;
+        let x1371 = x787 * x796;
+        let x1372 = x795 * x383;
+        let x1373 = x1364 * x320;
+        let x1374 = x315 * x1341;
+        let x1375 = x353 * e1_dot;
+        let x1376 = 2.0 * x1372 - 2.0 * x1371 - 2.0 * x1373 - 4.0 * x1159 + 2.0 * x1374
+            - 4.0 * x1375;
+        let x1377 = x1370 * e1 - (x1120 * x1214 + x1324 * x930) * J1
+            - m2 * ((x1329 - 2.0 * x1332) * e0 + x1334 * x205) - x203 * x1336
+            - x1339 * x211 - 2.0 * (e3 * x1344)
             - x7
-                * (x455 * x1328 + x1329 * x463 + x1332 * x436 + x1333 * x442
-                    + x1336 * x393 + x1338 * x414 + x450 * x1340)
-            - (e1 * x1346 - x215 * x1341) * m1 - x1349 * x213
-            - m2 * ((x1354 - 2.0 * x1357) * e0 + x1359 * x207) - x205 * x1361
-            - 2.0 * (e3 * x1366) + x1379 * e0 - (x1106 * x1195 + x811 * x1380) * J1;
-        let x1382 = x1349 * x197;
-        let x1383 = x176 * x1361;
-        let x1384 = (2.0 * x929 - x1106 * x1232
-            + gamma2_dot * (-x220 * x1380 - 2.0 * x959)) * J1;
-        let x1385 = ((x486 + x1344 * e2) * x189 + x1341 * x199
-            + x40 * (x962 + 2.0 * (x1345 * e2))) * m1;
-        let x1386 = 2.0 * x1374 - 2.0 * x1375 + 2.0 * x1376 + 4.0 * x1133 - 2.0 * x1377
-            + 4.0 * x1378;
-        let x1387 = e3 * x1386;
-        let x1388 = x1366 * e0;
-        let x1389 = 2.0 * x1368 - 2.0 * x1369 - 2.0 * x1370 + 4.0 * x923 + 2.0 * x1371
-            - 4.0 * x1372;
-        let x1390 = x1389 * e2;
-        let x1391 = m2 * ((2.0 * x1357 - x1354) * e3 - x1359 * x178 - x932);
-        let x1392 = d * x199;
-        let x1393 = J2 * (x1220 + 4.0 * e0 + 2.0 * x986) - 4.0 * x428
-            + m2 * (x1149 - 2.0 * (x178 * x686)) - (x1219 - 2.0 * x984) * J1 + 8.0 * x401
-            - 4.0 * x402 + (x1270 * x189 + x39 * (4.0 * (x132 * x40) - 2.0 * x1392)) * m1
-            + x945 * e0;
-        let x1394 = 4.0 * x424 + 4.0 * x425 + (x409 * e3 - x1208) * m2 + e3 * x906
-            - (2.0 * x869 + 2.0 * x878) * J1 + m1 * (x875 + e3 * x406) + 8.0 * x508
-            + J2 * (2.0 * x870 - 2.0 * x871);
-        let x1395 = (x1338 * x503 + x1329 * x422 + x393 * x1393 + x1394 * x450
-            + x513 * x1328 + x455 * x1332 + x1333 * x510
-            + (4.0 * x1205 - 8.0 * x397 - 4.0 * x1204 + 8.0 * x506 + x941 * e2
-                - 2.0 * (x178 * x942)) * x463) * x7;
-        let x1396 = x1382 + x931 - x1383 + x1384 - x1385 + x1387 - 2.0 * x1388 + x1390
-            - x1391 - x1395;
-        let x1397 = m1
-            * (x1344 * x1270 - x227 * x1341 + x39 * (2.0 * (x1345 * x132) - 2.0 * x991));
-        let x1398 = x1389 * e0;
-        let x1399 = (gamma2_dot * (x176 * x1380 - 2.0 * x988)
-            + (2.0 * x989 - x1106 * x231) * gamma1_dot) * J1;
-        let x1400 = e2 * x1366;
-        let x1401 = x1349 * x225;
-        let x1402 = (x1353 * x1273 - x222 * x1359
-            + (2.0 * x1223 - 2.0 * (x116 * x1356)) * x54) * m2;
-        let x1403 = x220 * x1361;
-        let x1404 = x227 * x69;
-        let x1405 = x222 * x67;
-        let x1406 = x238 * d;
-        let x1407 = m1 * (-x905 - 2.0 * (x873 * x233)) - 8.0 * x394 - 4.0 * x432
-            + 4.0 * x395 - (2.0 * x904 + x977) * J1 + x877 * e1
-            + (2.0 * x903 - 2.0 * x901 + 2.0 * x904 - 4.0 * e1) * J2
-            + m2 * ((2.0 * x1406 - 4.0 * (x116 * x55)) * x54 - x110 * x1273);
-        let x1408 = x7
-            * (x551 * x1338 + x1333 * x530
-                + (8.0 * x397 + 8.0 * x398 + d * (4.0 * x1404 - 4.0 * x1405) + 8.0 * x399
-                    - (4.0 * x950 - 4.0 * x946) * J1 + (4.0 * x948 - 4.0 * x947) * J2)
-                    * x393 + x1336 * x422 + x503 * x1328 + x1332 * x414 + x463 * x1393
-                + x1407 * x450);
-        let x1409 = e1 * x1379;
-        let x1410 = x1349 * x231;
-        let x1411 = x1386 * e2;
-        let x1412 = (2.0 * x365 + 2.0 * x366) - 2.0 * x367;
-        let x1413 = m2
-            * (x238 * x1359 - (e2 * x1353 + x359) * x110
-                + (2.0 * (e2 * x1356) + x1412) * x55);
-        let x1414 = x1373 * e3;
-        let x1415 = (2.0 * x919 - 2.0 * x920) + x519;
-        let x1416 = x1366 * e1;
-        let x1417 = x7
-            * (x450
-                * (4.0 * x892 - 8.0 * x399 - 8.0 * x506 + 2.0 * (x233 * x1339)
-                    - 4.0 * x893 + x865 * e2) + x530 * x1338 + x1394 * x463
-                + x442 * x1332 + x1333 * x537 + x510 * x1328 + x1407 * x393
-                + x1340 * x422);
-        let x1418 = ((x225 * x1106 + 2.0 * x808) * gamma1_dot - x1380 * x997
-            + 2.0 * x809) * J1;
-        let x1419 = x236 * x1361;
-        let x1420 = m1 * (x830 + x233 * x1341 + e3 * x1346);
-        let x1421 = x1411 - x1410 - x1413 + x1414 + x1415 + 2.0 * x1416 - x1417 + x1418
-            + x1419 - x1420;
-        let x1422 = x1398 - x1397 + x1399 + x1235 + 2.0 * x1400 - x1401 - x1402 - x1403
-            - x1408 + x1409;
-        let x1423 = (2.0 * x456 - 2.0 * x461) + (-x460 - 2.0 * x462);
-        let x1424 = (2.0 * x444 - x448) + (2.0 * x443 + 2.0 * x449);
-        let x1425 = x7 * x4;
-        let x1426 = (16.0 * x1425 - 2.0) * x7;
-        let x1427 = x1032 * e2;
-        let x1428 = 16.0 * x1427;
-        let x1429 = -(16.0 * x1427);
-        let x1430 = x1032 * x632;
-        let x1431 = x1032 * x640;
-        let x1432 = x77
-            * ((x646 + x1043) * e3 + (x69 * x75 + 8.0 * (x67 * x71)) * e1 + x1049 * x65);
-        let x1433 = (x647 * x75 + e3 * (x1046 + x1254)) * x77;
-        let x1434 = x77 * (e3 * (x1256 + x659) - x1044 * x75);
-        let x1435 = x1032 * x675;
-        let x1436 = x588 * x677;
-        let x1437 = m2
-            * (d * (x54 * (6.0 * x3 - 2.0 * x0 + x119) - 8.0 * x128) - 8.0 * x1059);
-        let x1438 = (e3 * (8.0 * x116 + x1061) + 4.0 * x1062) * m1;
-        let x1439 = m2
-            * (((4.0 * x219 - 8.0 * x143) * d - 8.0 * x132) * e3 - 4.0 * x687);
-        let x1440 = m1 * ((8.0 * x135 + (x137 - 6.0 * x3) * x39) * d + 8.0 * x689);
-        let x1441 = x1439 + x1440;
-        let x1442 = x7
-            * (e3 * (x694 - 2.0 * x1437 - 2.0 * x1438) + 2.0 * (x693 * e0) + 2.0 * x1318
-                - 2.0 * (e2 * x1441) - 2.0 * x123 - 2.0 * x129);
-        let x1443 = -(e1 * x189);
-        let x1444 = x110 * e0;
-        let x1445 = (x39 * (2.0 * x703 - 2.0 * (x116 * x213)) - x1443 * x197
-            - 2.0 * x1306) * m1
+                * (x448 * x1347 + x466 * x1350 + x404 * x1352 + x453 * x1353
+                    + x1354 * x425 + x1355 * x461 + x440 * x1357)
+            - (e1 * x1363 - x213 * x1358) * m1 + x1376 * e0;
+        let x1378 = (2.0 * x865 - 2.0 * x869 - 4.0 * e1 + 2.0 * x866) * J2 - 8.0 * x427
+            - 4.0 * x408 + (-x918 - 2.0 * (x233 * x913)) * m1 - (x870 + 2.0 * x866) * J1
+            + m2 * (x54 * (2.0 * (x237 * d) - 4.0 * (x116 * x55)) - x110 * x1266)
+            + 4.0 * x409 + x916 * e1;
+        let x1379 = 4.0 * x421 + 4.0 * x422 - (2.0 * x907 + 2.0 * x909) * J1
+            + (x426 * e3 - x1175) * m2 + e3 * x919 + J2 * (2.0 * x908 - 2.0 * x910)
+            + (x912 + e3 * x437) * m1 + 8.0 * x506;
+        let x1380 = x7
+            * (x1378 * x448 + x1352 * x474
+                + x404
+                    * (2.0 * (x233 * x1351) - 4.0 * x831 - 8.0 * x431 - 8.0 * x504
+                        + 4.0 * x833 + x922 * e2) + x1354 * x551 + x536 * x1357
+                + x1379 * x461 + x1353 * x508 + x425 * x1350);
+        let x1381 = (2.0 * x344 + 2.0 * x345) - 2.0 * x346;
+        let x1382 = m2
+            * (x237 * x1334 - (e2 * x1328 + x342) * x110
+                + (2.0 * (e2 * x1331) + x1381) * x55);
+        let x1383 = (2.0 * x929 - x1324 * x902
+            + gamma1_dot * (x225 * x1120 + 2.0 * x928)) * J1;
+        let x1384 = 2.0 * x1371 - 2.0 * x1372 + 2.0 * x1373 + 4.0 * x1159 - 2.0 * x1374
+            + 4.0 * x1375;
+        let x1385 = x1384 * e2;
+        let x1386 = x1370 * e3;
+        let x1387 = (2.0 * x939 - 2.0 * x940) + x516;
+        let x1388 = x1339 * x231;
+        let x1389 = x1344 * e1;
+        let x1390 = m1 * (x937 + x233 * x1358 + e3 * x1363);
+        let x1391 = x235 * x1336;
+        let x1392 = x1383 - x1380 - x1382 + x1385 + x1386 + x1387 - x1388 + 2.0 * x1389
+            - x1390 + x1391;
+        let x1393 = (x39 * (2.0 * (x1362 * x132) - 2.0 * x983) - x227 * x1358
+            + x1361 * x1268) * m1;
+        let x1394 = (gamma1_dot * (2.0 * x976 - x1120 * x231)
+            + gamma2_dot * (x174 * x1324 - 2.0 * x977)) * J1;
+        let x1395 = m2
+            * (x54 * (2.0 * x1113 - 2.0 * (x116 * x1331)) - x1334 * x221
+                + x1328 * x1266);
+        let x1396 = x219 * x1336;
+        let x1397 = 2.0 * x1365 - 2.0 * x1366 - 2.0 * x1367 + 4.0 * x904 + 2.0 * x1368
+            - 4.0 * x1369;
+        let x1398 = x1397 * e0;
+        let x1399 = e2 * x1344;
+        let x1400 = x1339 * x225;
+        let x1401 = 8.0 * x435 - 4.0 * x411 + J2 * (x1164 + 2.0 * x990 + 4.0 * e0)
+            + m2 * (x1195 - 2.0 * (x176 * x696)) - 4.0 * x412 + x952 * e0
+            + (x1268 * x191 + (4.0 * (x132 * x40) - 2.0 * (d * x188)) * x39) * m1
+            - (x1163 - 2.0 * x993) * J1;
+        let x1402 = x227 * x69;
+        let x1403 = x67 * x221;
+        let x1404 = x7
+            * (x1401 * x461 + x1347 * x474
+                + x448
+                    * ((4.0 * x1402 - 4.0 * x1403) * d + 8.0 * x429 + 8.0 * x430
+                        - (4.0 * x950 - 4.0 * x949) * J1 + 8.0 * x431
+                        + (4.0 * x954 - 4.0 * x948) * J2) + x534 * x1357 + x1378 * x404
+                + x1354 * x536 + x513 * x1353 + x440 * x1350);
+        let x1405 = e1 * x1376;
+        let x1406 = x1339 * x186;
+        let x1407 = (x1355 * x474 + x1379 * x404 + x511 * x1353 + x1401 * x448
+            + x461
+                * (4.0 * x1222 - 4.0 * x1221 - 8.0 * x429 - 2.0 * (x176 * x854)
+                    + 8.0 * x504 + x947 * e2) + x453 * x1350 + x513 * x1357
+            + x1354 * x508) * x7;
+        let x1408 = m2 * ((2.0 * x1332 - x1329) * e3 - x1334 * x176 - x964);
+        let x1409 = e3 * x1384;
+        let x1410 = x1344 * e0;
+        let x1411 = x1397 * e2;
+        let x1412 = (2.0 * x961 - x1120 * x1229
+            + gamma2_dot * (-x1324 * x219 - 2.0 * x968)) * J1;
+        let x1413 = ((x491 + x1361 * e2) * x191 + x188 * x1358
+            + x40 * (x958 + 2.0 * (x1362 * e2))) * m1;
+        let x1414 = x174 * x1336;
+        let x1415 = x963 + x1406 - x1407 - x1408 + x1409 - 2.0 * x1410 + x1411 + x1412
+            - x1413 - x1414;
+        let x1416 = x1394 - x1393 - x1395 - x1396 + x1398 + x1232 + 2.0 * x1399 - x1400
+            - x1404 + x1405;
+        let x1417 = (2.0 * x454 - 2.0 * x459) + (-x458 - 2.0 * x460);
+        let x1418 = (2.0 * x392 - x402) + (2.0 * x391 + 2.0 * x403);
+        let x1419 = x7 * x4;
+        let x1420 = (16.0 * x1419 - 2.0) * x7;
+        let x1421 = x1026 * e3;
+        let x1422 = 16.0 * x1421;
+        let x1423 = -(16.0 * x1421);
+        let x1424 = x1029 * x631;
+        let x1425 = x1029 * x639;
+        let x1426 = x77
+            * ((x645 + x1040) * e3 + (x69 * x75 + 8.0 * (x67 * x71)) * e1 + x1046 * x65);
+        let x1427 = (x646 * x75 + e3 * (x1043 + x1250)) * x77;
+        let x1428 = x77 * (e3 * (x1252 + x658) - x1041 * x75);
+        let x1429 = x1029 * x674;
+        let x1430 = x587 * x676;
+        let x1431 = m2
+            * (d * (x54 * (6.0 * x3 - 2.0 * x0 + x119) - 8.0 * x122) - 8.0 * x1056);
+        let x1432 = m1 * (e3 * (8.0 * x116 + x1058) + 4.0 * x1059);
+        let x1433 = m2
+            * (((4.0 * x218 - 8.0 * x217) * d - 8.0 * x132) * e3 - 4.0 * x697);
+        let x1434 = m1 * ((8.0 * x135 + (x137 - 6.0 * x3) * x39) * d + 8.0 * x694);
+        let x1435 = x1433 + x1434;
+        let x1436 = x7
+            * (e3 * (x678 - 2.0 * x1431 - 2.0 * x1432) + 2.0 * x1315 - 2.0 * x126
+                + 2.0 * (x693 * e0) - 2.0 * (x1435 * e2) - 2.0 * x129);
+        let x1437 = 2.0 * (x211 * x40) - x1300;
+        let x1438 = x219 * x55;
+        let x1439 = (x1437 * e0 - 2.0 * x1291) * m1
+            + m2 * ((x1296 - 2.0 * x1438) * e1 + 2.0 * x1293);
+        let x1440 = -(e1 * x191);
+        let x1441 = x110 * e0;
+        let x1442 = m1
+            * (x39 * (2.0 * x706 - 2.0 * (x116 * x211)) - 2.0 * x1298 - x186 * x1440)
             + m2
-                * (x176 * x1444 - 2.0 * x1302
-                    - x54 * (2.0 * x1074 + 2.0 * (x220 * x132)));
-        let x1446 = (2.0 * x1308 - (x187 - e3 * x197) * x189
-            - (x716 + 2.0 * (e3 * x213)) * x40) * m1;
-        let x1447 = x220 * x55;
-        let x1448 = 2.0 * x1447 - x1301;
-        let x1449 = (x713 - 2.0 * x1310 + x1448 * e2) * m2;
-        let x1450 = x1446 + x1449;
-        let x1451 = 2.0 * (x40 * x213) - x1304;
-        let x1452 = (x1451 * e0 - 2.0 * x1297) * m1
-            + m2 * (2.0 * x1296 + (x1301 - 2.0 * x1447) * e1);
-        let x1453 = m2 * (x185 + e3 * (4.0 * x154 + x1448 + 2.0 * x177));
-        let x1454 = (x728 + (4.0 * x165 + x1451 - 2.0 * x198) * e2) * m1;
-        let x1455 = x7
-            * (2.0 * (x1445 * e0) - 2.0 * x186 - 2.0 * x200 - 2.0 * (x1450 * e2)
-                + 2.0 * (x1452 * e1) + e3 * (x731 - 2.0 * x1453 - 2.0 * x1454));
-        let x1456 = (x258 + x1287) * m1;
-        let x1457 = (x1285 + x740) * m2;
-        let x1458 = x1456 + x1457;
-        let x1459 = m2
-            * (x236 * x1444 - x54 * (2.0 * (x1237 * x132) + 2.0 * x1086) + 2.0 * x1278)
-            + (x1066 * x1443 + (2.0 * x738 - 2.0 * (x116 * x225)) * x39 - 2.0 * x1282)
+                * (x174 * x1441 - x54 * (2.0 * (x219 * x132) + 2.0 * x1070)
+                    - 2.0 * x1295);
+        let x1443 = 2.0 * x1438 - x1296;
+        let x1444 = m2 * (x713 + x1443 * e2 - 2.0 * x1305);
+        let x1445 = (2.0 * x1307 - (x189 - e3 * x186) * x191
+            - (x709 + 2.0 * (e3 * x211)) * x40) * m1;
+        let x1446 = x1444 + x1445;
+        let x1447 = (x726 + (x1437 + 4.0 * x185 - 2.0 * x187) * e2) * m1;
+        let x1448 = m2 * (x183 + e3 * (2.0 * x175 + 4.0 * x164 + x1443));
+        let x1449 = x7
+            * (2.0 * (x1439 * e1) - 2.0 * x184 + 2.0 * (x1442 * e0) - 2.0 * x198
+                - 2.0 * (x1446 * e2) + e3 * (x724 - 2.0 * x1447 - 2.0 * x1448));
+        let x1450 = m2
+            * (x235 * x1441 - x54 * (2.0 * x1084 + 2.0 * (x1234 * x132)) + 2.0 * x1283)
+            + (x39 * (2.0 * x742 - 2.0 * (x116 * x225)) - 2.0 * x1281 + x1063 * x1440)
                 * m1;
-        let x1460 = m2
-            * ((2.0 * (e3 * x1237) + x1311) * x55 - (x249 + x236 * e3) * x110
-                - 2.0 * x1289);
-        let x1461 = 2.0 * x1279 + x1280;
-        let x1462 = m1 * (x749 + 2.0 * x1291 + x1461 * e2);
-        let x1463 = m1 * (x1461 * e0 - 2.0 * x1271) + m2 * (e1 * x1277 - 2.0 * x1272);
-        let x1464 = (2.0 * (x1459 * e0) - 2.0 * (e2 * x1458) - 2.0 * x272 - 2.0 * x273
-            + e3 * (x753 - 2.0 * x1460 - 2.0 * x1462) + 2.0 * (x1463 * e1)) * x7;
-        let x1465 = x763 * x588;
-        let x1466 = x1437 + x1438;
-        let x1467 = x7
-            * (e3 * (x767 - 2.0 * x1439 - 2.0 * x1440) - 2.0 * (x693 * e1)
-                + 2.0 * (x1466 * e2) + x1267);
-        let x1468 = x1453 + x1454;
-        let x1469 = x7
-            * (2.0 * (x1468 * e2) + x1269 + 2.0 * (x1452 * e0) - 2.0 * (x1445 * e1)
-                + e3 * (x769 - 2.0 * x1446 - 2.0 * x1449));
-        let x1470 = x1460 + x1462;
-        let x1471 = x7
-            * (2.0 * (x1463 * e0) + 2.0 * (x1470 * e2) + x1295
-                + e3 * (x775 - 2.0 * x1456 - 2.0 * x1457) - 2.0 * (x1459 * e1));
-        let x1472 = x1298 * x38;
-        let x1473 = x53 * x1237;
-        let x1474 = e3 * x783;
-        let x1475 = x375 * x792;
-        let x1476 = x336 * e0_dot;
-        let x1477 = 2.0 * x791 - 2.0 * x790;
-        let x1478 = (x1475 - 2.0 * x1476) * J1
-            + J2 * (2.0 * x1476 - x1475 + gamma1_dot * x1477);
-        let x1479 = 2.0 * x1124 - 2.0 * x1125;
-        let x1480 = x1126 * x852;
-        let x1481 = 2.0 * x1131 + 2.0 * x798 + 2.0 * (Ixx * e2_dot);
-        let x1482 = x1481 * x321;
-        let x1483 = x1120 * x493;
-        let x1484 = 2.0 * x1364 - 2.0 * x1112 - 2.0 * (Izz * e0_dot);
-        let x1485 = x316 * x1484;
-        let x1486 = 4.0 * x922 - 2.0 * x1480 - 2.0 * x1482 + 4.0 * x1372 - 2.0 * x1483
-            + 2.0 * x1485;
+        let x1451 = 2.0 * x1271 + x1272;
+        let x1452 = (2.0 * x1287 + x733 + e2 * x1451) * m1;
+        let x1453 = m2
+            * ((x1304 + 2.0 * (x1234 * e3)) * x55 - 2.0 * x1285
+                - x110 * (e3 * x235 + x255));
+        let x1454 = (x261 + x1274) * m1;
+        let x1455 = m2 * (x750 + x1279);
+        let x1456 = x1454 + x1455;
+        let x1457 = (e0 * x1451 - 2.0 * x1267) * m1 + m2 * (x1282 * e1 - 2.0 * x1265);
+        let x1458 = (2.0 * (x1450 * e0) - 2.0 * x250
+            + e3 * (x741 - 2.0 * x1452 - 2.0 * x1453) - 2.0 * x258 - 2.0 * (e2 * x1456)
+            + 2.0 * (e1 * x1457)) * x7;
+        let x1459 = x762 * x587;
+        let x1460 = x1431 + x1432;
+        let x1461 = x7
+            * (2.0 * (x1460 * e2) - 2.0 * (x693 * e1)
+                + e3 * (x766 - 2.0 * x1433 - 2.0 * x1434) + x1263);
+        let x1462 = x1447 + x1448;
+        let x1463 = (2.0 * (x1439 * e0) + e3 * (x770 - 2.0 * x1444 - 2.0 * x1445) + x1270
+            + 2.0 * (x1462 * e2) - 2.0 * (x1442 * e1)) * x7;
+        let x1464 = x1452 + x1453;
+        let x1465 = x7
+            * (2.0 * (x1464 * e2) + 2.0 * (x1457 * e0) - 2.0 * (x1450 * e1) + x1303
+                + e3 * (x772 - 2.0 * x1454 - 2.0 * x1455));
+        let x1466 = x38 * x1292;
+        let x1467 = x1234 * x53;
+        let x1468 = e3 * x782;
+        let x1469 = 2.0 * x1101 - 2.0 * x1102;
+        let x1470 = x1103 * x796;
+        let x1471 = 2.0 * x1144 + 2.0 * x879 + 2.0 * (Ixx * e2_dot);
+        let x1472 = x1471 * x320;
+        let x1473 = x1107 * x383;
+        let x1474 = 2.0 * x1342 - 2.0 * x1139 - 2.0 * (Izz * e0_dot);
+        let x1475 = x315 * x1474;
+        let x1476 = 4.0 * x903 - 2.0 * x1470 - 2.0 * x1472 + 4.0 * x1369 - 2.0 * x1473
+            + 2.0 * x1475;
+        let x1477 = x364 * x811;
+        let x1478 = x1471 * x326;
+        let x1479 = x875 * x809;
+        let x1480 = 2.0 * x1340 - 2.0 * x798 - 2.0 * (Iyy * e1_dot);
+        let x1481 = x315 * x1480;
+        let x1482 = 2.0 * x1477 + 2.0 * x1478 - 2.0 * x1479 - 2.0 * x1481 - 4.0 * x1160
+            - 4.0 * x1375;
+        let x1483 = x955 * J2 - 4.0 * x429 - 4.0 * x430 - 4.0 * x431 + x951 * J1
+            + d * (2.0 * x1403 - 2.0 * x1402);
+        let x1484 = 4.0 * x395 + x841;
+        let x1485 = x860 - 16.0 * x444;
+        let x1486 = x849
+            + (e3 * (x859 + x398 * x861 - 16.0 * x447) + x397 * x1484 + e3_dot * x1485)
+                * x7 - 4.0 * x1177;
         let x1487 = x7
-            * (e3_dot * (16.0 * x417 - 16.0 * x418) + (4.0 * x312 - 4.0 * x314) * x388
-                + e3 * (x388 * x859 - 16.0 * x415 - 32.0 * x416 + 16.0 * x421))
-            + 4.0 * x1337;
-        let x1488 = ((16.0 * x445 + 16.0 * x446) * e3_dot
-            + (4.0 * x320 - 4.0 * x319) * x388
-            + e3 * (16.0 * x443 + 16.0 * x444 + 32.0 * x449 + x388 * x1152)) * x7
-            + 4.0 * x913;
-        let x1489 = 4.0 * x1162
+            * (e3_dot * (16.0 * x469 - 16.0 * x470) + (4.0 * x311 - 4.0 * x313) * x397
+                + e3 * (x397 * x837 - 16.0 * x467 - 32.0 * x468 + 16.0 * x473))
+            + 4.0 * x1356;
+        let x1488 = x829 * e1 - x227 * x1351 - 4.0 * x427 - 2.0 * x1192 + 4.0 * x409
+            - 2.0 * x1193;
+        let x1489 = x857 * e0 - 2.0 * x945 - x1219 * x221 - 4.0 * x435 - 2.0 * x946
+            + 4.0 * x412;
+        let x1490 = ((16.0 * x399 + 16.0 * x400) * e3_dot
+            + (4.0 * x319 - 4.0 * x318) * x397
+            + e3 * (16.0 * x391 + 16.0 * x392 + 32.0 * x403 + x397 * x1170)) * x7
+            + 4.0 * x863;
+        let x1491 = 4.0 * x1166
             + x7
-                * ((32.0 * x456 - 16.0 * x461 + x388 * x897 - 16.0 * x462) * e3
-                    - e3_dot * (16.0 * x458 + 16.0 * x459)
-                    + x388 * (4.0 * x324 - 4.0 * x322));
-        let x1490 = 4.0 * x386 + x880;
-        let x1491 = x910 - 16.0 * x383;
-        let x1492 = x888
-            + (e3 * (x909 + x389 * x911 - 16.0 * x392) + x388 * x1490 + e3_dot * x1491)
-                * x7 - 4.0 * x1141;
-        let x1493 = x891 * e1 - 4.0 * x394 - 2.0 * x1147 + 4.0 * x395 - x227 * x1339
-            - 2.0 * x1148;
-        let x1494 = d * (2.0 * x1405 - 2.0 * x1404) - 4.0 * x397 - 4.0 * x398
-            - 4.0 * x399 + J2 * x949 + x951 * J1;
-        let x1495 = x955 * e0 - 4.0 * x401 - 2.0 * x938 + 4.0 * x402 - 2.0 * x940
-            - x222 * x1206;
-        let x1496 = x785 * d + 2.0 * x1350;
-        let x1497 = x836 - x336 * x1496 + e0_dot * x1174;
-        let x1498 = x1168 * e0_dot + x342 * x1496 + x834;
-        let x1499 = x1497 * x189 + 2.0 * (x1498 * x40);
-        let x1500 = x40 * (x785 * x321 + 2.0 * (x342 * e0_dot)) + x1165 * e0_dot
-            + x792 * x473 - x1477 * x470;
-        let x1501 = x337 * x785;
-        let x1502 = x1481 * x326;
-        let x1503 = x794 * x792;
-        let x1504 = 2.0 * x1362 - 2.0 * x802 - 2.0 * (Iyy * e1_dot);
-        let x1505 = x316 * x1504;
-        let x1506 = 2.0 * x1501 + 2.0 * x1502 - 2.0 * x1503 - 2.0 * x1505 - 4.0 * x1134
-            - 4.0 * x1378;
-        let x1507 = 2.0 * x1342 - x1126 * d;
-        let x1508 = x1355 * e1_dot - x355 * x1507 + x1127;
-        let x1509 = x1508 * x55;
-        let x1510 = x353 * x1507 - x1122 + x1352 * e1_dot;
-        let x1511 = x1510 * x110;
-        let x1512 = (2.0 * (x355 * e1_dot) - x1126 * x326) * x55 - x1120 * x371
-            - x1358 * e1_dot;
-        let x1513 = x353 * e1_dot;
-        let x1514 = (x490 * x1120 - 2.0 * x1513) * J2
-            + (2.0 * x1513 - x362 * x1120) * J1;
-        let x1515 = x1484 * x326 - 2.0 * x846 + 2.0 * x1108 - x1504 * x321;
-        let x1516 = x1486 * e1 - x1478 * x225 - (x1139 * x1479 - x785 * x958) * J1
-            - (x1487 * x414 + x530 * x1488 + x1489 * x503 + x551 * x1492 + x463 * x1493
-                + x422 * x1494 + x1495 * x450) * x7 - m1 * (x1499 * e0 - x227 * x1500)
-            + x1506 * e0 - m2 * (e1 * (x1511 - 2.0 * x1509) - x222 * x1512)
-            - x220 * x1514 + 2.0 * (e2 * x1515);
-        let x1517 = (x998 * x785 - 2.0 * x929 - gamma2_dot * (x205 * x1479 - 2.0 * x959))
-            * J1;
-        let x1518 = x1515 * e1;
-        let x1519 = d * x233;
-        let x1520 = m2 * (x907 - 2.0 * (x238 * x686)) + 4.0 * x394 + 8.0 * x432
-            + (2.0 * x903 + x977) * J1 + 4.0 * x395 + J2 * (4.0 * e1 - 2.0 * x902 + x976)
-            + x945 * e1 + m1 * (x39 * (4.0 * (x116 * x40) + 2.0 * x1519) - x1443 * x189);
-        let x1521 = m1 * (x406 * e2 + x1160) + 4.0 * x397
-            - J2 * (2.0 * x946 + 2.0 * x950) - 4.0 * x399 + m2 * (x409 * e2 - x943)
-            - 8.0 * x506 + x906 * e2 + (2.0 * x947 + 2.0 * x948) * J1;
-        let x1522 = (x530 * x1492 + x1520 * x422 + x1495 * x393
-            + x450
-                * (2.0 * (x238 * x1206) + 4.0 * x953 - 8.0 * x425 + 4.0 * x954
-                    - 8.0 * x508 + x941 * e3) + x442 * x1487 + x537 * x1488
-            + x1489 * x510 + x463 * x1521) * x7;
-        let x1523 = 2.0 * x1480 - 4.0 * x922 + 2.0 * x1482 - 4.0 * x1372 + 2.0 * x1483
-            - 2.0 * x1485;
-        let x1524 = x1523 * e2;
-        let x1525 = 2.0 * x1503 - 2.0 * x1501 - 2.0 * x1502 + 2.0 * x1505 + 4.0 * x1134
-            + 4.0 * x1378;
-        let x1526 = x1525 * e3;
+                * ((32.0 * x454 - 16.0 * x459 + x397 * x824 - 16.0 * x460) * e3
+                    - e3_dot * (16.0 * x456 + 16.0 * x457)
+                    + x397 * (4.0 * x324 - 4.0 * x322));
+        let x1492 = x811 * d + 2.0 * x1325;
+        let x1493 = x814 - x363 * x1492 + e0_dot * x1134;
+        let x1494 = x1128 * e0_dot + x359 * x1492 + x812;
+        let x1495 = x1493 * x191 + 2.0 * (x1494 * x40);
+        let x1496 = 2.0 * x808 - 2.0 * x807;
+        let x1497 = x40 * (x811 * x320 + 2.0 * (x359 * e0_dot)) + x1126 * e0_dot
+            + x809 * x483 - x1496 * x494;
+        let x1498 = x369 * x809;
+        let x1499 = x363 * e0_dot;
+        let x1500 = (x1498 - 2.0 * x1499) * J1
+            + J2 * (2.0 * x1499 - x1498 + gamma1_dot * x1496);
+        let x1501 = 2.0 * x1359 - x1103 * d;
+        let x1502 = x1330 * e1_dot - x321 * x1501 + x1109;
+        let x1503 = x1502 * x55;
+        let x1504 = x330 * x1501 - x1111 + x1327 * e1_dot;
+        let x1505 = x1504 * x110;
+        let x1506 = (2.0 * (x321 * e1_dot) - x1103 * x326) * x55 - x1107 * x335
+            - x1333 * e1_dot;
+        let x1507 = x330 * e1_dot;
+        let x1508 = (x384 * x1107 - 2.0 * x1507) * J2
+            + (2.0 * x1507 - x332 * x1107) * J1;
+        let x1509 = x1474 * x326 - 2.0 * x789 + 2.0 * x1151 - x1480 * x320;
+        let x1510 = x1476 * e1 - (x1469 * x1203 - x811 * x969) * J1 + x1482 * e0
+            - (x1483 * x474 + x534 * x1486 + x440 * x1487 + x1488 * x461 + x404 * x1489
+                + x536 * x1490 + x513 * x1491) * x7 - m1 * (x1495 * e0 - x227 * x1497)
+            - x225 * x1500 - m2 * (e1 * (x1505 - 2.0 * x1503) - x1506 * x221)
+            - x219 * x1508 + 2.0 * (e2 * x1509);
+        let x1511 = (x937 + x188 * x1497 + e2 * x1495) * m1;
+        let x1512 = x1509 * e0;
+        let x1513 = J1
+            * (2.0 * x929 - x1230 * x1469 + (2.0 * x928 + x811 * x211) * gamma1_dot);
+        let x1514 = m2
+            * ((2.0 * (x1502 * e3) + x1381) * x55 - x1506 * x176
+                - x110 * (x342 + x1504 * e3));
+        let x1515 = x186 * x1500;
+        let x1516 = 2.0 * x1470 - 4.0 * x903 + 2.0 * x1472 - 4.0 * x1369 + 2.0 * x1473
+            - 2.0 * x1475;
+        let x1517 = e3 * x1516;
+        let x1518 = m2 * (x426 * e2 - x953) - J2 * (2.0 * x949 + 2.0 * x950) + 4.0 * x429
+            + (2.0 * x954 + 2.0 * x948) * J1 + (x1172 + x437 * e2) * m1 - 4.0 * x431
+            - 8.0 * x504 + x919 * e2;
+        let x1519 = 8.0 * x411 + (x1163 - 2.0 * x994) * J1 + x916 * e0 - 4.0 * x435
+            + (2.0 * (x913 * x188) - x1194) * m1
+            + J2 * (2.0 * x993 + 2.0 * x994 - 2.0 * x989 - 4.0 * e0) - 4.0 * x412
+            + m2 * (-x1441 * x110 - x54 * (4.0 * (x132 * x55) - 2.0 * (d * x176)));
+        let x1520 = (x1488 * x448 + x1491 * x511 + x513 * x1486 + x404 * x1518
+            + x453 * x1487 + x1490 * x508
+            + (8.0 * x421 - 4.0 * x1189 + 2.0 * (x188 * x1351) + 4.0 * x1190 + x922 * e3
+                + 8.0 * x506) * x461 + x1519 * x474) * x7;
+        let x1521 = x174 * x1508;
+        let x1522 = x1482 * e2;
+        let x1523 = x1513 - x1511 - 2.0 * x1512 - x1514 + x1387 + x1515 + x1517 - x1520
+            - x1521 + x1522;
+        let x1524 = x203 * x1508;
+        let x1525 = 4.0 * x427 + 8.0 * x408 + m2 * (x920 - 2.0 * (x237 * x696))
+            + 4.0 * x409 + J1 * (x870 + 2.0 * x865) + x952 * e1
+            + J2 * (x867 - 2.0 * x868 + 4.0 * e1)
+            + m1 * ((2.0 * (x233 * d) + 4.0 * (x116 * x40)) * x39 - x1440 * x191);
+        let x1526 = x7
+            * (((4.0 * x910 + 4.0 * x908) * J1 - 8.0 * x421 + 8.0 * x422
+                + (4.0 * x909 - 4.0 * x907) * J2 + 8.0 * x423
+                + d * (-4.0 * x1345 - 4.0 * x1346)) * x474 + x404 * x1525 + x1491 * x453
+                + x466 * x1487 + x1483 * x448 + x425 * x1490 + x440 * x1486
+                + x1519 * x461);
         let x1527 = m1
-            * (x233 * x1500 - (x486 + e3 * x1497) * x189
-                + (x1198 - 2.0 * (x1498 * e3)) * x40);
-        let x1528 = x1478 * x231;
-        let x1529 = x236 * x1514;
-        let x1530 = m2 * ((2.0 * x1509 - x1511) * e2 + x238 * x1512 + x932);
-        let x1531 = x1517 + 2.0 * x1518 - x1522 + x1524 + x1526 - x1527 - x1528 + x1529
-            - x1530 + x1215;
-        let x1532 = x1515 * e0;
-        let x1533 = x1478 * x197;
-        let x1534 = (2.0 * x809 - x1479 * x1233
-            + gamma1_dot * (x785 * x213 + 2.0 * x808)) * J1;
-        let x1535 = e3 * x1523;
-        let x1536 = m2
-            * ((2.0 * (x1508 * e3) + x1412) * x55 - x1512 * x178
-                - x110 * (x359 + x1510 * e3));
-        let x1537 = x176 * x1514;
-        let x1538 = -(d * x178);
-        let x1539 = 8.0 * x428 + x877 * e0 - 4.0 * x401
-            + m1 * (2.0 * (x873 * x199) - x1150)
-            + (2.0 * x983 + 2.0 * x984 - 2.0 * x985 - 4.0 * e0) * J2 - 4.0 * x402
-            + m2 * (-x1444 * x110 - x54 * (2.0 * x1538 + 4.0 * (x132 * x55)))
-            + (x1219 - 2.0 * x983) * J1;
-        let x1540 = (x510 * x1488 + x422 * x1539 + x455 * x1487 + x513 * x1489
-            + x450 * x1521 + x393 * x1493
-            + x463
-                * (8.0 * x424 - 4.0 * x1154 + 4.0 * x1155 + 2.0 * (x1339 * x199)
-                    + x865 * e3 + 8.0 * x508) + x1492 * x503) * x7;
-        let x1541 = (x830 + e2 * x1499 + x199 * x1500) * m1;
-        let x1542 = x1506 * e2;
-        let x1543 = x1533 - 2.0 * x1532 + x1534 + x1415 + x1535 - x1536 - x1537 - x1540
-            - x1541 + x1542;
-        let x1544 = (x1497 * x1443 + x39 * (2.0 * x991 - 2.0 * (x116 * x1498))
-            - x215 * x1500) * m1;
-        let x1545 = x1478 * x213;
-        let x1546 = e3 * x1515;
-        let x1547 = x1486 * e0;
-        let x1548 = x205 * x1514;
-        let x1549 = (x393 * x1494 + x1487 * x436
-            + x422
-                * ((4.0 * x878 - 4.0 * x869) * J2 - 8.0 * x424
-                    + (4.0 * x870 + 4.0 * x871) * J1 + d * (-4.0 * x1334 - 4.0 * x1335)
-                    + 8.0 * x425 + 8.0 * x426) + x442 * x1488 + x463 * x1539
-            + x1492 * x414 + x1520 * x450 + x455 * x1489) * x7;
-        let x1550 = x1525 * e1;
-        let x1551 = J1
-            * (-gamma2_dot * (x236 * x1479 - 2.0 * x988)
-                - gamma1_dot * (2.0 * x989 - x785 * x197));
-        let x1552 = m2
-            * (x1510 * x1444 + x1512 * x207
-                - x54 * (2.0 * x1223 + 2.0 * (x1508 * x132)));
-        let x1553 = x1547 - x1544 - x1545 - 2.0 * x1546 - x1548 - x1549 + x1000 + x1550
-            + x1551 - x1552;
-        let x1554 = x3 * x7;
-        let x1555 = (16.0 * x1554 - 2.0) * x7;
-        let x1556 = 16.0 * x44 + x58;
-        let x1557 = 32.0 * J2 - 32.0 * J1;
-        let x1558 = x22 * J1;
-        let x1559 = x22 * J2;
-        let x1560 = x1559 - x1558;
-        let x1561 = x44 * x22;
-        let x1562 = x11 * x44;
-        let x1563 = x11 * J2;
-        let x1564 = x11 * J1;
-        let x1565 = x1563 - x1564;
-        let x1566 = x1558 - x1559;
-        let x1567 = x1564 - x1563;
-        let x1568 = 32.0 * J1 - 32.0 * J2;
-        let x1569 = x4 * (x1566 - x1561) + (x1567 - x1562) * x3
-            + x0 * (x0 * x49 + (x1568 - 32.0 * x44) * x1) + x49 * f64::powi(e0, 4);
-        let x1570 = x8 * (x37 * x188 * x38 + x15 * x1569);
-        let x1571 = x38 * x7;
-        let x1572 = x106 * x1571;
-        let x1573 = x1572 * (e3 * (8.0 * x158 + x73 * e1) + x75 * x141);
-        let x1574 = x1572 * x84;
-        let x1575 = x1572 * x86;
-        let x1576 = -x99 - x100 - 32.0 * x36 - x102;
-        let x1577 = x2 * x212 + x106 * x164;
-        let x1578 = e2 * x71;
-        let x1579 = x106 * (e3 * x138 - 4.0 * x1578) - x5 * x196;
-        let x1580 = x224 * x2 + x106 * x159;
-        let x1581 = x106 * x121 - x139 * x5;
-        let x1582 = x1571
-            * (2.0 * (x1577 * e1) - 2.0 * (e2 * x1579) + 2.0 * (x1580 * e0)
-                - 2.0 * (x1581 * e3));
-        let x1583 = x7 * m1;
-        let x1584 = x193 * x189;
-        let x1585 = x193 * x188;
-        let x1586 = 2.0 * x1585 - x1584;
-        let x1587 = x1586 * e0 - x1066 * x703;
-        let x1588 = e2 * x1586 - x1298 * x703;
-        let x1589 = x1584 - 2.0 * x1585;
-        let x1590 = e3 * x1589 - x225 * x703;
-        let x1591 = x1589 * e1 + x703 * x197;
-        let x1592 = x1583
-            * (2.0 * (x1587 * e1) - 2.0 * (x1588 * e3) - 2.0 * (x1590 * e2)
-                + 2.0 * (x1591 * e0));
-        let x1593 = x254 * x189;
-        let x1594 = x188 * x254;
-        let x1595 = 2.0 * x1594 - x1593;
-        let x1596 = x1595 * e0 - x1066 * x738;
-        let x1597 = x1593 - 2.0 * x1594;
-        let x1598 = x1597 * e3 - x738 * x225;
-        let x1599 = x1597 * e1 + x738 * x197;
-        let x1600 = x1595 * e2 - x738 * x1298;
-        let x1601 = x1583
-            * (2.0 * (x1596 * e1) - 2.0 * (x1598 * e2) + 2.0 * (x1599 * e0)
-                - 2.0 * (e3 * x1600));
-        let x1602 = x8 * x1576;
-        let x1603 = -(x40 * x1571 * x6);
-        let x1604 = (2.0 * (x1577 * e0) - 2.0 * (x1580 * e1) + 2.0 * (x1581 * e2)
-            - 2.0 * (e3 * x1579)) * x1571;
-        let x1605 = (2.0 * (x1587 * e0) - 2.0 * (e1 * x1591) - 2.0 * (e3 * x1590)
-            + 2.0 * (x1588 * e2)) * x1583;
-        let x1606 = (2.0 * (x1596 * e0) - 2.0 * (x1599 * e1) - 2.0 * (x1598 * e3)
-            + 2.0 * (x1600 * e2)) * x1583;
-        let x1607 = -(x38 * x583);
-        let x1608 = -(x193 * x38);
-        let x1609 = -(x38 * x254);
-        let x1610 = x340 - x341;
-        let x1611 = x342 * x473 - x471 * x342 - x1610 * x470;
-        let x1612 = d * x336 * x336;
-        let x1613 = x471 * x321;
-        let x1614 = x1613 - x1612;
-        let x1615 = (x1614 + x478) * x189;
-        let x1616 = x106 * x482;
-        let x1617 = (x475 + 2.0 * x476) * x336;
-        let x1618 = (2.0 * x1617 - 2.0 * x485) * x39;
-        let x1619 = a_ * (-2.0 * x1616 - x1618) - x1615;
-        let x1620 = x1610 * x374 + x375 * x1007;
-        let x1621 = d * x40;
-        let x1622 = J2 * x197;
-        let x1623 = x197 * J1;
-        let x1624 = m1 * (8.0 * (x1621 * x71) - d * (x227 * x197 - x1066 * x215))
-            + (x437 + x440) * J1 + J2 * (x1066 * x213 - x437);
-        let x1625 = x225 * J1;
-        let x1626 = J2 * x225;
-        let x1627 = x1626 - x1625;
-        let x1628 = (-d * (-x233 * x197 - x215 * x225) - 8.0 * (x127 * x1621)) * m1
-            + x213 * x1627 + (x1623 - x1622) * x231;
-        let x1629 = J2 * (x1298 * x213 + x431) + (x435 - x431) * J1
-            + m1 * (8.0 * (x1621 * x126) - d * (-x1298 * x215 - x199 * x197));
-        let x1630 = x794 * x342 - x337 * x336;
-        let x1631 = x515 - m1 * (x991 * x197 - x1611 * x215 + x1619 * e1)
-            - (x342 * x213 - x336 * x197) * x338 - x213 * x1620
-            - (((2.0 * x1623 - 2.0 * x1622) * x213
-                - (8.0 * (x0 * x1621) - 2.0 * (x215 * x198)) * m1) * x422 + x393 * x1624
-                + x1628 * x450 + x1629 * x463) * x7 + 2.0 * (x1630 * e1);
-        let x1632 = x1615 + a_ * (2.0 * x1616 + x1618);
-        let x1633 = (x410 - x412) * J1
-            + m1 * (-d * (x1066 * x199 - x227 * x1298) - 8.0 * (x1621 * x141))
-            + J2 * (x1298 * x225 - x1066 * x197);
-        let x1634 = x1066 * J2;
-        let x1635 = x231 * J1;
-        let x1636 = x231 * (x1634 + x1635) + x225 * x1627
-            + (8.0 * (x1621 * x134) - d * (x1066 * x233 - x227 * x225)) * m1;
-        let x1637 = -x1066 * x378 - x338 * (x225 * x342 - x336 * x231)
-            - 2.0 * (x1630 * e0) - (x1632 * e0 - x1611 * x227 - x1066 * x991) * m1
+            * (x1493 * x1440 - x213 * x1497 + (2.0 * x983 - 2.0 * (x116 * x1494)) * x39);
+        let x1528 = e3 * x1509;
+        let x1529 = x1476 * e0;
+        let x1530 = 2.0 * x1479 - 2.0 * x1477 - 2.0 * x1478 + 2.0 * x1481 + 4.0 * x1160
+            + 4.0 * x1375;
+        let x1531 = x1530 * e1;
+        let x1532 = (-gamma2_dot * (x1469 * x235 - 2.0 * x977)
+            - gamma1_dot * (2.0 * x976 - x186 * x811)) * J1;
+        let x1533 = m2
+            * (x1504 * x1441 - x54 * (2.0 * (x1502 * x132) + 2.0 * x1113)
+                + x1506 * x205);
+        let x1534 = x1500 * x211;
+        let x1535 = x235 * x1508;
+        let x1536 = x1509 * e1;
+        let x1537 = (x811 * x901 - 2.0 * x961 - gamma2_dot * (x203 * x1469 - 2.0 * x968))
+            * J1;
+        let x1538 = (x233 * x1497 - (x491 + e3 * x1493) * x191
+            + (x1207 - 2.0 * (x1494 * e3)) * x40) * m1;
+        let x1539 = (x1491 * x508 + x425 * x1487 + x536 * x1486 + x551 * x1490
+            + x1525 * x474 + x461 * x1518
+            + (4.0 * x853 - 8.0 * x422 + 2.0 * (x237 * x1219) + 4.0 * x856 - 8.0 * x506
+                + x947 * e3) * x404 + x448 * x1489) * x7;
+        let x1540 = x1516 * e2;
+        let x1541 = x1530 * e3;
+        let x1542 = x1500 * x231;
+        let x1543 = m2 * ((2.0 * x1503 - x1505) * e2 + x237 * x1506 + x964);
+        let x1544 = x1535 + 2.0 * x1536 + x1537 - x1538 - x1539 + x1540 + x1541 - x1542
+            - x1543 + x1227;
+        let x1545 = x1529 - x1524 - x1526 - x1527 - 2.0 * x1528 + x996 + x1531 + x1532
+            - x1533 - x1534;
+        let x1546 = x3 * x7;
+        let x1547 = (16.0 * x1546 - 2.0) * x7;
+        let x1548 = 16.0 * x44 + x58;
+        let x1549 = 32.0 * J2 - 32.0 * J1;
+        let x1550 = x22 * J1;
+        let x1551 = x22 * J2;
+        let x1552 = x1551 - x1550;
+        let x1553 = x44 * x22;
+        let x1554 = x11 * x44;
+        let x1555 = x11 * J2;
+        let x1556 = x11 * J1;
+        let x1557 = x1555 - x1556;
+        let x1558 = x1550 - x1551;
+        let x1559 = x1556 - x1555;
+        let x1560 = 32.0 * J1 - 32.0 * J2;
+        let x1561 = x4 * (x1558 - x1553) + (x1559 - x1554) * x3
+            + x0 * (x0 * x49 + (x1560 - 32.0 * x44) * x1) + x49 * f64::powi(e0, 4);
+        let x1562 = x8 * (x37 * x190 * x38 + x15 * x1561);
+        let x1563 = x38 * x7;
+        let x1564 = x106 * x1563;
+        let x1565 = x1564 * (e3 * (8.0 * x151 + x73 * e1) + x75 * x141);
+        let x1566 = x1564 * x84;
+        let x1567 = x1564 * x86;
+        let x1568 = -x99 - x100 - 32.0 * x36 - x102;
+        let x1569 = -(x39 * x5);
+        let x1570 = x106 * x127 + x1569 * e1;
+        let x1571 = x223 * x2 + x106 * x167;
+        let x1572 = e2 * x71;
+        let x1573 = x106 * (e3 * x138 - 4.0 * x1572) + x1569 * e0;
+        let x1574 = x150 * x39 + x106 * x158;
+        let x1575 = (2.0 * (x1571 * e0) - 2.0 * (e3 * x1570) - 2.0 * (x1573 * e2)
+            + 2.0 * (x1574 * e1)) * x1563;
+        let x1576 = d * x1292;
+        let x1577 = x195 * x191;
+        let x1578 = x195 * x190;
+        let x1579 = 2.0 * x1578 - x1577;
+        let x1580 = e2 * x1579 - x177 * x1576;
+        let x1581 = x1577 - 2.0 * x1578;
+        let x1582 = e3 * x1581 - x226 * x177;
+        let x1583 = x1063 * d;
+        let x1584 = x1579 * e0 - x1583 * x177;
+        let x1585 = x1581 * e1 - x187 * x177;
+        let x1586 = x7 * m1;
+        let x1587 = (2.0 * (x1584 * e1) - 2.0 * (e3 * x1580) - 2.0 * (x1582 * e2)
+            + 2.0 * (x1585 * e0)) * x1586;
+        let x1588 = x244 * x191;
+        let x1589 = x190 * x244;
+        let x1590 = x1588 - 2.0 * x1589;
+        let x1591 = x1590 * e1 - x249 * x187;
+        let x1592 = 2.0 * x1589 - x1588;
+        let x1593 = x1592 * e0 - x249 * x1583;
+        let x1594 = x1590 * e3 - x226 * x249;
+        let x1595 = x1592 * e2 - x249 * x1576;
+        let x1596 = (2.0 * (x1591 * e0) + 2.0 * (x1593 * e1) - 2.0 * (e2 * x1594)
+            - 2.0 * (x1595 * e3)) * x1586;
+        let x1597 = x8 * x1568;
+        let x1598 = -(x40 * x1563 * x6);
+        let x1599 = (2.0 * (x1574 * e0) - 2.0 * (x1571 * e1) - 2.0 * (x1573 * e3)
+            + 2.0 * (x1570 * e2)) * x1563;
+        let x1600 = x1586
+            * (2.0 * (x1580 * e2) - 2.0 * (x1582 * e3) - 2.0 * (x1585 * e1)
+                + 2.0 * (x1584 * e0));
+        let x1601 = x1586
+            * (2.0 * (x1595 * e2) - 2.0 * (x1591 * e1) - 2.0 * (e3 * x1594)
+                + 2.0 * (x1593 * e0));
+        let x1602 = -(x38 * x582);
+        let x1603 = -(x195 * x38);
+        let x1604 = -(x38 * x244);
+        let x1605 = x357 - x358;
+        let x1606 = x1605 * x368 + x369 * x1003;
+        let x1607 = d * x40;
+        let x1608 = x186 * J1;
+        let x1609 = J2 * x186;
+        let x1610 = J2 * (x1063 * x211 - x416)
+            + (8.0 * (x1607 * x71) - (x227 * x186 - x1063 * x213) * d) * m1
+            + (x416 + x417) * J1;
+        let x1611 = m1 * (8.0 * (x1607 * x123) - d * (-x186 * x188 - x213 * x1292))
+            + (x465 - x463) * J1 + (x211 * x1292 + x463) * J2;
+        let x1612 = x225 * J2;
+        let x1613 = x225 * J1;
+        let x1614 = x1612 - x1613;
+        let x1615 = x211 * x1614 + (x1608 - x1609) * x231
+            + (-d * (-x225 * x213 - x233 * x186) - 8.0 * (x121 * x1607)) * m1;
+        let x1616 = x875 * x359 - x364 * x363;
+        let x1617 = x359 * x483 - x480 * x359 - x1605 * x494;
+        let x1618 = d * x363 * x363;
+        let x1619 = x480 * x320;
+        let x1620 = x1619 - x1618;
+        let x1621 = (x1620 + x479) * x191;
+        let x1622 = x106 * x486;
+        let x1623 = (x476 + 2.0 * x477) * x363;
+        let x1624 = (2.0 * x1623 - 2.0 * x490) * x39;
+        let x1625 = a_ * (-2.0 * x1622 - x1624) - x1621;
+        let x1626 = x499 - x211 * x1606
             - x7
-                * (x1633 * x463
-                    + ((2.0 * x1634 + 2.0 * x1635) * x225
-                        - (2.0 * (x1066 * x944) + 8.0 * (x1 * x1621)) * m1) * x393
-                    + x1624 * x422 + x1636 * x450) - x225 * x1620;
-        let x1638 = J2 * x1298;
-        let x1639 = x213 * J1;
-        let x1640 = (x1638 + x1639) * x231 - x1627 * x197
-            + (8.0 * (x1621 * x68) - (x225 * x199 + x1298 * x233) * d) * m1;
-        let x1641 = 2.0 * (e3 * x1630) - x550 - x1620 * x231
+                * (((2.0 * x1608 - 2.0 * x1609) * x211
+                    - (8.0 * (x0 * x1607) - 2.0 * (x213 * x187)) * m1) * x474
+                    + x1610 * x448 + x1611 * x461 + x1615 * x404) + 2.0 * (x1616 * e1)
+            - m1 * (x1625 * e1 - x1617 * x213 - x187 * x495)
+            - x365 * (x359 * x211 - x186 * x363);
+        let x1627 = x231 * J1;
+        let x1628 = x1063 * J2;
+        let x1629 = (8.0 * (x1607 * x134) - (x233 * x1063 - x227 * x225) * d) * m1
+            + x225 * x1614 + x231 * (x1627 + x1628);
+        let x1630 = x211 * J1;
+        let x1631 = J2 * x1292;
+        let x1632 = m1 * (8.0 * (x1607 * x68) - d * (x233 * x1292 + x225 * x188))
+            + (x1630 + x1631) * x231 - x186 * x1614;
+        let x1633 = 2.0 * (e3 * x1616) - x528
+            - (x1617 * x233 + x1625 * e3 - x226 * x495) * m1
+            - x365 * (x359 * x231 + x225 * x363)
+            - (((2.0 * x1612 - 2.0 * x1613) * x231
+                - m1 * (8.0 * (x3 * x1607) + 2.0 * (x233 * x226))) * x404 + x1615 * x474
+                + x448 * x1629 + x461 * x1632) * x7 - x1606 * x231;
+        let x1634 = (-8.0 * (x1607 * x141) - (x1063 * x188 - x227 * x1292) * d) * m1
+            + (x438 - x433) * J1 + J2 * (x225 * x1292 - x1063 * x186);
+        let x1635 = x1621 + a_ * (2.0 * x1622 + x1624);
+        let x1636 = x186 * x1606 - 2.0 * (x1616 * e2)
+            - (-x363 * x211 - x186 * x359) * x365 - x372 * x1292
             - x7
-                * (x1636 * x393
-                    + ((2.0 * x1626 - 2.0 * x1625) * x231
-                        - (8.0 * (x3 * x1621) + 2.0 * (x225 * x1519)) * m1) * x450
-                    + x1628 * x422 + x1640 * x463)
-            - m1 * (x1619 * e3 - x991 * x225 + x1611 * x233)
-            - (x342 * x231 + x225 * x336) * x338;
-        let x1642 = x1620 * x197 - 2.0 * (x1630 * e2) - x1298 * x378
-            - x338 * (-x336 * x213 - x342 * x197)
-            - x7
-                * (x463
-                    * (-(2.0 * x1638 + 2.0 * x1639) * x197
-                        - (2.0 * (x1298 * x1392) + 8.0 * (x1621 * x4)) * m1)
-                    + x1640 * x450 + x1629 * x422 + x1633 * x393)
-            - m1 * (x1611 * x199 - x991 * x1298 + x1632 * e2);
-        let x1643 = x1614 + x481;
-        let x1644 = x484 + x1617;
-        let x1645 = x11 * x57;
-        let x1646 = x57 * x22;
-        let x1647 = x59 * f64::powi(e0, 4) + x3 * (x1645 + x1565)
-            + x0 * (x1 * (x1557 + 32.0 * x57) + x0 * x59) + x4 * (x1560 + x1646);
-        let x1648 = x8 * (x53 * x109 * x52 + x19 * x1647);
-        let x1649 = x53 * x7;
-        let x1650 = x104 * x1649;
-        let x1651 = (e3 * (x73 * e0 - 8.0 * x152) - x126 * x75) * x1650;
-        let x1652 = x80 * x1650;
-        let x1653 = x1650 * x87;
-        let x1654 = -(x1649 * x6 * x55);
-        let x1655 = x104 * x169 - x2 * x203;
-        let x1656 = x5 * x235 + x104 * (e3 * x120 - 4.0 * x1578);
-        let x1657 = x146 * x104 + x5 * x125;
-        let x1658 = x104 * x153 - x2 * x219;
-        let x1659 = x1649
-            * (2.0 * (x1655 * e1) - 2.0 * (e3 * x1656) - 2.0 * (e2 * x1657)
-                + 2.0 * (e0 * x1658));
-        let x1660 = x110 * x183;
-        let x1661 = x109 * x183;
-        let x1662 = x1660 - 2.0 * x1661;
-        let x1663 = x1662 * e0 - x1074 * x236;
-        let x1664 = 2.0 * x1661 - x1660;
-        let x1665 = x1664 * e2 - x1074 * x205;
-        let x1666 = x1662 * e1 + x176 * x1074;
-        let x1667 = e3 * x1664 - x1074 * x220;
-        let x1668 = m2 * x7;
-        let x1669 = (2.0 * (x1663 * e0) - 2.0 * (x1665 * e2) + 2.0 * (x1666 * e1)
-            - 2.0 * (e3 * x1667)) * x1668;
-        let x1670 = x247 * x109;
-        let x1671 = x247 * x110;
-        let x1672 = x1671 - 2.0 * x1670;
-        let x1673 = x1672 * e0 - x236 * x1086;
-        let x1674 = x176 * x1086 + x1672 * e1;
-        let x1675 = 2.0 * x1670 - x1671;
-        let x1676 = e3 * x1675 - x220 * x1086;
-        let x1677 = e2 * x1675 - x205 * x1086;
-        let x1678 = x1668
-            * (2.0 * (x1673 * e0) + 2.0 * (x1674 * e1) - 2.0 * (e3 * x1676)
-                - 2.0 * (x1677 * e2));
-        let x1679 = x48 - 16.0 * x57;
-        let x1680 = x1649
-            * (2.0 * (x1656 * e2) - 2.0 * (e3 * x1657) - 2.0 * (e1 * x1658)
-                + 2.0 * (x1655 * e0));
-        let x1681 = x1668
-            * (2.0 * (x1666 * e0) - 2.0 * (e3 * x1665) - 2.0 * (x1663 * e1)
-                + 2.0 * (x1667 * e2));
-        let x1682 = x1668
-            * (2.0 * (e2 * x1676) - 2.0 * (x1673 * e1) - 2.0 * (e3 * x1677)
+                * (x1611 * x474 + x404 * x1632
+                    + (-(2.0 * (x188 * x1576) + 8.0 * (x1607 * x4)) * m1
+                        - (2.0 * x1630 + 2.0 * x1631) * x186) * x461 + x1634 * x448)
+            - (x1617 * x188 - x495 * x1576 + x1635 * e2) * m1;
+        let x1637 = -x225 * x1606 - 2.0 * (x1616 * e0) - x1063 * x372
+            - (x404 * x1629 + x1610 * x474 + x1634 * x461
+                + ((2.0 * x1627 + 2.0 * x1628) * x225
+                    - (8.0 * (x1 * x1607) - 2.0 * (x227 * x1583)) * m1) * x448) * x7
+            - (x1635 * e0 - x1583 * x495 - x1617 * x227) * m1
+            - (x225 * x359 - x363 * x231) * x365;
+        let x1638 = x1620 + x485;
+        let x1639 = x489 + x1623;
+        let x1640 = x11 * x57;
+        let x1641 = x57 * x22;
+        let x1642 = x59 * f64::powi(e0, 4) + x3 * (x1640 + x1557)
+            + x0 * (x1 * (x1549 + 32.0 * x57) + x0 * x59) + x4 * (x1552 + x1641);
+        let x1643 = x8 * (x53 * x109 * x52 + x19 * x1642);
+        let x1644 = x53 * x7;
+        let x1645 = x104 * x1644;
+        let x1646 = (e3 * (x73 * e0 - 8.0 * x156) - x123 * x75) * x1645;
+        let x1647 = x80 * x1645;
+        let x1648 = x1645 * x87;
+        let x1649 = -(x1644 * x6 * x55);
+        let x1650 = x54 * x5;
+        let x1651 = x1650 * e1 + x104 * (e3 * x120 - 4.0 * x1572);
+        let x1652 = x54 * x155 + x104 * x153;
+        let x1653 = x146 * x104 + x1650 * e0;
+        let x1654 = x104 * x163 - x2 * x218;
+        let x1655 = (2.0 * (x1652 * e1) - 2.0 * (e3 * x1651) - 2.0 * (e2 * x1653)
+            + 2.0 * (e0 * x1654)) * x1644;
+        let x1656 = x110 * x181;
+        let x1657 = x109 * x181;
+        let x1658 = 2.0 * x1657 - x1656;
+        let x1659 = e3 * x1658 - x173 * x220;
+        let x1660 = x1656 - 2.0 * x1657;
+        let x1661 = x236;
+        let x1662 = x1660 * e0 - x173 * x1661;
+        let x1663 = x1658 * e2 - x173 * x204;
+        let x1664 = -(x174 * d);
+        let x1665 = x1660 * e1 - x173 * x1664;
+        let x1666 = m2 * x7;
+        let x1667 = (2.0 * (x1662 * e0) - 2.0 * (e3 * x1659) - 2.0 * (x1663 * e2)
+            + 2.0 * (x1665 * e1)) * x1666;
+        let x1668 = x253 * x109;
+        let x1669 = x253 * x110;
+        let x1670 = 2.0 * x1668 - x1669;
+        let x1671 = e3 * x1670 - x242 * x220;
+        let x1672 = e2 * x1670 - x242 * x204;
+        let x1673 = x1669 - 2.0 * x1668;
+        let x1674 = x1673 * e1 - x242 * x1664;
+        let x1675 = x1673 * e0 - x242 * x1661;
+        let x1676 = x1666
+            * (2.0 * (x1674 * e1) - 2.0 * (e3 * x1671) - 2.0 * (x1672 * e2)
+                + 2.0 * (x1675 * e0));
+        let x1677 = x48 - 16.0 * x57;
+        let x1678 = (2.0 * (x1651 * e2) - 2.0 * (e1 * x1654) - 2.0 * (e3 * x1653)
+            + 2.0 * (x1652 * e0)) * x1644;
+        let x1679 = x1666
+            * (2.0 * (x1665 * e0) - 2.0 * (x1663 * e3) - 2.0 * (x1662 * e1)
+                + 2.0 * (x1659 * e2));
+        let x1680 = x1666
+            * (2.0 * (x1671 * e2) - 2.0 * (x1675 * e1) - 2.0 * (e3 * x1672)
                 + 2.0 * (x1674 * e0));
-        let x1683 = x53 * x582;
-        let x1684 = x53 * x183;
-        let x1685 = x247 * x53;
-        let x1686 = (2.0 * x322 - 2.0 * x323 - 2.0 * x324 + 2.0 * x325) * x349;
-        let x1687 = x353 * (x354 + 2.0 * x356);
-        let x1688 = x54 * ((2.0 * x350 + 2.0 * x1686) + (2.0 * x1687 - 2.0 * x358));
-        let x1689 = x104 * x368;
-        let x1690 = x361 * x326;
-        let x1691 = x353 * x353 * d;
-        let x1692 = x1690 - x1691 + x366;
-        let x1693 = x1692 * x110;
-        let x1694 = a_ * (x1688 + 2.0 * x1689) - x1693;
-        let x1695 = x355 * x371 - x355 * x361;
-        let x1696 = x236 * x355;
-        let x1697 = x352 - x351;
-        let x1698 = d * x55;
-        let x1699 = x220 * J2;
-        let x1700 = x1070 * J1;
-        let x1701 = x1699 + x1700;
-        let x1702 = x236 * J1;
-        let x1703 = x236 * J2;
-        let x1704 = x1702 - x1703;
-        let x1705 = m2 * (8.0 * (x1698 * x126) - d * (-x222 * x205 - x176 * x238))
-            + x1701 * x205 - x176 * x1704;
-        let x1706 = x1237 * J1;
-        let x1707 = x205 * J2;
-        let x1708 = x1706 + x1707;
-        let x1709 = m2 * (8.0 * (x1698 * x141) - (x236 * x238 + x205 * x207) * d)
-            + x205 * x1708 + x236 * x1704;
-        let x1710 = x176 * J2;
-        let x1711 = x176 * J1;
-        let x1712 = x1710 - x1711;
-        let x1713 = x220 * x1704
-            + m2 * (-(x238 * x220 - x205 * x178) * d - 8.0 * (x1698 * x68))
-            + x205 * x1712;
-        let x1714 = x353 * x852 - x355 * x493;
-        let x1715 = 2.0 * (x1714 * e2) - (x1694 * e2 + x238 * x1695 - x205 * x1223) * m2
-            - x495 * (x205 * x1697 - x1696) - x491 * (x205 * x353 + x1696)
+        let x1681 = x53 * x581;
+        let x1682 = x53 * x181;
+        let x1683 = x253 * x53;
+        let x1684 = x329 - x328;
+        let x1685 = d * x55;
+        let x1686 = (x235 * x1066 - x1234 * x174) * J1
+            + m2 * (-(-x174 * x205 - x221 * x235) * d - 8.0 * (x1685 * x71))
+            + J2 * (x449 - x452);
+        let x1687 = x174 * J1;
+        let x1688 = x174 * J2;
+        let x1689 = x1688 - x1687;
+        let x1690 = x1066 * J1;
+        let x1691 = J2 * x219;
+        let x1692 = x1690 + x1691;
+        let x1693 = m2 * (8.0 * (x121 * x1685) - (x174 * x176 - x219 * x221) * d)
+            - x1689 * x174 + x1692 * x219;
+        let x1694 = x235 * J1;
+        let x1695 = J2 * x235;
+        let x1696 = x1694 - x1695;
+        let x1697 = m2 * (8.0 * (x1685 * x123) - (-x174 * x237 - x203 * x221) * d)
+            - x174 * x1696 + x203 * x1692;
+        let x1698 = (2.0 * x322 - 2.0 * x323 - 2.0 * x324 + 2.0 * x325) * x327;
+        let x1699 = x330 * (x338 + 2.0 * x339);
+        let x1700 = x54 * ((2.0 * x337 + 2.0 * x1698) + (2.0 * x1699 - 2.0 * x341));
+        let x1701 = x104 * x347;
+        let x1702 = x331 * x326;
+        let x1703 = x330 * x330 * d;
+        let x1704 = x1702 - x1703 + x345;
+        let x1705 = x1704 * x110;
+        let x1706 = a_ * (-x1700 - 2.0 * x1701) + x1705;
+        let x1707 = x321 * x335 - x321 * x331;
+        let x1708 = x330 * x796 - x321 * x383;
+        let x1709 = -x385 * (-x321 * x219 - x174 * x330)
+            - (-x174 * x1684 - x321 * x1066) * x388
             - x7
-                * (x393 * x1705
-                    + x450
-                        * (x205 * (2.0 * x1702 - 2.0 * x1703)
-                            - m2 * (2.0 * (x1406 * x205) + 8.0 * (x1698 * x4)))
-                    + x1709 * x422 + x463 * x1713);
-        let x1716 = m2 * (8.0 * (x1698 * x134) - d * (x220 * x207 - x236 * x178))
-            + x236 * x1712 + x220 * x1708;
-        let x1717 = m2 * (-(-x222 * x236 - x176 * x207) * d - 8.0 * (x1698 * x71))
-            + J2 * (x454 - x453) + (x236 * x1070 - x176 * x1237) * J1;
-        let x1718 = a_ * (-x1688 - 2.0 * x1689) + x1693;
-        let x1719 = -((x236 * (2.0 * x1706 + 2.0 * x1707)
-            - m2 * (2.0 * (x236 * d * x207) + 8.0 * (x1698 * x1))) * x422 + x1709 * x450
-            + x463 * x1716 + x1717 * x393) * x7
-            - m2 * (x207 * x1695 - x236 * x1223 + x1718 * e0)
-            - (x236 * x1697 - x355 * x1237) * x495 - x491 * (x236 * x353 - x205 * x355)
-            - 2.0 * (x1714 * e0);
-        let x1720 = x1701 * x220 - x176 * x1712
-            + m2 * (8.0 * (x127 * x1698) - d * (x176 * x178 - x222 * x220));
-        let x1721 = x176 * x355;
-        let x1722 = 2.0 * (e3 * x1714)
-            - (x463
-                * (x220 * (2.0 * x1710 - 2.0 * x1711)
-                    - m2 * (8.0 * (x1698 * x3) + 2.0 * (x220 * x1538))) + x422 * x1716
-                + x450 * x1713 + x1720 * x393) * x7
-            - m2 * (x1694 * e3 - x220 * x1223 - x178 * x1695)
-            - x491 * (x220 * x353 - x1721) - x495 * (x220 * x1697 + x1721);
-        let x1723 = -(-x176 * x353 - x220 * x355) * x491
-            - (-x355 * x1070 - x176 * x1697) * x495 - 2.0 * (x1714 * e1)
-            - m2 * (x1718 * e1 - x222 * x1695 + x176 * x1223)
-            - (x450 * x1705 + x1720 * x463
-                + x393
-                    * (-x176 * (2.0 * x1699 + 2.0 * x1700)
-                        - m2 * (8.0 * (x0 * x1698) - 2.0 * (x176 * x1159)))
-                + x1717 * x422) * x7;
-        let x1724 = x359 + x1686 + x1687;
-        let x1725 = x316 * x531;
-        let x1726 = x329 * e3;
-        let x1727 = x535 * x321;
-        let x1728 = x205 * x493;
-        let x1729 = e1 * x344;
-        let x1730 = x236 * x852;
-        let x1731 = 2.0 * x1727 - 2.0 * x1725 - 4.0 * x1726 + 2.0 * x1728 + 4.0 * x1729
-            - 2.0 * x1730;
-        let x1732 = e2 * x344;
-        let x1733 = e3 * x327;
-        let x1734 = x531 * x326 - x533 * x321 - 2.0 * x1732 + 2.0 * x1733;
-        let x1735 = x492 + x1360 * e2;
-        let x1736 = (x236 * x326 + 2.0 * (x355 * e2)) * x55 - x205 * x371 - x353 * x1075;
-        let x1737 = x236 * x357;
-        let x1738 = x1355 * e2 - x1737 - x238 * x355;
-        let x1739 = x1738 * x55;
-        let x1740 = x238 * x353;
-        let x1741 = x205 * x357;
-        let x1742 = x1352 * e2 + x1740 - x1741;
-        let x1743 = x1742 * x110;
-        let x1744 = 2.0 * x1739 - x1743;
-        let x1745 = x535 * x326;
-        let x1746 = x316 * x533;
-        let x1747 = x337 * x231;
-        let x1748 = x327 * e1;
-        let x1749 = x794 * x225;
-        let x1750 = x329 * e2;
-        let x1751 = 2.0 * x1745 - 2.0 * x1746 - 2.0 * x1747 + 4.0 * x1748 + 2.0 * x1749
-            - 4.0 * x1750;
-        let x1752 = x231 * x1232;
-        let x1753 = (x884 * e0 - (4.0 * x0 + x5) * x388) * x7 + x881;
-        let x1754 = x1331 + 4.0 * (x388 * e2);
-        let x1755 = x590 * x1754 + 4.0 * x323 - 8.0 * x325;
-        let x1756 = 4.0 * (e3 * x388) + x1491;
-        let x1757 = x590 * x1756 - 8.0 * x319 + 4.0 * x320;
-        let x1758 = 4.0 * (x388 * e1) + x1145;
-        let x1759 = x590 * x1758 - 8.0 * x313 + 4.0 * x315;
-        let x1760 = e3 * x336;
-        let x1761 = x375 * x225;
-        let x1762 = (-2.0 * x1760 - x1761) * J1
-            + (2.0 * x1760 + x1761 + gamma1_dot * x225) * J2;
-        let x1763 = x225 * x477;
-        let x1764 = e3 * x1174 - x1763 - x233 * x336;
-        let x1765 = x1764 * x189;
-        let x1766 = x477 * x231;
-        let x1767 = x233 * x342 - x1766 + e3 * x1168;
-        let x1768 = x40 * x1767;
-        let x1769 = x1765 + 2.0 * x1768;
-        let x1770 = e3 * x1165 - x225 * x473 + x40 * (2.0 * (e3 * x342) - x321 * x231)
-            - x225 * x470;
-        let x1771 = x1731 * e3 - 2.0 * (x1734 * e0) - x176 * x1735
-            - m2 * (e3 * x1744 - x1736 * x178) + x1751 * e2 - (x1752 + x236 * x1233) * J1
-            - x7 * (x1753 * x510 + x455 * x1755 + x1757 * x503 + x513 * x1759)
-            + x1762 * x197 - m1 * (x1769 * e2 + x1770 * x199);
-        let x1772 = -x1765 - 2.0 * x1768;
-        let x1773 = 2.0 * x1746 - 2.0 * x1745 + 2.0 * x1747 - 4.0 * x1748 - 2.0 * x1749
-            + 4.0 * x1750;
-        let x1774 = x236 * x1735
-            - (x1757 * x530 + x1753 * x537 + x1759 * x510 + x1755 * x442) * x7
-            - (x1770 * x233 + e3 * x1772) * m1 - x439 * x495 + 2.0 * (e1 * x1734)
-            + e3 * x1773 - m2 * (x1744 * e2 + x238 * x1736) + x1731 * e2
-            - (x1762 - x544) * x231;
-        let x1775 = 2.0 * x1725 + 4.0 * x1726 - 2.0 * x1727 - 2.0 * x1728 - 4.0 * x1729
-            + 2.0 * x1730;
-        let x1776 = x197 * x958;
-        let x1777 = x1743 - 2.0 * x1739;
-        let x1778 = x1775 * e0 + x1773 * e1 - (e1 * x1772 - x1770 * x215) * m1
-            - (x1757 * x414 + x455 * x1759 + x442 * x1753 + x1755 * x436) * x7
-            - (x236 * x811 + x1776) * J1 - x205 * x1735 - x1762 * x213
-            - m2 * (x1736 * x207 + x1777 * e0) - 2.0 * (e3 * x1734);
-        let x1779 = x236 * x1139;
-        let x1780 = 2.0 * (e2 * x1734) - (x1769 * e0 - x1770 * x227) * m1 - x220 * x1735
-            - x1762 * x225 - m2 * (x1777 * e1 - x222 * x1736)
-            - (x231 * x958 + x1779) * J1
-            - (x1759 * x503 + x1757 * x551 + x1753 * x530 + x1755 * x414) * x7
-            + x1751 * e0 + x1775 * e1;
-        let x1781 = e3 * x344;
-        let x1782 = e2 * x327;
-        let x1783 = x321 * x509 + x507 * x326 - 2.0 * x1781 - 2.0 * x1782;
-        let x1784 = (2.0 * (x355 * e3) - x176 * x326) * x55 - x1358 * e3 - x220 * x371;
-        let x1785 = x220 * x357;
-        let x1786 = x353 * x178;
-        let x1787 = e3 * x1352 - x1785 - x1786;
-        let x1788 = x1787 * x110;
-        let x1789 = x176 * x357;
-        let x1790 = x355 * x178 + x1789 + e3 * x1355;
-        let x1791 = x1790 * x55;
-        let x1792 = x1788 - 2.0 * x1791;
-        let x1793 = x336 * e2;
-        let x1794 = x375 * x213;
-        let x1795 = (2.0 * x1793 + x1794) * J1
-            + (x1298 * gamma1_dot - 2.0 * x1793 - x1794) * J2;
-        let x1796 = x794 * x213;
-        let x1797 = x337 * x197;
-        let x1798 = x327 * e0;
-        let x1799 = x505 * x326;
-        let x1800 = x316 * x509;
-        let x1801 = 2.0 * x1796 - 2.0 * x1797 + 4.0 * x1726 + 4.0 * x1798 - 2.0 * x1799
-            - 2.0 * x1800;
-        let x1802 = x176 * x852;
-        let x1803 = x220 * x493;
-        let x1804 = x316 * x507;
-        let x1805 = x344 * e0;
-        let x1806 = x505 * x321;
-        let x1807 = 2.0 * x1804 - 2.0 * x1802 - 2.0 * x1803 + 4.0 * x1805 - 4.0 * x1750
-            - 2.0 * x1806;
-        let x1808 = x477 * x213;
-        let x1809 = x1808 - x336 * x199 + x831 * e2;
-        let x1810 = x1809 * x189;
-        let x1811 = x477 * x197;
-        let x1812 = x342 * x199 + x1811 + x839 * e2;
-        let x1813 = x1812 * x40;
-        let x1814 = -x1810 - 2.0 * x1813;
-        let x1815 = x213 * x473 - (2.0 * (x342 * e2) - x321 * x197) * x40 - x1298 * x470
-            + x702 * x336;
-        let x1816 = x555 + x1360 * e3;
-        let x1817 = x7 * (e1 * x1145 - x388 * (4.0 * x1 + x5)) + x1144;
-        let x1818 = x884 + 4.0 * (x388 * e0);
-        let x1819 = 4.0 * x313 - 8.0 * x315 + x1818 * x584;
-        let x1820 = x1756 * x584 - 8.0 * x322 + 4.0 * x324;
-        let x1821 = x1754 * x584 + 4.0 * x317 - 8.0 * x318;
-        let x1822 = x1801 * e1 - 2.0 * (e3 * x1783) - m2 * (x207 * x1784 + x1792 * e0)
-            - x1795 * x213 - (x1779 - x1195 * x197) * J1 + x1807 * e0
-            - (x1814 * e1 - x215 * x1815) * m1 - x205 * x1816
-            - (x455 * x1817 + x442 * x1819 + x1820 * x414 + x1821 * x436) * x7;
-        let x1823 = 2.0 * x1791 - x1788;
-        let x1824 = x1810 + 2.0 * x1813;
-        let x1825 = 2.0 * x1797 - 2.0 * x1796 - 4.0 * x1726 - 4.0 * x1798 + 2.0 * x1799
-            + 2.0 * x1800;
-        let x1826 = 2.0 * x1802 + 2.0 * x1803 - 2.0 * x1804 - 4.0 * x1805 + 4.0 * x1750
-            + 2.0 * x1806;
-        let x1827 = x1795 * x197 - m2 * (e3 * x1823 - x178 * x1784)
-            - (x199 * x1815 + x1824 * e2) * m1 + e2 * x1825 - 2.0 * (x1783 * e0)
-            - (x220 * x1139 - x1232 * x197) * J1 + e3 * x1826
-            - x7 * (x1820 * x503 + x513 * x1817 + x455 * x1821 + x1819 * x510)
-            - x176 * x1816;
-        let x1828 = 2.0 * (x1783 * e1) - (x205 * x1139 - x998 * x197) * J1 + x236 * x1816
-            - (x1817 * x510 + x530 * x1820 + x442 * x1821 + x1819 * x537) * x7
-            - (x233 * x1815 + e3 * x1814) * m1 + e3 * x1801
-            - m2 * (x238 * x1784 + x1823 * e2) - x1795 * x231 + x1826 * e2;
-        let x1829 = x1807 * e1
-            - x7 * (x1817 * x503 + x1821 * x414 + x1819 * x530 + x551 * x1820)
-            - (-x176 * x1139 - x1776) * J1 + 2.0 * (e2 * x1783)
-            - m1 * (x1824 * e0 - x227 * x1815) - m2 * (x1792 * e1 - x222 * x1784)
-            - x220 * x1816 - x1795 * x225 + x1825 * e0;
-        let x1830 = x236 * x493;
-        let x1831 = x205 * x852;
-        let x1832 = x427 * x321;
-        let x1833 = x316 * x433;
-        let x1834 = x329 * e1;
-        let x1835 = 2.0 * x1830 + 2.0 * x1831 + 2.0 * x1832 - 4.0 * x1781 + 2.0 * x1833
-            - 4.0 * x1834;
-        let x1836 = x1168 * e1 - x1808 - x215 * x342;
-        let x1837 = x1836 * x40;
-        let x1838 = x215 * x336 + x1174 * e1 + x1811;
-        let x1839 = x1838 * x189;
-        let x1840 = 2.0 * x1837 + x1839;
-        let x1841 = x470 * x197 + x473 * x197 + (2.0 * (x342 * e1) - x321 * x213) * x40
-            + x336 * x1443;
-        let x1842 = 2.0 * x1748 - x433 * x326 - x429 * x321 + 2.0 * x1805;
-        let x1843 = x353 * e0;
-        let x1844 = J2 * (x236 * x490 + 2.0 * x1843) - (x362 * x236 + 2.0 * x1843) * J1;
-        let x1845 = -x236 * x371 - x353 * x1444
-            - (2.0 * (x355 * e0) + x205 * x326) * x55;
-        let x1846 = x353 * x207;
-        let x1847 = x1846 - x1737 + x815 * e0;
-        let x1848 = x1847 * x110;
-        let x1849 = x824 * e0 - x355 * x207 + x1741;
-        let x1850 = x1849 * x55;
-        let x1851 = 2.0 * x1850 - x1848;
-        let x1852 = x7 * (x1331 * e2 - (4.0 * x3 + x2) * x388) + x1330;
-        let x1853 = 4.0 * x312 + x1756 * x586 - 8.0 * x314;
-        let x1854 = x586 * x1758 - 8.0 * x317 + 4.0 * x318;
-        let x1855 = 4.0 * x325 - 8.0 * x323 + x1818 * x586;
-        let x1856 = x336 * e1;
-        let x1857 = x375 * x197;
-        let x1858 = J2 * (2.0 * x1856 - x1857 - x1194) + (x1857 - 2.0 * x1856) * J1;
-        let x1859 = x794 * x197;
-        let x1860 = x427 * x326;
-        let x1861 = x329 * e0;
-        let x1862 = x337 * x213;
-        let x1863 = x316 * x429;
-        let x1864 = 2.0 * x1860 - 2.0 * x1859 + 4.0 * x1861 - 2.0 * x1862 - 4.0 * x1733
-            - 2.0 * x1863;
-        let x1865 = e3 * x1835 - (x1840 * e2 + x1841 * x199) * m1 - 2.0 * (x1842 * e0)
-            - x176 * x1844 - m2 * (e3 * x1851 - x178 * x1845)
-            - (x1237 * x1233 + x213 * x1232) * J1
-            - (x455 * x1852 + x1853 * x503 + x513 * x1854 + x510 * x1855) * x7
-            + x1858 * x197 + x1864 * e2;
-        let x1866 = 4.0 * x1781 - 2.0 * x1830 - 2.0 * x1831 - 2.0 * x1832 - 2.0 * x1833
-            + 4.0 * x1834;
-        let x1867 = x1848 - 2.0 * x1850;
-        let x1868 = 2.0 * (e2 * x1842) - (x1840 * e0 - x227 * x1841) * m1 + x1866 * e1
-            + x1864 * e0 - x220 * x1844
-            - x7 * (x1853 * x551 + x503 * x1854 + x530 * x1855 + x1852 * x414)
-            - (x1867 * e1 - x222 * x1845) * m2 - x225 * x1858
-            - (x1752 + x1139 * x1237) * J1;
-        let x1869 = -2.0 * x1837 - x1839;
-        let x1870 = 2.0 * x1859 - 2.0 * x1860 - 4.0 * x1861 + 2.0 * x1862 + 4.0 * x1733
-            + 2.0 * x1863;
-        let x1871 = e1 * x1870 - x236 * x1237 * x495 - (x207 * x1845 + x1867 * e0) * m2
-            - (x1869 * e1 - x1841 * x215) * m1 - (x1858 + x339) * x213
-            - x7 * (x455 * x1854 + x1852 * x436 + x442 * x1855 + x1853 * x414)
-            - 2.0 * (e3 * x1842) - x205 * x1844 + x1866 * e0;
-        let x1872 = x225 * x1232;
-        let x1873 = x1835 * e2
-            - x7 * (x442 * x1852 + x537 * x1855 + x510 * x1854 + x1853 * x530)
-            - (x1237 * x997 - x1872) * J1 - m1 * (x1869 * e3 + x1841 * x233)
-            - x1858 * x231 - m2 * (x238 * x1845 + x1851 * e2) + 2.0 * (x1842 * e1)
-            + e3 * x1870 + x236 * x1844;
-        let x1874 = x1270 * x336 - x1066 * x470 - (2.0 * (x342 * e0) + x225 * x321) * x40
-            + x231 * x473;
-        let x1875 = x227 * x336 + x1766 + x831 * e0;
-        let x1876 = x1875 * x189;
-        let x1877 = x839 * e0 - x1763 - x227 * x342;
-        let x1878 = x1877 * x40;
-        let x1879 = x1876 + 2.0 * x1878;
-        let x1880 = x353 * e1;
-        let x1881 = J2 * (2.0 * x1880 - x176 * x490) - (2.0 * x1880 - x176 * x362) * J1;
-        let x1882 = x403 * x326 - 2.0 * x1798 + 2.0 * x1729 - x396 * x321;
-        let x1883 = x176 * x371 - (2.0 * (x355 * e1) + x220 * x326) * x55 - x353 * x1273;
-        let x1884 = x222 * x353;
-        let x1885 = x1789 - x1884 + x815 * e1;
-        let x1886 = x1885 * x110;
-        let x1887 = x1785 + x222 * x355 + x824 * e1;
-        let x1888 = x1887 * x55;
-        let x1889 = x1886 - 2.0 * x1888;
-        let x1890 = x375 * x231;
-        let x1891 = x336 * e0;
-        let x1892 = (x1890 + 2.0 * x1891) * J1
-            + J2 * (x1066 * gamma1_dot - x1890 - 2.0 * x1891);
-        let x1893 = x337 * x225;
-        let x1894 = x794 * x231;
-        let x1895 = x396 * x316;
-        let x1896 = x400 * x326;
-        let x1897 = 4.0 * x1834 - 2.0 * x1893 - 2.0 * x1894 - 2.0 * x1895 + 4.0 * x1782
-            - 2.0 * x1896;
-        let x1898 = x220 * x852;
-        let x1899 = x176 * x493;
-        let x1900 = x316 * x403;
-        let x1901 = x321 * x400;
-        let x1902 = 2.0 * x1899 - 4.0 * x1861 - 2.0 * x1898 + 2.0 * x1900 - 4.0 * x1732
-            + 2.0 * x1901;
-        let x1903 = 4.0 * x314 - 8.0 * x312 + x1754 * x588;
-        let x1904 = 4.0 * x319 + x1818 * x588 - 8.0 * x320;
-        let x1905 = x7 * (e3 * x1491 - (x2 + 4.0 * x4) * x388) + x1490;
-        let x1906 = 4.0 * x322 + x588 * x1758 - 8.0 * x324;
-        let x1907 = 2.0 * (x1882 * e2) - (x1879 * e0 - x227 * x1874) * m1 - x220 * x1881
-            - m2 * (x1889 * e1 - x222 * x1883) - x225 * (x1892 + x561) + x1897 * e0
-            + x1902 * e1 + x176 * x1070 * x495
-            - x7 * (x1903 * x414 + x1904 * x530 + x551 * x1905 + x1906 * x503);
-        let x1908 = 2.0 * x1888 - x1886;
-        let x1909 = 4.0 * x1861 + 2.0 * x1898 - 2.0 * x1899 - 2.0 * x1900 + 4.0 * x1732
-            - 2.0 * x1901;
-        let x1910 = x1897 * e2 - m1 * (x1879 * e2 + x199 * x1874) + x1892 * x197
-            - m2 * (x1908 * e3 - x1883 * x178) - (x1872 + x1233 * x1070) * J1
-            - 2.0 * (x1882 * e0)
-            - (x513 * x1906 + x503 * x1905 + x1904 * x510 + x455 * x1903) * x7
-            - x176 * x1881 + x1909 * e3;
-        let x1911 = -x1876 - 2.0 * x1878;
-        let x1912 = 2.0 * x1893 + 2.0 * x1894 - 4.0 * x1834 + 2.0 * x1895 - 4.0 * x1782
-            + 2.0 * x1896;
-        let x1913 = x1909 * e2 - (e3 * x1911 + x233 * x1874) * m1 - x1892 * x231
-            + x1912 * e3 - (x998 * x225 + x1070 * x997) * J1 + 2.0 * (x1882 * e1)
-            + x236 * x1881 - m2 * (x1883 * x238 + x1908 * e2)
-            - (x1904 * x537 + x442 * x1903 + x530 * x1905 + x510 * x1906) * x7;
-        let x1914 = x1902 * e0 - m1 * (x1911 * e1 - x215 * x1874)
-            - x7 * (x1903 * x436 + x455 * x1906 + x414 * x1905 + x442 * x1904)
-            + x1912 * e1 - (x1889 * e0 + x1883 * x207) * m2 - 2.0 * (x1882 * e3)
-            - x1892 * x213 - (x811 * x1070 + x225 * x1195) * J1 - x205 * x1881;
-        let x1915 = 2.0 * x334 + 2.0 * x335;
-        let x1916 = x336 * J1 - J2 * x1915;
-        let x1917 = x342 * J1;
-        let x1918 = x375 * x40;
-        let x1919 = x213 * x1916 + x1917 * x197
-            + (4.0 * (x1918 * e1) - x215 * x1915) * x38;
-        let x1920 = x38 * (x1915 * x199 - 4.0 * (x1918 * e2)) + x1917 * x213
-            - x197 * x1916;
-        let x1921 = x225 * x1916 + x38 * (-4.0 * (x1918 * e0) - x227 * x1915)
-            + x1917 * x231;
-        let x1922 = x38 * (x233 * x1915 + 4.0 * (e3 * x1918)) - x1917 * x225
-            + x231 * x1916;
-        let x1923 = x353 * (2.0 * J2 - J1);
-        let x1924 = x362 * x55;
-        let x1925 = -(x355 * J1);
-        let x1926 = x205 * x1923 - (2.0 * x1846 + 4.0 * (x1924 * e0)) * x53
-            + x236 * x1925;
-        let x1927 = x176 * x1923 + x53 * (2.0 * x1786 + 4.0 * (e3 * x1924))
-            + x220 * x1925;
-        let x1928 = x53 * (4.0 * (x1924 * e2) - 2.0 * x1740) - x236 * x1923
-            + x205 * x1925;
-        let x1929 = x220 * x1923 - x53 * (4.0 * (x1924 * e1) - 2.0 * x1884)
-            - x176 * x1925;
+                * (x1686 * x474 + x461 * x1693
+                    + x448
+                        * (-m2 * (8.0 * (x0 * x1685) - 2.0 * (x221 * x1664))
+                            - x174 * (2.0 * x1690 + 2.0 * x1691)) + x404 * x1697)
+            - m2 * (x1706 * e1 - x1664 * x336 - x221 * x1707) - 2.0 * (x1708 * e1);
+        let x1710 = x203 * J2;
+        let x1711 = x1234 * J1;
+        let x1712 = x1710 + x1711;
+        let x1713 = x1712 * x219 + x1689 * x235
+            + m2 * (8.0 * (x1685 * x134) - d * (x219 * x205 - x235 * x176));
+        let x1714 = m2 * (8.0 * (x1685 * x141) - d * (x237 * x235 + x203 * x205))
+            + x235 * x1696 + x203 * x1712;
+        let x1715 = -(x330 * x235 - x203 * x321) * x385
+            - m2 * (x1707 * x205 - x1661 * x336 + x1706 * e0)
+            - x7
+                * (x1713 * x461 + x404 * x1714
+                    + ((2.0 * x1710 + 2.0 * x1711) * x235
+                        - m2 * (2.0 * (x205 * x1661) + 8.0 * (x1685 * x1))) * x474
+                    + x1686 * x448) - 2.0 * (x1708 * e0)
+            - x388 * (x235 * x1684 - x1234 * x321);
+        let x1716 = x1689 * x203 + x219 * x1696
+            + (-d * (x237 * x219 - x203 * x176) - 8.0 * (x1685 * x68)) * m2;
+        let x1717 = x174 * x321;
+        let x1718 = a_ * (x1700 + 2.0 * x1701) - x1705;
+        let x1719 = 2.0 * (e3 * x1708)
+            - (x448 * x1693 + x404 * x1716
+                + ((2.0 * x1688 - 2.0 * x1687) * x219
+                    - m2 * (8.0 * (x1685 * x3) - 2.0 * (x176 * x220))) * x461
+                + x1713 * x474) * x7 - (x219 * x1684 + x1717) * x388
+            - m2 * (x1718 * e3 - x176 * x1707 - x220 * x336)
+            - (x330 * x219 - x1717) * x385;
+        let x1720 = x321 * x235;
+        let x1721 = 2.0 * (x1708 * e2)
+            - x7
+                * (x404
+                    * (x203 * (2.0 * x1694 - 2.0 * x1695)
+                        - m2 * (2.0 * (x237 * x204) + 8.0 * (x1685 * x4))) + x448 * x1697
+                    + x474 * x1714 + x461 * x1716) - (x203 * x1684 - x1720) * x388
+            - m2 * (x1718 * e2 - x204 * x336 + x237 * x1707)
+            - x385 * (x203 * x330 + x1720);
+        let x1722 = x342 + x1698 + x1699;
+        let x1723 = e2 * x374;
+        let x1724 = e3 * x351;
+        let x1725 = x547 * x326 - x548 * x320 - 2.0 * x1723 + 2.0 * x1724;
+        let x1726 = x231 * x1229;
+        let x1727 = e3 * x363;
+        let x1728 = x225 * x369;
+        let x1729 = (-2.0 * x1727 - x1728) * J1
+            + J2 * (2.0 * x1727 + x225 * gamma1_dot + x1728);
+        let x1730 = x1335 * e2 + x386;
+        let x1731 = x235 * x796;
+        let x1732 = x315 * x547;
+        let x1733 = x353 * e3;
+        let x1734 = x550 * x320;
+        let x1735 = e1 * x374;
+        let x1736 = x203 * x383;
+        let x1737 = 2.0 * x1734 - 2.0 * x1731 - 2.0 * x1732 - 4.0 * x1733 + 4.0 * x1735
+            + 2.0 * x1736;
+        let x1738 = x875 * x225;
+        let x1739 = x550 * x326;
+        let x1740 = x315 * x548;
+        let x1741 = x351 * e1;
+        let x1742 = x364 * x231;
+        let x1743 = x353 * e2;
+        let x1744 = 2.0 * x1738 + 2.0 * x1739 - 2.0 * x1740 + 4.0 * x1741 - 2.0 * x1742
+            - 4.0 * x1743;
+        let x1745 = x40 * (2.0 * (e3 * x359) - x320 * x231) - x225 * x494 - x225 * x483
+            + e3 * x1126;
+        let x1746 = x478 * x231;
+        let x1747 = x233 * x359 - x1746 + e3 * x1128;
+        let x1748 = x1747 * x40;
+        let x1749 = x225 * x478;
+        let x1750 = e3 * x1134 - x233 * x363 - x1749;
+        let x1751 = x1750 * x191;
+        let x1752 = 2.0 * x1748 + x1751;
+        let x1753 = (2.0 * (x321 * e2) + x235 * x326) * x55 - x203 * x335 - x330 * x1069;
+        let x1754 = x237 * x330;
+        let x1755 = x203 * x340;
+        let x1756 = x1754 - x1755 + x1327 * e2;
+        let x1757 = x1756 * x110;
+        let x1758 = x235 * x340;
+        let x1759 = x1330 * e2 - x1758 - x321 * x237;
+        let x1760 = x1759 * x55;
+        let x1761 = 2.0 * x1760 - x1757;
+        let x1762 = (x845 * e0 - (4.0 * x0 + x5) * x397) * x7 + x842;
+        let x1763 = 4.0 * (x397 * e1) + x1181;
+        let x1764 = x589 * x1763 - 8.0 * x312 + 4.0 * x314;
+        let x1765 = 4.0 * (e3 * x397) + x1485;
+        let x1766 = x589 * x1765 - 8.0 * x318 + 4.0 * x319;
+        let x1767 = x1349 + 4.0 * (x397 * e2);
+        let x1768 = x589 * x1767 + 4.0 * x323 - 8.0 * x325;
+        let x1769 = x186 * x1729 - 2.0 * (x1725 * e0) - (x219 * x930 + x1726) * J1
+            - x174 * x1730 + e3 * x1737 + x1744 * e2 - (x1745 * x188 + x1752 * e2) * m1
+            - m2 * (e3 * x1761 - x1753 * x176)
+            - x7 * (x1762 * x508 + x1764 * x511 + x513 * x1766 + x1768 * x453);
+        let x1770 = 2.0 * x1731 + 2.0 * x1732 + 4.0 * x1733 - 2.0 * x1734 - 4.0 * x1735
+            - 2.0 * x1736;
+        let x1771 = x1757 - 2.0 * x1760;
+        let x1772 = 2.0 * x1740 - 2.0 * x1738 - 2.0 * x1739 - 4.0 * x1741 + 2.0 * x1742
+            + 4.0 * x1743;
+        let x1773 = -2.0 * x1748 - x1751;
+        let x1774 = x1770 * e0
+            - x7 * (x1762 * x425 + x1768 * x466 + x440 * x1766 + x1764 * x453)
+            - m2 * (x1771 * e0 + x1753 * x205) + x1772 * e1 - x1729 * x211
+            - (x1773 * e1 - x1745 * x213) * m1 - (x231 * x1214 + x235 * x930) * J1
+            - x203 * x1730 - 2.0 * (e3 * x1725);
+        let x1775 = e3 * x1772 - (x1773 * e3 + x233 * x1745) * m1 + x235 * x1730
+            - (x1729 - x555) * x231 - x415 * x388 + 2.0 * (e1 * x1725)
+            - (x1768 * x425 + x1766 * x536 + x1762 * x551 + x1764 * x508) * x7
+            + e2 * x1737 - m2 * (x1753 * x237 + x1761 * e2);
+        let x1776 = x235 * x1203;
+        let x1777 = 2.0 * (e2 * x1725) - x225 * x1729 - (x1776 + x231 * x969) * J1
+            - (x1771 * e1 - x1753 * x221) * m2 - x219 * x1730
+            - m1 * (x1752 * e0 - x227 * x1745)
+            - x7 * (x513 * x1764 + x1768 * x440 + x1762 * x536 + x534 * x1766)
+            + x1770 * e1 + x1744 * e0;
+        let x1778 = e3 * x374;
+        let x1779 = e2 * x351;
+        let x1780 = x320 * x507 + x505 * x326 - 2.0 * x1778 - 2.0 * x1779;
+        let x1781 = x1767 * x583 + 4.0 * x316 - 8.0 * x317;
+        let x1782 = x1765 * x583 - 8.0 * x322 + 4.0 * x324;
+        let x1783 = x7 * (e1 * x1181 - x397 * (4.0 * x1 + x5)) + x1180;
+        let x1784 = x845 + 4.0 * (x397 * e0);
+        let x1785 = 4.0 * x312 - 8.0 * x314 + x1784 * x583;
+        let x1786 = (2.0 * (x321 * e3) - x174 * x326) * x55 - x1333 * e3 - x219 * x335;
+        let x1787 = x330 * x176;
+        let x1788 = x219 * x340;
+        let x1789 = e3 * x1327 - x1787 - x1788;
+        let x1790 = x1789 * x110;
+        let x1791 = x174 * x340;
+        let x1792 = x1791 + e3 * x1330 + x321 * x176;
+        let x1793 = x1792 * x55;
+        let x1794 = x1790 - 2.0 * x1793;
+        let x1795 = x219 * x383;
+        let x1796 = x174 * x796;
+        let x1797 = x315 * x505;
+        let x1798 = x374 * e0;
+        let x1799 = x503 * x320;
+        let x1800 = 2.0 * x1797 - 2.0 * x1795 - 2.0 * x1796 + 4.0 * x1798 - 4.0 * x1743
+            - 2.0 * x1799;
+        let x1801 = x211 * x483 - x494 * x1292 - (2.0 * (x359 * e2) - x186 * x320) * x40
+            + x705 * x363;
+        let x1802 = x211 * x478;
+        let x1803 = x1802 - x188 * x363 + x805 * e2;
+        let x1804 = x1803 * x191;
+        let x1805 = x186 * x478;
+        let x1806 = x1805 + x188 * x359 + x817 * e2;
+        let x1807 = x1806 * x40;
+        let x1808 = -x1804 - 2.0 * x1807;
+        let x1809 = x351 * e0;
+        let x1810 = x364 * x186;
+        let x1811 = x503 * x326;
+        let x1812 = x875 * x211;
+        let x1813 = x315 * x507;
+        let x1814 = 4.0 * x1733 + 4.0 * x1809 - 2.0 * x1810 - 2.0 * x1811 + 2.0 * x1812
+            - 2.0 * x1813;
+        let x1815 = x363 * e2;
+        let x1816 = x369 * x211;
+        let x1817 = (2.0 * x1815 + x1816) * J1
+            + (gamma1_dot * x1292 - 2.0 * x1815 - x1816) * J2;
+        let x1818 = x1335 * e3 + x538;
+        let x1819 = x1800 * e0 - 2.0 * (e3 * x1780)
+            - (x466 * x1781 + x440 * x1782 + x1783 * x453 + x1785 * x425) * x7
+            - (x1786 * x205 + x1794 * e0) * m2 - (x1776 - x186 * x1214) * J1
+            - (x1808 * e1 - x213 * x1801) * m1 + x1814 * e1 - x211 * x1817
+            - x203 * x1818;
+        let x1820 = 2.0 * x1810 - 4.0 * x1733 - 4.0 * x1809 + 2.0 * x1811 - 2.0 * x1812
+            + 2.0 * x1813;
+        let x1821 = x1804 + 2.0 * x1807;
+        let x1822 = x1820 * e0
+            - x7 * (x534 * x1782 + x1785 * x536 + x440 * x1781 + x513 * x1783)
+            - x225 * x1817 - (-x186 * x969 - x174 * x1203) * J1 + 2.0 * (e2 * x1780)
+            - (x1821 * e0 - x227 * x1801) * m1 + x1800 * e1
+            - m2 * (x1794 * e1 - x1786 * x221) - x219 * x1818;
+        let x1823 = 2.0 * x1795 + 2.0 * x1796 - 2.0 * x1797 - 4.0 * x1798 + 4.0 * x1743
+            + 2.0 * x1799;
+        let x1824 = 2.0 * x1793 - x1790;
+        let x1825 = x1823 * e2 + e3 * x1814 - (x203 * x1203 - x186 * x901) * J1
+            + 2.0 * (x1780 * e1) + x235 * x1818 - x231 * x1817
+            - (x233 * x1801 + e3 * x1808) * m1
+            - (x536 * x1782 + x1785 * x551 + x1783 * x508 + x425 * x1781) * x7
+            - m2 * (x1786 * x237 + x1824 * e2);
+        let x1826 = x186 * x1817 - m2 * (e3 * x1824 - x1786 * x176)
+            - (x1821 * e2 + x188 * x1801) * m1 - 2.0 * (x1780 * e0) - x174 * x1818
+            + x1823 * e3 - (x219 * x1203 - x186 * x1229) * J1
+            - x7 * (x453 * x1781 + x1783 * x511 + x513 * x1782 + x1785 * x508)
+            + x1820 * e2;
+        let x1827 = x363 * e1;
+        let x1828 = x186 * x369;
+        let x1829 = (x1828 - 2.0 * x1827) * J1 + (2.0 * x1827 - x1213 - x1828) * J2;
+        let x1830 = 4.0 * x325 - 8.0 * x323 + x1784 * x585;
+        let x1831 = 4.0 * x311 + x1765 * x585 - 8.0 * x313;
+        let x1832 = x7 * (x1349 * e2 - (4.0 * x3 + x2) * x397) + x1348;
+        let x1833 = x585 * x1763 - 8.0 * x316 + 4.0 * x317;
+        let x1834 = x225 * x1229;
+        let x1835 = x1755 - x321 * x205 + x888 * e0;
+        let x1836 = x1835 * x55;
+        let x1837 = x330 * x205;
+        let x1838 = x1837 - x1758 + x894 * e0;
+        let x1839 = x1838 * x110;
+        let x1840 = 2.0 * x1836 - x1839;
+        let x1841 = -x330 * x1441 - (x203 * x326 + 2.0 * (x321 * e0)) * x55
+            - x235 * x335;
+        let x1842 = x1134 * e1 + x1805 + x213 * x363;
+        let x1843 = x1842 * x191;
+        let x1844 = x1128 * e1 - x213 * x359 - x1802;
+        let x1845 = x1844 * x40;
+        let x1846 = -x1843 - 2.0 * x1845;
+        let x1847 = (2.0 * (x359 * e1) - x211 * x320) * x40 + x186 * x494 + x363 * x1440
+            + x186 * x483;
+        let x1848 = x330 * e0;
+        let x1849 = (2.0 * x1848 + x384 * x235) * J2 - (x332 * x235 + 2.0 * x1848) * J1;
+        let x1850 = 2.0 * x1741 - x410 * x326 - x413 * x320 + 2.0 * x1798;
+        let x1851 = x235 * x383;
+        let x1852 = x203 * x796;
+        let x1853 = x424 * x320;
+        let x1854 = x315 * x410;
+        let x1855 = x353 * e1;
+        let x1856 = 2.0 * x1851 + 2.0 * x1852 + 2.0 * x1853 - 4.0 * x1778 + 2.0 * x1854
+            - 4.0 * x1855;
+        let x1857 = x875 * x186;
+        let x1858 = x424 * x326;
+        let x1859 = x353 * e0;
+        let x1860 = x364 * x211;
+        let x1861 = x315 * x413;
+        let x1862 = 2.0 * x1857 - 2.0 * x1858 - 4.0 * x1859 + 2.0 * x1860 + 4.0 * x1724
+            + 2.0 * x1861;
+        let x1863 = x1849 * x235 - x1829 * x231
+            - (x551 * x1830 + x1831 * x536 + x1832 * x425 + x508 * x1833) * x7
+            - (x1234 * x902 - x1834) * J1 - m2 * (e2 * x1840 + x237 * x1841)
+            - (e3 * x1846 + x233 * x1847) * m1 + 2.0 * (x1850 * e1) + x1856 * e2
+            + x1862 * e3;
+        let x1864 = 4.0 * x1778 - 2.0 * x1851 - 2.0 * x1852 - 2.0 * x1853 - 2.0 * x1854
+            + 4.0 * x1855;
+        let x1865 = x1839 - 2.0 * x1836;
+        let x1866 = x1862 * e1
+            - x7 * (x1832 * x466 + x425 * x1830 + x440 * x1831 + x453 * x1833)
+            - x1234 * x235 * x388 - m1 * (x1846 * e1 - x213 * x1847) - x203 * x1849
+            - 2.0 * (e3 * x1850) + x1864 * e0 - m2 * (x1841 * x205 + x1865 * e0)
+            - (x366 + x1829) * x211;
+        let x1867 = x1843 + 2.0 * x1845;
+        let x1868 = 2.0 * x1858 - 2.0 * x1857 + 4.0 * x1859 - 2.0 * x1860 - 4.0 * x1724
+            - 2.0 * x1861;
+        let x1869 = x186 * x1829 - (x1867 * e2 + x188 * x1847) * m1
+            - (x211 * x1229 + x1230 * x1234) * J1 - 2.0 * (x1850 * e0)
+            - m2 * (e3 * x1840 - x1841 * x176) - x174 * x1849 + x1868 * e2 + e3 * x1856
+            - x7 * (x513 * x1831 + x1832 * x453 + x511 * x1833 + x508 * x1830);
+        let x1870 = x1864 * e1
+            - (x536 * x1830 + x513 * x1833 + x440 * x1832 + x534 * x1831) * x7
+            + 2.0 * (e2 * x1850) - x1849 * x219 - (x1726 + x1234 * x1203) * J1
+            - (x1867 * e0 - x227 * x1847) * m1 + x1868 * e0
+            - m2 * (x1865 * e1 - x1841 * x221) - x225 * x1829;
+        let x1871 = x364 * x225;
+        let x1872 = x875 * x231;
+        let x1873 = x428 * x315;
+        let x1874 = x432 * x326;
+        let x1875 = 4.0 * x1855 - 2.0 * x1871 - 2.0 * x1872 - 2.0 * x1873 + 4.0 * x1779
+            - 2.0 * x1874;
+        let x1876 = x436 * x326 - 2.0 * x1809 + 2.0 * x1735 - x428 * x320;
+        let x1877 = x330 * x221;
+        let x1878 = x1791 - x1877 + x894 * e1;
+        let x1879 = x1878 * x110;
+        let x1880 = x321 * x221 + x888 * e1 + x1788;
+        let x1881 = x1880 * x55;
+        let x1882 = x1879 - 2.0 * x1881;
+        let x1883 = x174 * x335 - (2.0 * (x321 * e1) + x219 * x326) * x55 - x330 * x1266;
+        let x1884 = x315 * x436;
+        let x1885 = x174 * x383;
+        let x1886 = x320 * x432;
+        let x1887 = x219 * x796;
+        let x1888 = 2.0 * x1884 - 4.0 * x1859 - 4.0 * x1723 + 2.0 * x1885 + 2.0 * x1886
+            - 2.0 * x1887;
+        let x1889 = x330 * e1;
+        let x1890 = J2 * (2.0 * x1889 - x174 * x384) - (2.0 * x1889 - x332 * x174) * J1;
+        let x1891 = 4.0 * x322 + x587 * x1763 - 8.0 * x324;
+        let x1892 = 4.0 * x313 - 8.0 * x311 + x1767 * x587;
+        let x1893 = x7 * (e3 * x1485 - (x2 + 4.0 * x4) * x397) + x1484;
+        let x1894 = 4.0 * x318 + x1784 * x587 - 8.0 * x319;
+        let x1895 = x369 * x231;
+        let x1896 = x363 * e0;
+        let x1897 = (x1895 + 2.0 * x1896) * J1
+            + J2 * (x1063 * gamma1_dot - x1895 - 2.0 * x1896);
+        let x1898 = x817 * e0 - x227 * x359 - x1749;
+        let x1899 = x1898 * x40;
+        let x1900 = x1746 + x227 * x363 + x805 * e0;
+        let x1901 = x1900 * x191;
+        let x1902 = 2.0 * x1899 + x1901;
+        let x1903 = x1268 * x363 - x40 * (2.0 * (x359 * e0) + x225 * x320) - x1063 * x494
+            + x231 * x483;
+        let x1904 = x1875 * e0 + 2.0 * (x1876 * e2) - m2 * (x1882 * e1 - x1883 * x221)
+            + x1888 * e1 + x174 * x388 * x1066 - x219 * x1890
+            - (x513 * x1891 + x440 * x1892 + x534 * x1893 + x1894 * x536) * x7
+            - x225 * (x529 + x1897) - (x1902 * e0 - x227 * x1903) * m1;
+        let x1905 = 2.0 * x1871 + 2.0 * x1872 - 4.0 * x1855 + 2.0 * x1873 - 4.0 * x1779
+            + 2.0 * x1874;
+        let x1906 = -2.0 * x1899 - x1901;
+        let x1907 = x1905 * e1 - x203 * x1890 - m2 * (x1883 * x205 + x1882 * e0)
+            - 2.0 * (x1876 * e3) - m1 * (x1906 * e1 - x213 * x1903) + x1888 * e0
+            - (x225 * x1214 + x1066 * x930) * J1 - x211 * x1897
+            - (x453 * x1891 + x440 * x1893 + x1894 * x425 + x1892 * x466) * x7;
+        let x1908 = 2.0 * x1881 - x1879;
+        let x1909 = 4.0 * x1859 - 2.0 * x1884 + 4.0 * x1723 - 2.0 * x1885 - 2.0 * x1886
+            + 2.0 * x1887;
+        let x1910 = x186 * x1897 - (x188 * x1903 + x1902 * e2) * m1
+            - (e3 * x1908 - x1883 * x176) * m2 - 2.0 * (x1876 * e0)
+            - (x1834 + x1230 * x1066) * J1
+            - x7 * (x1891 * x511 + x1894 * x508 + x513 * x1893 + x1892 * x453)
+            + e3 * x1909 + e2 * x1875 - x174 * x1890;
+        let x1911 = e2 * x1909 - (x233 * x1903 + x1906 * e3) * m1
+            - m2 * (x1908 * e2 + x1883 * x237)
+            - (x1892 * x425 + x536 * x1893 + x1891 * x508 + x1894 * x551) * x7
+            + x235 * x1890 + 2.0 * (x1876 * e1) + e3 * x1905 - x231 * x1897
+            - (x225 * x901 + x902 * x1066) * J1;
+        let x1912 = x369 * x40;
+        let x1913 = 2.0 * x361 + 2.0 * x362;
+        let x1914 = x363 * J1 - J2 * x1913;
+        let x1915 = x359 * J1;
+        let x1916 = x38 * (-4.0 * (x1912 * e0) - x227 * x1913) + x225 * x1914
+            + x1915 * x231;
+        let x1917 = x211 * x1914 + x38 * (4.0 * (x1912 * e1) - x1913 * x213)
+            + x1915 * x186;
+        let x1918 = x38 * (x1913 * x188 - 4.0 * (x1912 * e2)) + x1915 * x211
+            - x186 * x1914;
+        let x1919 = x231 * x1914 - x1915 * x225
+            + x38 * (x233 * x1913 + 4.0 * (e3 * x1912));
+        let x1920 = x332 * x55;
+        let x1921 = x330 * (2.0 * J2 - J1);
+        let x1922 = -(x321 * J1);
+        let x1923 = x203 * x1921 - x53 * (2.0 * x1837 + 4.0 * (x1920 * e0))
+            + x1922 * x235;
+        let x1924 = (4.0 * (x1920 * e2) - 2.0 * x1754) * x53 - x235 * x1921
+            + x203 * x1922;
+        let x1925 = x1922 * x219 + x174 * x1921
+            + x53 * (2.0 * x1787 + 4.0 * (e3 * x1920));
+        let x1926 = x219 * x1921 - (4.0 * (x1920 * e1) - 2.0 * x1877) * x53
+            - x174 * x1922;
         Derivatives {
             qdot: [
                 e0_dot,
@@ -7697,48 +7668,48 @@ pub mod maggi {
                     x108,
                     0.0,
                     x115,
-                    x173,
-                    x242,
-                    x276,
+                    x171,
+                    x241,
+                    x275,
                 ],
                 [
                     x64,
                     x108,
                     x8
-                        * (x4 * (x278 + x279 * x4 + x0 * x277) + x0 * (x0 * x279 + x278)
+                        * (x4 * (x277 + x278 * x4 + x0 * x276) + x0 * (x0 * x278 + x277)
                             + x3 * (x19 * x62 + x45 + x95 * J2 + x96 + x11 * Izz)
-                            + x279 * f64::powi(e0, 4)
-                            + ((d * x52 + x188 * x103) * m1
+                            + x278 * f64::powi(e0, 4)
+                            + ((d * x52 + x190 * x103) * m1
                                 + m2 * (x109 * x103 + d * (x97 + x19 * x97))) * d),
-                    x283,
+                    x282,
                     0.0,
-                    x288,
-                    x293,
-                    x298,
+                    x287,
+                    x292,
+                    x297,
                 ],
-                [0.0, 0.0, x283, x44 + J2, 0.0, x302, x303, x304],
-                [0.0, x115, 0.0, 0.0, x57 + J2, x307, x308, x309],
-                [x78, x173, x288, x302, x307, x311, 0.0, 0.0],
-                [x85, x242, x293, x303, x308, 0.0, x311, 0.0],
-                [x88, x276, x298, x304, x309, 0.0, 0.0, x311],
+                [0.0, 0.0, x282, x44 + J2, 0.0, x301, x302, x303],
+                [0.0, x115, 0.0, 0.0, x57 + J2, x306, x307, x308],
+                [x78, x171, x287, x301, x306, x310, 0.0, 0.0],
+                [x85, x241, x292, x302, x307, 0.0, x310, 0.0],
+                [x88, x275, x297, x303, x308, 0.0, 0.0, x310],
             ],
             force: [
-                x7 * (2.0 * x499 + 2.0 * x527 - 2.0 * x549 - 2.0 * x564),
-                x7 * (2.0 * x565 - 2.0 * x566 + 2.0 * x567 - 2.0 * x568),
-                (2.0 * x570 - 2.0 * x569 - 2.0 * x571 + 2.0 * x572) * x7,
-                x7 * (-x281 * (x573 + x574) - (x575 + x576) * x282) - x486 * x38
-                    + x342 * x377,
-                (-(x577 + x578) * x112 - (x579 + x580) * x114) * x7 - x53 * x359
-                    + x353 * x581,
-                -(x450 * x148 + x130 * x463 + x161 * x422 + x171 * x393) * x7
-                    - (x306 * x359 + x368 * x582 + x300 * x372) * m2
-                    - (x305 * x474 + x583 * x482 + x486 * x301) * m1,
-                -m2 * (x359 * x181 + x368 * x183 + x175 * x372)
-                    - (x193 * x482 + x179 * x474 + x187 * x486) * m1
-                    - (x450 * x240 + x229 * x393 + x422 * x217 + x201 * x463) * x7,
-                -m2 * (x252 * x372 + x368 * x247 + x249 * x359)
-                    - m1 * (x243 * x474 + x254 * x482 + x486 * x256)
-                    - x7 * (x260 * x450 + x265 * x422 + x270 * x393 + x463 * x274),
+                x7 * (2.0 * x498 + 2.0 * x526 - 2.0 * x545 - 2.0 * x563),
+                (2.0 * x564 + 2.0 * x565 - 2.0 * x566 - 2.0 * x567) * x7,
+                x7 * (2.0 * x570 - 2.0 * x568 - 2.0 * x569 + 2.0 * x571),
+                x7 * (-x280 * (x572 + x573) - (x574 + x575) * x281) - x491 * x38
+                    + x359 * x371,
+                (-(x576 + x577) * x112 - (x578 + x579) * x114) * x7 - x53 * x342
+                    + x330 * x580,
+                -x7 * (x474 * x169 + x148 * x404 + x448 * x160 + x130 * x461)
+                    - (x305 * x342 + x347 * x581 + x299 * x336) * m2
+                    - (x304 * x495 + x582 * x486 + x491 * x300) * m1,
+                -m2 * (x342 * x179 + x347 * x181 + x173 * x336)
+                    - (x195 * x486 + x177 * x495 + x189 * x491) * m1
+                    - (x239 * x404 + x199 * x461 + x448 * x229 + x215 * x474) * x7,
+                -m2 * (x242 * x336 + x347 * x253 + x255 * x342)
+                    - (x265 * x474 + x448 * x269 + x404 * x273 + x259 * x461) * x7
+                    - m1 * (x249 * x495 + x244 * x486 + x491 * x246),
             ],
             checks: [x6],
             d_qdot: [
@@ -7763,98 +7734,98 @@ pub mod maggi {
             ],
             d_matrix: [
                 [
-                    [x592 * x620, x633, x641, 0.0, 0.0, x648, x656, x660],
-                    [x633, x592 * x674, x676, 0.0, x678, x701, x732, x757],
-                    [x641, x676, x761 * x592, x764, 0.0, x768, x772, x776],
-                    [0.0, 0.0, x764, 0.0, 0.0, x777, x778, x779],
-                    [0.0, x678, 0.0, 0.0, 0.0, x780, x781, x782],
-                    [x648, x701, x768, x777, x780, x784, 0.0, 0.0],
-                    [x656, x732, x772, x778, x781, 0.0, x784, 0.0],
-                    [x660, x757, x776, x779, x782, 0.0, 0.0, x784],
+                    [x591 * x619, x632, x640, 0.0, 0.0, x647, x655, x659],
+                    [x632, x591 * x673, x675, 0.0, x677, x700, x731, x756],
+                    [x640, x675, x760 * x591, x763, 0.0, x767, x771, x775],
+                    [0.0, 0.0, x763, 0.0, 0.0, x776, x777, x778],
+                    [0.0, x677, 0.0, 0.0, 0.0, x779, x780, x781],
+                    [x647, x700, x767, x776, x779, x783, 0.0, 0.0],
+                    [x655, x731, x771, x777, x780, 0.0, x783, 0.0],
+                    [x659, x756, x775, x778, x781, 0.0, 0.0, x783],
                 ],
                 [
-                    [x1039 * x620, x1040, x1041, 0.0, 0.0, x1045, x1047, x1050],
-                    [x1040, x1039 * x674, x1051, 0.0, x1052, x1065, x1081, x1091],
-                    [x1041, x1051, x1039 * x761, x1092, 0.0, x1094, x1096, x1098],
-                    [0.0, 0.0, x1092, 0.0, 0.0, x1099, x1100, x778],
-                    [0.0, x1052, 0.0, 0.0, 0.0, x1101, x1102, x781],
-                    [x1045, x1065, x1094, x1099, x1101, x1103, 0.0, 0.0],
-                    [x1047, x1081, x1096, x1100, x1102, 0.0, x1103, 0.0],
-                    [x1050, x1091, x1098, x778, x781, 0.0, 0.0, x1103],
+                    [x1036 * x619, x1037, x1038, 0.0, 0.0, x1042, x1044, x1047],
+                    [x1037, x1036 * x673, x1048, 0.0, x1049, x1062, x1078, x1088],
+                    [x1038, x1048, x1036 * x760, x1089, 0.0, x1091, x1093, x1095],
+                    [0.0, 0.0, x1089, 0.0, 0.0, x1096, x1097, x777],
+                    [0.0, x1049, 0.0, 0.0, 0.0, x1098, x1099, x780],
+                    [x1042, x1062, x1091, x1096, x1098, x1100, 0.0, 0.0],
+                    [x1044, x1078, x1093, x1097, x1099, 0.0, x1100, 0.0],
+                    [x1047, x1088, x1095, x777, x780, 0.0, 0.0, x1100],
                 ],
                 [
-                    [x1248 * x620, x1249, x1250, 0.0, 0.0, x1253, x1255, x1257],
-                    [x1249, x1248 * x674, x1258, 0.0, x1259, x1268, x1294, x1316],
-                    [x1250, x1258, x1248 * x761, x1317, 0.0, x1320, x1322, x1324],
-                    [0.0, 0.0, x1317, 0.0, 0.0, x779, x1099, x1325],
-                    [0.0, x1259, 0.0, 0.0, 0.0, x782, x1101, x1326],
-                    [x1253, x1268, x1320, x779, x782, x1327, 0.0, 0.0],
-                    [x1255, x1294, x1322, x1099, x1101, 0.0, x1327, 0.0],
-                    [x1257, x1316, x1324, x1325, x1326, 0.0, 0.0, x1327],
+                    [x1026 * x619, x1245, x1246, 0.0, 0.0, x1249, x1251, x1253],
+                    [x1245, x1026 * x673, x1254, 0.0, x1255, x1264, x1290, x1312],
+                    [x1246, x1254, x1026 * x760, x1313, 0.0, x1316, x1318, x1320],
+                    [0.0, 0.0, x1313, 0.0, 0.0, x778, x1096, x1321],
+                    [0.0, x1255, 0.0, 0.0, 0.0, x781, x1098, x1322],
+                    [x1249, x1264, x1316, x778, x781, x1323, 0.0, 0.0],
+                    [x1251, x1290, x1318, x1096, x1098, 0.0, x1323, 0.0],
+                    [x1253, x1312, x1320, x1321, x1322, 0.0, 0.0, x1323],
                 ],
                 [
-                    [x1032 * x620, x1430, x1431, 0.0, 0.0, x1432, x1433, x1434],
-                    [x1430, x1032 * x674, x1435, 0.0, x1436, x1442, x1455, x1464],
-                    [x1431, x1435, x761 * x1032, x1465, 0.0, x1467, x1469, x1471],
-                    [0.0, 0.0, x1465, 0.0, 0.0, x1472, x777, x1099],
-                    [0.0, x1436, 0.0, 0.0, 0.0, x1473, x780, x1101],
-                    [x1432, x1442, x1467, x1472, x1473, x1474, 0.0, 0.0],
-                    [x1433, x1455, x1469, x777, x780, 0.0, x1474, 0.0],
-                    [x1434, x1464, x1471, x1099, x1101, 0.0, 0.0, x1474],
+                    [x1029 * x619, x1424, x1425, 0.0, 0.0, x1426, x1427, x1428],
+                    [x1424, x1029 * x673, x1429, 0.0, x1430, x1436, x1449, x1458],
+                    [x1425, x1429, x760 * x1029, x1459, 0.0, x1461, x1463, x1465],
+                    [0.0, 0.0, x1459, 0.0, 0.0, x1466, x776, x1096],
+                    [0.0, x1430, 0.0, 0.0, 0.0, x1467, x779, x1098],
+                    [x1426, x1436, x1461, x1466, x1467, x1468, 0.0, 0.0],
+                    [x1427, x1449, x1463, x776, x779, 0.0, x1468, 0.0],
+                    [x1428, x1458, x1465, x1096, x1098, 0.0, 0.0, x1468],
                 ],
                 [
                     [
                         x8 * x42
-                            * (x0 * (x0 * x1556 + x1 * (32.0 * x44 + x1557))
-                                + (x1560 + x1561) * x4 + x3 * (x1562 + x1565)
-                                + x1556 * f64::powi(e0, 4)),
-                        x1570,
+                            * (x0 * (x0 * x1548 + x1 * (32.0 * x44 + x1549))
+                                + (x1552 + x1553) * x4 + x3 * (x1554 + x1557)
+                                + x1548 * f64::powi(e0, 4)),
+                        x1562,
                         0.0,
                         0.0,
                         0.0,
-                        x1573,
-                        x1574,
-                        x1575,
+                        x1565,
+                        x1566,
+                        x1567,
                     ],
                     [
-                        x1570,
-                        x8 * (x41 * x1576 + x1569 * x42),
+                        x1562,
+                        x8 * (x41 * x1568 + x1561 * x42),
                         0.0,
                         0.0,
                         0.0,
-                        x1582,
-                        x1592,
-                        x1601,
+                        x1575,
+                        x1587,
+                        x1596,
                     ],
-                    [0.0, 0.0, x1602 * x41, x1603, 0.0, x1604, x1605, x1606],
-                    [0.0, 0.0, x1603, 0.0, 0.0, x1607, x1608, x1609],
+                    [0.0, 0.0, x1597 * x41, x1598, 0.0, x1599, x1600, x1601],
+                    [0.0, 0.0, x1598, 0.0, 0.0, x1602, x1603, x1604],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1573, x1582, x1604, x1607, 0.0, 0.0, 0.0, 0.0],
-                    [x1574, x1592, x1605, x1608, 0.0, 0.0, 0.0, 0.0],
-                    [x1575, x1601, x1606, x1609, 0.0, 0.0, 0.0, 0.0],
+                    [x1565, x1575, x1599, x1602, 0.0, 0.0, 0.0, 0.0],
+                    [x1566, x1587, x1600, x1603, 0.0, 0.0, 0.0, 0.0],
+                    [x1567, x1596, x1601, x1604, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x8 * x1647 * x63, 0.0, x1648, 0.0, 0.0, x1651, x1652, x1653],
-                    [0.0, x1602 * x56, 0.0, 0.0, x1654, x1659, x1669, x1678],
+                    [x8 * x1642 * x63, 0.0, x1643, 0.0, 0.0, x1646, x1647, x1648],
+                    [0.0, x1597 * x56, 0.0, 0.0, x1649, x1655, x1667, x1676],
                     [
-                        x1648,
+                        x1643,
                         0.0,
                         x8
-                            * (((x1566 - x1646) * x4
-                                + x0 * (x0 * x1679 + (x1568 - 32.0 * x57) * x1)
-                                + x1679 * f64::powi(e0, 4) + x3 * (x1567 - x1645)) * x63
-                                + x56 * x1576),
+                            * (((x1558 - x1641) * x4
+                                + x0 * (x0 * x1677 + (x1560 - 32.0 * x57) * x1)
+                                + x1677 * f64::powi(e0, 4) + x3 * (x1559 - x1640)) * x63
+                                + x56 * x1568),
                         0.0,
                         0.0,
+                        x1678,
+                        x1679,
                         x1680,
-                        x1681,
-                        x1682,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x1654, 0.0, 0.0, 0.0, x1683, x1684, x1685],
-                    [x1651, x1659, x1680, 0.0, x1683, 0.0, 0.0, 0.0],
-                    [x1652, x1669, x1681, 0.0, x1684, 0.0, 0.0, 0.0],
-                    [x1653, x1678, x1682, 0.0, x1685, 0.0, 0.0, 0.0],
+                    [0.0, x1649, 0.0, 0.0, 0.0, x1681, x1682, x1683],
+                    [x1646, x1655, x1678, 0.0, x1681, 0.0, 0.0, 0.0],
+                    [x1647, x1667, x1679, 0.0, x1682, 0.0, 0.0, 0.0],
+                    [x1648, x1676, x1680, 0.0, x1683, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -7979,402 +7950,400 @@ pub mod maggi {
             ],
             d_force: [
                 [
-                    (2.0 * (x926 * e3) - 2.0 * (x967 * e2) + x968
-                        + (2.0 * x970 - 2.0 * x971 - 2.0 * x973 + 2.0 * x974 + 2.0 * x975
-                            - 2.0 * x987 + 2.0 * x990 - 2.0 * x992 - 4.0 * x993 + x996)
-                            * e0 - 2.0 * (x999 * e1)) * x7,
                     x7
-                        * (x1002 - 2.0 * (e3 * x1001) - 2.0 * (x999 * e2)
-                            + 2.0 * (x967 * e1)
-                            + (2.0 * x807 - 2.0 * x789 + 2.0 * x812 - 2.0 * x829
-                                - 2.0 * x844 + 2.0 * x856 - 2.0 * x915 + x1003 - 2.0 * x918
-                                - 4.0 * x925) * e0),
+                        * (x784 - 2.0 * (x906 * e1) + 2.0 * (x943 * e3)
+                            - 2.0 * (x974 * e2)
+                            + e0
+                                * (2.0 * x975 + 2.0 * x978 - 2.0 * x979 - 2.0 * x980
+                                    + 2.0 * x981 + 2.0 * x982 - 2.0 * x984 - 4.0 * x985 + x988
+                                    - 2.0 * x995)),
                     x7
-                        * (2.0 * (x1001 * e2) - 2.0 * (x926 * e1) - 2.0 * (e3 * x999)
-                            + (4.0 * x936 - 2.0 * x927 - 2.0 * x935 - 2.0 * x957
-                                + 2.0 * x960 - 2.0 * x961 - 2.0 * x963 + x1004 + 2.0 * x964
-                                + 2.0 * x966) * e0 + x1005),
+                        * (e0
+                            * (2.0 * x926 - 2.0 * x925 - 2.0 * x927 + 2.0 * x931
+                                - 2.0 * x933 + 2.0 * x935 - 2.0 * x936 - 2.0 * x938 + x998
+                                - 4.0 * x942) - 2.0 * (e3 * x997) + 2.0 * (x974 * e1) + x999
+                            - 2.0 * (x906 * e2)),
                     x7
-                        * (x281 * (x1006 - x900 * e2 - x914 * e0)
-                            - x282 * (x862 * e1 + e3 * x890)) - x38 * x835 + x377 * x792
-                        + x785 * x1007,
+                        * (2.0 * (x997 * e2) + x1000
+                            + (4.0 * x966 - 2.0 * x944 - 2.0 * x957 - 2.0 * x959
+                                - 2.0 * x965 - 2.0 * x967 + 2.0 * x970 + 2.0 * x971 + x1001
+                                + 2.0 * x973) * e0 - 2.0 * (x906 * e3) - 2.0 * (x943 * e1)),
                     x7
-                        * ((x1008 - x862 * e0 - x914 * e1) * x114
-                            - x112 * (e3 * x900 + e2 * x890)) - x53 * x820 + x810 * x1009
-                        + x581 * x818,
-                    -(x1012 + x583 * x840 + x835 * x301 + x843 * x305) * m1
-                        - m2 * (x820 * x306 + x1015 + x828 * x300 + x582 * x826)
-                        - (x393 * x691 + x684 * x450 + x130 * x900 + x161 * x862
-                            + x693 * x463 + x914 * x171 + x765 * x422 + x148 * x890)
+                        * (x280 * (x1002 - x827 * e2 - x864 * e0)
+                            - x281 * (x840 * e1 + e3 * x851)) - x38 * x813 + x371 * x809
+                        + x811 * x1003,
+                    x7
+                        * ((x1004 - x840 * e0 - x864 * e1) * x114
+                            - x112 * (e3 * x827 + e2 * x851)) - x53 * x896 + x795 * x1005
+                        + x580 * x787,
+                    -m2 * (x896 * x305 + x885 * x299 + x1008 + x581 * x892)
+                        - x7
+                            * (x699 * x448 + x827 * x130 + x864 * x160 + x148 * x851
+                                + x840 * x169 + x693 * x461 + x690 * x404 + x765 * x474)
+                        - (x1011 + x582 * x818 + x813 * x300 + x304 * x821) * m1,
+                    -(x404 * x723 + x717 * x448 + x864 * x229 + x474 * x768 + x827 * x199
+                        + x708 * x461 + x840 * x215 + x239 * x851) * x7
+                        - m2 * (x885 * x173 + x1014 + x896 * x179 + x892 * x181)
+                        - (x1017 + x195 * x818 + x189 * x813 + x177 * x821) * m1,
+                    -(x244 * x818 + x813 * x246 + x249 * x821 + x1020) * m1
+                        - m2 * (x253 * x892 + x255 * x896 + x1023 + x885 * x242)
+                        - (x748 * x461 + x840 * x265 + x864 * x269 + x773 * x474
+                            + x755 * x404 + x448 * x752 + x273 * x851 + x827 * x259) * x7,
+                ],
+                [
+                    x7
+                        * ((2.0 * x1115 - 2.0 * x1106 - 2.0 * x1117 + 2.0 * x1125
+                            + 2.0 * x1137 - 2.0 * x1149 - 2.0 * x1158 - 4.0 * x1162
+                            + 2.0 * x1183 + x988) * e1 - 2.0 * (x1205 * e2) + x1206
+                            + 2.0 * (e3 * x1228) + 2.0 * (x1231 * e0)),
+                    x7
+                        * (2.0 * (x1228 * e0) + x1000 - 2.0 * (e3 * x1231)
+                            + (2.0 * x1185 - 2.0 * x1186 - 2.0 * x1188 - 2.0 * x1197
+                                + 4.0 * x1198 - 2.0 * x1199 - 2.0 * x1200 + x998
+                                + 2.0 * x1202 + 2.0 * x1204) * e1 - 2.0 * (x1233 * e2)),
+                    x7
+                        * (2.0 * x350 - 4.0 * x356 - 2.0 * x367 + 2.0 * x373
+                            + (2.0 * x1208 + 2.0 * x1211 - 2.0 * x1212 - 2.0 * x1215
+                                - 2.0 * x1216 + 2.0 * x1217 + 2.0 * x1224 + x1001
+                                + 2.0 * x1225 + 4.0 * x1226) * e1 + 4.0 * x378
+                            + 2.0 * (x1231 * e2) - 2.0 * (e3 * x1233) + 4.0 * x382
+                            + 2.0 * x387 + 2.0 * x390 + 2.0 * x475 + 2.0 * (x1205 * e0)
+                            + 2.0 * x496),
+                    x1003 * x1120
+                        + ((x1004 - x1169 * e1 - e3 * x1171) * x281
+                            - x280 * (x1182 * e2 + x1167 * e0)) * x7 - x1135 * x38
+                        + x1116 * x371,
+                    (x114 * (x1002 - x1167 * e1 - x1169 * e0)
+                        - (e3 * x1182 + x1171 * e2) * x112) * x7 - x1110 * x53
+                        + x1103 * x580 - x1107 * x1005,
+                    -m2 * (x1110 * x305 + x1112 * x581 + x299 * x1114 + x1235)
+                        - x7
+                            * (x1167 * x160 + x690 * x461 + x1090 * x448 + x474 * x1055
+                                + x1169 * x169 + x130 * x1182 + x1171 * x148 + x404 * x1061)
+                        - m1 * (x1135 * x300 + x1236 + x1127 * x304 + x1131 * x582),
+                    -(x1131 * x195 + x1135 * x189 - 2.0 * x1018 + x1063 * x486 - x1019
+                        + x1127 * x177) * m1
+                        - (x1112 * x181 - 2.0 * x1022 + x342 * x1066 + x1021
+                            + x1110 * x179 + x173 * x1114) * m2
+                        - (x461 * x1068 + x1075 * x474 + x448 * x1092 + x404 * x1071
+                            + x239 * x1171 + x215 * x1169 + x1167 * x229 + x1182 * x199)
                             * x7,
-                    -m2 * (x175 * x828 + x820 * x181 + x826 * x183 + x1018)
-                        - (x193 * x840 + x187 * x835 + x843 * x179 + x1021) * m1
-                        - x7
-                            * (x914 * x229 + x393 * x718 + x240 * x890 + x862 * x217
-                                + x709 * x463 + x422 * x770 + x201 * x900 + x724 * x450),
-                    -m2 * (x247 * x826 + x249 * x820 + x1024 + x828 * x252)
-                        - (x843 * x243 + x254 * x840 + x835 * x256 + x1027) * m1
-                        - x7
-                            * (x862 * x265 + x393 * x745 + x774 * x422 + x260 * x890
-                                + x900 * x274 + x739 * x463 + x756 * x450 + x914 * x270),
+                    -(x448 * x1094 + x1081 * x474 + x1171 * x273 + x404 * x1085
+                        + x265 * x1169 + x1167 * x269 + x461 * x1083 + x259 * x1182) * x7
+                        - (x1131 * x244 + x1017 + x1135 * x246 + x1127 * x249) * m1
+                        - m2 * (x1112 * x253 + x242 * x1114 + x1014 + x255 * x1110),
                 ],
                 [
+                    (2.0 * (e3 * x1377) - 2.0 * x527 + 2.0 * x528 + 2.0 * x530
+                        - 4.0 * x531 - 2.0 * (x1392 * e1) + 2.0 * x537
+                        + (2.0 * x1393 - 2.0 * x1394 + 2.0 * x1395 + 2.0 * x1396
+                            - 2.0 * x1398 - 4.0 * x1399 + 2.0 * x1400 + 2.0 * x1404
+                            + x988 - 2.0 * x1405) * e2 + 2.0 * (x1415 * e0) + 2.0 * x539
+                        + 4.0 * x540 + 2.0 * x541 + 2.0 * x542 + 4.0 * x543) * x7,
+                    (2.0 * (x1416 * e1) - 2.0 * (e3 * x1415) + x1206
+                        + (2.0 * x1380 + 2.0 * x1382 - 2.0 * x1383 - 2.0 * x1385
+                            - 2.0 * x1386 + 2.0 * x1388 - 4.0 * x1389 + x998
+                            + 2.0 * x1390 - 2.0 * x1391) * e2 + 2.0 * (x1377 * e0)) * x7,
                     x7
-                        * (2.0 * (e3 * x1216) - 2.0 * (x1190 * e2)
-                            + (2.0 * x1218 - 2.0 * x1217 + 2.0 * x1222 + 2.0 * x1224
-                                - 2.0 * x1225 + 2.0 * x1226 - 2.0 * x1228 - 2.0 * x1229
-                                - 4.0 * x1230 + x996) * e1 + x1231 + 2.0 * (x1234 * e0)),
-                    x7
-                        * (2.0 * (x1216 * e0) - 2.0 * (x1236 * e2) - 2.0 * (x1234 * e3)
-                            + (2.0 * x1119 - 2.0 * x1130 + 4.0 * x1136 - 2.0 * x1138
-                                + 2.0 * x1140 - 2.0 * x1164 - 2.0 * x1178 + x1003
-                                + 2.0 * x1185 - 2.0 * x1189) * e1 + x1005),
-                    x7
-                        * ((2.0 * x1191 - 2.0 * x1193 - 2.0 * x1196 + 2.0 * x1197
-                            + 2.0 * x1199 - 2.0 * x1200 + 2.0 * x1203 + x1004
-                            + 2.0 * x1213 + 4.0 * x1214) * e1 - 4.0 * x332 - 2.0 * x343
-                            + 2.0 * (x1234 * e2) + 4.0 * x348 + 2.0 * x373 + 2.0 * x379
-                            - 2.0 * (x1236 * e3) + 2.0 * x464 + 4.0 * x468 + 2.0 * x489
-                            + 2.0 * x494 + 2.0 * (x1190 * e0) + 2.0 * x497),
-                    x1007 * x1106
-                        + ((x1008 - x1158 * e1 - e3 * x1153) * x282
-                            - x281 * (x1146 * e2 + x1163 * e0)) * x7 - x1175 * x38
-                        + x1109 * x377,
-                    (x114 * (x1006 - x1163 * e1 - x1158 * e0)
-                        - (e3 * x1146 + x1153 * e2) * x112) * x7 - x1128 * x53
-                        + x1126 * x581 - x1120 * x1009,
-                    -m2 * (x1128 * x306 + x1123 * x582 + x1129 * x300 + x1238)
-                        - x7
-                            * (x1153 * x148 + x171 * x1163 + x393 * x1093 + x130 * x1146
-                                + x684 * x463 + x161 * x1158 + x1058 * x422 + x450 * x1064)
-                        - m1 * (x1175 * x301 + x1239 + x1167 * x305 + x1171 * x583),
-                    -x7
-                        * (x450 * x1076 + x201 * x1146 + x1080 * x422 + x1153 * x240
-                            + x1158 * x217 + x1077 * x463 + x393 * x1095 + x1163 * x229)
-                        - m2
-                            * (x1123 * x183 + x1129 * x175 + x1070 * x359 - 2.0 * x1023
-                                + x1022 + x1128 * x181)
-                        - m1
-                            * (x1066 * x482 + x1171 * x193 - x1025 + x1175 * x187
-                                - 2.0 * x1026 + x1167 * x179),
-                    -(x1163 * x270 + x450 * x1087 + x1146 * x274 + x1097 * x393
-                        + x1083 * x463 + x260 * x1153 + x1090 * x422 + x1158 * x265) * x7
-                        - (x1171 * x254 + x1175 * x256 + x1167 * x243 + x1021) * m1
-                        - (x1129 * x252 + x1123 * x247 + x249 * x1128 + x1018) * m2,
-                ],
-                [
-                    x7
-                        * (2.0 * x550 + 2.0 * x552 + 2.0 * (e3 * x1381) + 2.0 * x553
-                            + 2.0 * (x1396 * e0) - 4.0 * x554
+                        * (x784 - 2.0 * (x1392 * e3) + 2.0 * (x1416 * e0)
                             + e2
-                                * (2.0 * x1397 - 2.0 * x1398 - 2.0 * x1399 - 4.0 * x1400
-                                    + 2.0 * x1401 + 2.0 * x1402 + 2.0 * x1403 + x996
-                                    + 2.0 * x1408 - 2.0 * x1409) + 2.0 * x556 - 2.0 * x557
-                            + 4.0 * x558 + 2.0 * x559 - 2.0 * (x1421 * e1) + 4.0 * x560
-                            + 2.0 * x562),
+                                * (2.0 * x1406 - 2.0 * x1407 - 2.0 * x1408 + 2.0 * x1409
+                                    - 4.0 * x1410 + 2.0 * x1411 + 2.0 * x1412 + x1001
+                                    - 2.0 * x1413 - 2.0 * x1414) - 2.0 * (x1377 * e1)),
                     x7
-                        * ((2.0 * x1410 - 2.0 * x1411 + 2.0 * x1413 - 2.0 * x1414
-                            - 4.0 * x1416 + 2.0 * x1417 - 2.0 * x1418 - 2.0 * x1419
-                            + x1003 + 2.0 * x1420) * e2 - 2.0 * (e3 * x1396)
-                            + 2.0 * (x1422 * e1) + 2.0 * (x1381 * e0) + x1231),
-                    ((2.0 * x1382 - 2.0 * x1383 + 2.0 * x1384 - 2.0 * x1385 + 2.0 * x1387
-                        - 4.0 * x1388 + 2.0 * x1390 + x1004 - 2.0 * x1391 - 2.0 * x1395)
-                        * e2 - 2.0 * (e3 * x1421) + x968 - 2.0 * (e1 * x1381)
-                        + 2.0 * (x1422 * e0)) * x7,
-                    x7
-                        * (x281 * (x1423 - x1338 * e0 - x1328 * e2)
-                            - x282 * (x1332 * e1 + e3 * x1333)) - x38 * x1344
-                        + x377 * x1106 - x1007 * x1109,
-                    (x112 * (x1424 - e3 * x1328 - x1333 * e2)
-                        - x114 * (x1332 * e0 + x1338 * e1)) * x7 - x810 * x581
-                        - x53 * x1353 + x818 * x1009,
+                        * (x280 * (x1417 - x1357 * e0 - x1353 * e2)
+                            - x281 * (x1350 * e1 + e3 * x1354)) - x38 * x1361
+                        + x371 * x1120 - x1003 * x1116,
+                    (x112 * (x1418 - e3 * x1353 - x1354 * e2)
+                        - x114 * (x1350 * e0 + x1357 * e1)) * x7 - x795 * x580
+                        - x53 * x1328 + x787 * x1005,
                     -x7
-                        * (x130 * x1328 + x1262 * x463 + x393 * x1064 + x450 * x1319
-                            + x171 * x1338 + x1333 * x148 + x161 * x1332 + x1266 * x422)
-                        - (x582 * x1356 + x1024 + x1359 * x300 + x306 * x1353) * m2
-                        - m1 * (x1345 * x583 + x1027 + x1344 * x301 + x305 * x1341),
-                    -m1 * (x187 * x1344 + x1341 * x179 + x1239 + x193 * x1345)
-                        - (x175 * x1359 + x183 * x1356 + x1238 + x181 * x1353) * m2
-                        - x7
-                            * (x229 * x1338 + x1332 * x217 + x201 * x1328 + x1333 * x240
-                                + x1293 * x463 + x1321 * x450 + x1283 * x422
-                                + x1274 * x393),
-                    -(x1298 * x482 + x1341 * x243 - 2.0 * x1010 + x1344 * x256 + x1011
-                        + x254 * x1345) * m1
-                        - x7
-                            * (x450 * x1323 + x270 * x1338 + x260 * x1333 + x463 * x1315
-                                + x1307 * x422 + x265 * x1332 + x1328 * x274 + x1299 * x393)
+                        * (x169 * x1350 + x1258 * x461 + x448 * x1061 + x1357 * x160
+                            + x474 * x1262 + x1354 * x148 + x130 * x1353 + x404 * x1314)
+                        - m2 * (x581 * x1331 + x1023 + x1334 * x299 + x305 * x1328)
+                        - m1 * (x1362 * x582 + x1361 * x300 + x304 * x1358 + x1020),
+                    -(x1317 * x404 + x215 * x1350 + x199 * x1353 + x1269 * x448
+                        + x1284 * x474 + x239 * x1354 + x1357 * x229 + x1289 * x461) * x7
+                        - (x189 * x1361 + x177 * x1358 + x1236 + x195 * x1362) * m1
+                        - m2 * (x173 * x1334 + x181 * x1331 + x1235 + x179 * x1328),
+                    -(x1357 * x269 + x448 * x1294 + x1311 * x461 + x1354 * x273
+                        + x265 * x1350 + x404 * x1319 + x259 * x1353 + x1302 * x474) * x7
                         - m2
-                            * (2.0 * x1014 - x1013 + x247 * x1356 + x249 * x1353
-                                + x1359 * x252 + x368 * x1070),
+                            * (2.0 * x1006 + x347 * x1066 + x253 * x1331 + x255 * x1328
+                                + x1334 * x242 - x1007)
+                        - (x486 * x1292 - 2.0 * x1009 + x249 * x1358 + x1361 * x246
+                            + x244 * x1362 + x1010) * m1,
                 ],
                 [
-                    (x1002 - 2.0 * (x1516 * e2) - 2.0 * (x1531 * e1) + 2.0 * (x1543 * e0)
-                        + e3
-                            * (2.0 * x1547 - 2.0 * x1544 - 2.0 * x1545 - 4.0 * x1546
-                                - 2.0 * x1548 - 2.0 * x1549 + 2.0 * x1550 + 2.0 * x1551
-                                + x996 - 2.0 * x1552)) * x7,
-                    (2.0 * x501 + 2.0 * x514 - 2.0 * x515 + 4.0 * x516
-                        + e3
-                            * (4.0 * x1532 - 2.0 * x1533 - 2.0 * x1534 - 2.0 * x1535
-                                + 2.0 * x1536 + x1003 + 2.0 * x1537 + 2.0 * x1540
-                                + 2.0 * x1541 - 2.0 * x1542) + 2.0 * x517 + 2.0 * x518
-                        + 2.0 * (x1516 * e1) - 2.0 * x520 + 2.0 * (x1553 * e0)
-                        + 4.0 * x521 + 2.0 * x523 + 2.0 * x525 - 2.0 * (x1531 * e2))
-                        * x7,
-                    (2.0 * (x1516 * e0)
-                        + e3
-                            * (2.0 * x1522 - 2.0 * x1517 - 4.0 * x1518 - 2.0 * x1524
-                                - 2.0 * x1526 + 2.0 * x1527 + x1004 + 2.0 * x1528
-                                - 2.0 * x1529 + 2.0 * x1530) - 2.0 * (x1553 * e1)
-                        + 2.0 * (e2 * x1543) + x1231) * x7,
                     x7
-                        * (x282 * (x1424 - x1487 * e1 - e3 * x1488)
-                            - x281 * (x1489 * e2 + x1492 * e0)) - x785 * x377
-                        + x1007 * x792 - x38 * x1497,
-                    ((x1423 - x1488 * e2 - e3 * x1489) * x112
-                        - x114 * (x1487 * e0 + x1492 * e1)) * x7 - x1510 * x53
-                        + x1126 * x1009 + x581 * x1120,
+                        * (2.0 * (x1523 * e0) - 2.0 * (x1510 * e2)
+                            + e3
+                                * (2.0 * x1529 - 2.0 * x1524 - 2.0 * x1526 - 2.0 * x1527
+                                    - 4.0 * x1528 + 2.0 * x1531 + 2.0 * x1532 - 2.0 * x1533
+                                    - 2.0 * x1534 + x988) - 2.0 * (x1544 * e1) + x999),
+                    (4.0 * x500 - 2.0 * x499 - 2.0 * (x1544 * e2) + 2.0 * x501
+                        + e3
+                            * (2.0 * x1511 + 4.0 * x1512 - 2.0 * x1513 + 2.0 * x1514
+                                - 2.0 * x1515 - 2.0 * x1517 + x998 + 2.0 * x1520
+                                + 2.0 * x1521 - 2.0 * x1522) + 2.0 * x514 + 2.0 * x515
+                        - 2.0 * x517 + 4.0 * x518 + 2.0 * x520 + 2.0 * (x1510 * e1)
+                        + 2.0 * x522 + 2.0 * (x1545 * e0) + 2.0 * x524) * x7,
+                    (e3
+                        * (2.0 * x1538 - 2.0 * x1535 - 4.0 * x1536 - 2.0 * x1537
+                            + 2.0 * x1539 - 2.0 * x1540 - 2.0 * x1541 + 2.0 * x1542
+                            + x1001 + 2.0 * x1543) - 2.0 * (x1545 * e1)
+                        + 2.0 * (x1510 * e0) + x1206 + 2.0 * (x1523 * e2)) * x7,
+                    x7
+                        * (x281 * (x1418 - x1487 * e1 - e3 * x1490)
+                            - x280 * (x1491 * e2 + x1486 * e0)) - x811 * x371
+                        + x1003 * x809 - x38 * x1493,
+                    ((x1417 - x1490 * e2 - e3 * x1491) * x112
+                        - x114 * (x1487 * e0 + x1486 * e1)) * x7 - x1504 * x53
+                        + x1103 * x1005 + x580 * x1107,
                     -m2
-                        * (x1512 * x300 + x1237 * x359 - x1016 + x1510 * x306
-                            - 2.0 * x1017 + x1508 * x582)
+                        * (x1506 * x299 + x1504 * x305 - 2.0 * x1013 + x1502 * x581
+                            - x1012 + x1234 * x342)
+                        - (x1493 * x300 - x1015 + x304 * x1497 + x491 * x1292
+                            + 2.0 * x1016 + x1494 * x582) * m1
                         - x7
-                            * (x171 * x1492 + x450 * x1441 + x1266 * x393 + x130 * x1489
-                                + x693 * x422 + x161 * x1487 + x1466 * x463 + x1488 * x148)
-                        - (x1497 * x301 - x1019 + x305 * x1500 + 2.0 * x1020
-                            + x1498 * x583 + x486 * x1298) * m1,
-                    -m2 * (x175 * x1512 + x1015 + x1510 * x181 + x1508 * x183)
+                            * (x1486 * x160 + x1491 * x130 + x148 * x1490 + x693 * x474
+                                + x404 * x1435 + x448 * x1262 + x1460 * x461
+                                + x1487 * x169),
+                    -m1 * (x189 * x1493 + x1011 + x1494 * x195 + x177 * x1497)
+                        - m2 * (x173 * x1506 + x1504 * x179 + x1502 * x181 + x1008)
                         - x7
-                            * (x201 * x1489 + x240 * x1488 + x1487 * x217 + x1445 * x422
-                                + x450 * x1450 + x229 * x1492 + x1468 * x463 + x1452 * x393)
-                        - (x187 * x1497 + x1012 + x1498 * x193 + x179 * x1500) * m1,
-                    -(x243 * x1500 + x1239 + x1498 * x254 + x1497 * x256) * m1
-                        - m2 * (x1512 * x252 + x1510 * x249 + x1238 + x1508 * x247)
-                        - (x270 * x1492 + x450 * x1458 + x1459 * x422 + x1470 * x463
-                            + x260 * x1488 + x1463 * x393 + x265 * x1487 + x1489 * x274)
-                            * x7,
+                            * (x1442 * x474 + x1486 * x229 + x1446 * x404 + x448 * x1439
+                                + x215 * x1487 + x461 * x1462 + x239 * x1490
+                                + x1491 * x199),
+                    -m2 * (x1506 * x242 + x1504 * x255 + x1235 + x1502 * x253)
+                        - x7
+                            * (x461 * x1464 + x1486 * x269 + x265 * x1487 + x1450 * x474
+                                + x1491 * x259 + x404 * x1456 + x448 * x1457 + x273 * x1490)
+                        - (x249 * x1497 + x1236 + x1494 * x244 + x1493 * x246) * m1,
                 ],
                 [
-                    (2.0 * (x1631 * e3) - 2.0 * (x1637 * e2) - 2.0 * (x1641 * e1)
-                        + 2.0 * (x1642 * e0)) * x7,
+                    (2.0 * (e3 * x1626) - 2.0 * (x1633 * e1) + 2.0 * (x1636 * e0)
+                        - 2.0 * (x1637 * e2)) * x7,
                     x7
-                        * (2.0 * (x1631 * e0) - 2.0 * (e3 * x1642) - 2.0 * (x1641 * e2)
-                            + 2.0 * (x1637 * e1)),
+                        * (2.0 * (x1626 * e0) - 2.0 * (x1633 * e2) + 2.0 * (x1637 * e1)
+                            - 2.0 * (e3 * x1636)),
                     x7
-                        * (2.0 * (x1637 * e0) - 2.0 * (x1631 * e1) + 2.0 * (e2 * x1642)
-                            - 2.0 * (e3 * x1641)),
-                    x1007 * x342
+                        * (2.0 * (x1636 * e2) - 2.0 * (x1626 * e1) + 2.0 * (x1637 * e0)
+                            - 2.0 * (x1633 * e3)),
+                    x1003 * x359
                         + x38
-                            * (x1612
-                                + (2.0 * x573 - 2.0 * x575 + 2.0 * x574 - 2.0 * x576) * x7
-                                    * x40 - x1613 - x478) - x336 * x377,
+                            * (x1618
+                                + (2.0 * x572 - 2.0 * x574 + 2.0 * x573 - 2.0 * x575) * x7
+                                    * x40 - x1619 - x479) - x363 * x371,
                     0.0,
-                    (x486 * x583 - x301 * x1643 - x583 * x1644 - x1611 * x305
-                        - (x422 * x1580 + x1581 * x463 + x450 * x1579 + x1577 * x393)
+                    (x491 * x582 - x300 * x1638 - x582 * x1639 - x1617 * x304
+                        - (x474 * x1571 + x1570 * x461 + x448 * x1574 + x1573 * x404)
                             * x77) * m1,
                     m1
-                        * (x193 * x486 - x1611 * x179 - x193 * x1644
-                            - x7
-                                * (x450 * x1590 + x422 * x1591 + x1588 * x463
-                                    + x1587 * x393) - x187 * x1643),
-                    (x486 * x254 - x254 * x1644 - x256 * x1643 - x1611 * x243
+                        * (x195 * x491 - x1617 * x177
+                            - (x1584 * x448 + x1585 * x474 + x1580 * x461 + x1582 * x404)
+                                * x7 - x195 * x1639 - x189 * x1638),
+                    (x491 * x244 - x244 * x1639 - x246 * x1638 - x1617 * x249
                         - x7
-                            * (x1598 * x450 + x1600 * x463 + x1599 * x422
-                                + x393 * x1596)) * m1,
+                            * (x404 * x1594 + x448 * x1593 + x1595 * x461
+                                + x474 * x1591)) * m1,
                 ],
                 [
-                    (2.0 * (x1719 * e3) - 2.0 * (x1715 * e1) + 2.0 * (x1722 * e0)
-                        - 2.0 * (x1723 * e2)) * x7,
+                    (2.0 * (e3 * x1715) - 2.0 * (e2 * x1709) + 2.0 * (x1719 * e0)
+                        - 2.0 * (x1721 * e1)) * x7,
                     x7
-                        * (2.0 * (x1719 * e0) - 2.0 * (e2 * x1715) + 2.0 * (x1723 * e1)
-                            - 2.0 * (e3 * x1722)),
-                    (2.0 * (x1722 * e2) - 2.0 * (e3 * x1715) + 2.0 * (x1723 * e0)
-                        - 2.0 * (x1719 * e1)) * x7,
+                        * (2.0 * (x1709 * e1) - 2.0 * (x1721 * e2) - 2.0 * (x1719 * e3)
+                            + 2.0 * (x1715 * e0)),
+                    x7
+                        * (2.0 * (x1719 * e2) - 2.0 * (e3 * x1721) - 2.0 * (e1 * x1715)
+                            + 2.0 * (x1709 * e0)),
                     0.0,
-                    x353 * x1009 - x355 * x581
+                    x330 * x1005 - x321 * x580
                         + x53
-                            * (x7 * (2.0 * x579 - 2.0 * x577 + 2.0 * x580 - 2.0 * x578)
-                                * x55 - x1690 + x1691 - x366),
+                            * (x7 * (2.0 * x578 - 2.0 * x576 + 2.0 * x579 - 2.0 * x577)
+                                * x55 - x1702 + x1703 - x345),
+                    (x347 * x305 - x299 * x1707
+                        - (x474 * x1654 + x1651 * x461 + x1652 * x448 + x404 * x1653)
+                            * x77 - x1722 * x581 - x305 * x1704) * m2,
                     m2
-                        * (x368 * x306 - x300 * x1695
-                            - x77
-                                * (x422 * x1658 + x450 * x1657 + x463 * x1656
-                                    + x1655 * x393) - x1724 * x582 - x306 * x1692),
-                    (x368 * x181
-                        - x7
-                            * (x1666 * x393 + x422 * x1663 + x450 * x1665 + x463 * x1667)
-                        - x181 * x1692 - x175 * x1695 - x1724 * x183) * m2,
+                        * (x347 * x179 - x179 * x1704 - x173 * x1707
+                            - (x1659 * x461 + x1662 * x474 + x1665 * x448 + x1663 * x404)
+                                * x7 - x1722 * x181),
                     m2
-                        * (x249 * x368 - x249 * x1692
-                            - (x1673 * x422 + x463 * x1676 + x450 * x1677 + x393 * x1674)
-                                * x7 - x252 * x1695 - x247 * x1724),
+                        * (x255 * x347
+                            - (x1675 * x474 + x404 * x1672 + x461 * x1671 + x1674 * x448)
+                                * x7 - x255 * x1704 - x242 * x1707 - x253 * x1722),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (2.0 * (x1771 * e0) - 2.0 * (e1 * x1774) + 2.0 * (e3 * x1778)
-                        - 2.0 * (x1780 * e2)) * x7,
-                    (2.0 * (x1778 * e0) - 2.0 * (e2 * x1774) - 2.0 * (e3 * x1771)
-                        + 2.0 * (x1780 * e1)) * x7,
-                    (2.0 * (x1780 * e0) - 2.0 * (e3 * x1774) - 2.0 * (x1778 * e1)
-                        + 2.0 * (x1771 * e2)) * x7,
                     x7
-                        * (-x281 * (x1759 * e2 + x1757 * e0)
-                            - x282 * (x1755 * e1 + e3 * x1753)) - x225 * x1007
-                        + x377 * x231 - x1764 * x38,
-                    x205 * x581 - x53 * x1742
+                        * (2.0 * (x1769 * e0) + 2.0 * (e3 * x1774) - 2.0 * (e1 * x1775)
+                            - 2.0 * (x1777 * e2)),
+                    (2.0 * (x1777 * e1) - 2.0 * (e2 * x1775) + 2.0 * (x1774 * e0)
+                        - 2.0 * (x1769 * e3)) * x7,
+                    x7
+                        * (2.0 * (x1777 * e0) - 2.0 * (e3 * x1775) - 2.0 * (x1774 * e1)
+                            + 2.0 * (x1769 * e2)),
+                    x371 * x231 - x225 * x1003
                         + x7
-                            * (-(e3 * x1759 + x1753 * e2) * x112
-                                - (x1755 * e0 + x1757 * e1) * x114) - x236 * x1009,
-                    -(x130 * x1759 + x1753 * x148 + x1755 * x161 + x171 * x1757) * x7
-                        - m2 * (x582 * x1738 + x306 * x1742 + x1736 * x300)
-                        - (x583 * x1767 + x1770 * x305 + x1764 * x301) * m1,
-                    -m2 * (x181 * x1742 + x1736 * x175 + x1738 * x183)
-                        - (x1755 * x217 + x201 * x1759 + x1757 * x229 + x1753 * x240)
-                            * x7 - (x193 * x1767 + x187 * x1764 + x1770 * x179) * m1,
-                    -m2 * (x1736 * x252 + x247 * x1738 + x249 * x1742)
+                            * (-x280 * (x1764 * e2 + x1766 * e0)
+                                - x281 * (x1768 * e1 + e3 * x1762)) - x1750 * x38,
+                    x7
+                        * (-(e3 * x1764 + x1762 * e2) * x112
+                            - (x1768 * e0 + x1766 * e1) * x114) - x235 * x1005
+                        - x53 * x1756 + x203 * x580,
+                    -(x1747 * x582 + x1750 * x300 + x1745 * x304) * m1
                         - x7
-                            * (x260 * x1753 + x1757 * x270 + x1759 * x274 + x1755 * x265)
-                        - m1 * (x1764 * x256 + x1770 * x243 + x254 * x1767),
+                            * (x1768 * x169 + x148 * x1762 + x1766 * x160 + x1764 * x130)
+                        - m2 * (x581 * x1759 + x1753 * x299 + x1756 * x305),
+                    -(x1745 * x177 + x195 * x1747 + x189 * x1750) * m1
+                        - m2 * (x1753 * x173 + x1756 * x179 + x1759 * x181)
+                        - (x1764 * x199 + x239 * x1762 + x1766 * x229 + x1768 * x215)
+                            * x7,
+                    -x7 * (x1764 * x259 + x1762 * x273 + x1768 * x265 + x1766 * x269)
+                        - m1 * (x1750 * x246 + x1745 * x249 + x1747 * x244)
+                        - m2 * (x253 * x1759 + x255 * x1756 + x1753 * x242),
+                ],
+                [
+                    (2.0 * (x1819 * e3) - 2.0 * (x1822 * e2) - 2.0 * (x1825 * e1)
+                        + 2.0 * (x1826 * e0)) * x7,
+                    (2.0 * (x1822 * e1) - 2.0 * (x1826 * e3) - 2.0 * (x1825 * e2)
+                        + 2.0 * (x1819 * e0)) * x7,
+                    (2.0 * (x1826 * e2) - 2.0 * (x1819 * e1) + 2.0 * (x1822 * e0)
+                        - 2.0 * (x1825 * e3)) * x7,
+                    x1003 * x211 - x186 * x371 - x38 * x1803
+                        + x7
+                            * (-(x1781 * e1 + e3 * x1785) * x281
+                                - (x1783 * e2 + x1782 * e0) * x280),
+                    x7
+                        * (-x114 * (x1781 * e0 + x1782 * e1)
+                            - x112 * (x1785 * e2 + e3 * x1783)) + x174 * x1005
+                        + x219 * x580 - x53 * x1789,
+                    -m1 * (x304 * x1801 + x1806 * x582 + x1803 * x300)
+                        - (x1783 * x130 + x148 * x1785 + x1781 * x169 + x1782 * x160)
+                            * x7 - m2 * (x1792 * x581 + x305 * x1789 + x1786 * x299),
+                    -m2 * (x173 * x1786 + x179 * x1789 + x1792 * x181)
+                        - (x195 * x1806 + x189 * x1803 + x177 * x1801) * m1
+                        - x7
+                            * (x1783 * x199 + x1782 * x229 + x239 * x1785
+                                + x215 * x1781),
+                    -(x249 * x1801 + x1806 * x244 + x246 * x1803) * m1
+                        - x7
+                            * (x1782 * x269 + x1785 * x273 + x1783 * x259 + x265 * x1781)
+                        - (x253 * x1792 + x255 * x1789 + x1786 * x242) * m2,
                 ],
                 [
                     x7
-                        * (2.0 * (e3 * x1822) + 2.0 * (x1827 * e0) - 2.0 * (x1828 * e1)
-                            - 2.0 * (x1829 * e2)),
+                        * (2.0 * (e3 * x1866) - 2.0 * (x1863 * e1) + 2.0 * (x1869 * e0)
+                            - 2.0 * (e2 * x1870)),
+                    (2.0 * (e1 * x1870) + 2.0 * (x1866 * e0) - 2.0 * (x1863 * e2)
+                        - 2.0 * (e3 * x1869)) * x7,
                     x7
-                        * (2.0 * (x1822 * e0) - 2.0 * (e2 * x1828) + 2.0 * (x1829 * e1)
-                            - 2.0 * (x1827 * e3)),
-                    (2.0 * (x1829 * e0) - 2.0 * (e3 * x1828) - 2.0 * (x1822 * e1)
-                        + 2.0 * (x1827 * e2)) * x7,
-                    x1007 * x213 - x38 * x1809 - x377 * x197
+                        * (2.0 * (x1870 * e0) - 2.0 * (x1866 * e1) + 2.0 * (x1869 * e2)
+                            - 2.0 * (e3 * x1863)),
+                    x7
+                        * (-(e3 * x1830 + x1832 * e1) * x281
+                            - (e2 * x1833 + x1831 * e0) * x280) - x38 * x1842
+                        + x211 * x371 + x186 * x1003,
+                    x580 * x235 - x1838 * x53
                         + x7
-                            * (-(x1821 * e1 + e3 * x1819) * x282
-                                - (x1817 * e2 + x1820 * e0) * x281),
-                    x220 * x581
-                        + x7
-                            * (-x114 * (x1821 * e0 + x1820 * e1)
-                                - x112 * (x1819 * e2 + e3 * x1817)) + x176 * x1009
-                        - x1787 * x53,
-                    -x7 * (x1819 * x148 + x161 * x1821 + x130 * x1817 + x171 * x1820)
-                        - (x582 * x1790 + x300 * x1784 + x1787 * x306) * m2
-                        - (x301 * x1809 + x305 * x1815 + x583 * x1812) * m1,
-                    -m2 * (x1787 * x181 + x175 * x1784 + x1790 * x183)
+                            * (-x112 * (e3 * x1833 + e2 * x1830)
+                                - x114 * (x1832 * e0 + x1831 * e1)) + x203 * x1005,
+                    -m2 * (x1841 * x299 + x581 * x1835 + x1838 * x305)
+                        - m1 * (x1842 * x300 + x582 * x1844 + x304 * x1847)
                         - x7
-                            * (x229 * x1820 + x1821 * x217 + x1819 * x240 + x201 * x1817)
-                        - m1 * (x187 * x1809 + x1815 * x179 + x193 * x1812),
-                    -m2 * (x247 * x1790 + x249 * x1787 + x252 * x1784)
-                        - (x270 * x1820 + x260 * x1819 + x265 * x1821 + x1817 * x274)
-                            * x7 - (x254 * x1812 + x256 * x1809 + x1815 * x243) * m1,
+                            * (x130 * x1833 + x148 * x1830 + x1832 * x169
+                                + x1831 * x160),
+                    -m2 * (x173 * x1841 + x1838 * x179 + x1835 * x181)
+                        - m1 * (x1847 * x177 + x189 * x1842 + x195 * x1844)
+                        - x7
+                            * (x239 * x1830 + x199 * x1833 + x215 * x1832
+                                + x1831 * x229),
+                    -(x273 * x1830 + x1832 * x265 + x259 * x1833 + x1831 * x269) * x7
+                        - (x255 * x1838 + x1841 * x242 + x253 * x1835) * m2
+                        - m1 * (x1842 * x246 + x1847 * x249 + x244 * x1844),
                 ],
                 [
                     x7
-                        * (2.0 * (x1865 * e0) - 2.0 * (x1868 * e2) + 2.0 * (e3 * x1871)
-                            - 2.0 * (x1873 * e1)),
+                        * (2.0 * (x1907 * e3) - 2.0 * (x1904 * e2) + 2.0 * (x1910 * e0)
+                            - 2.0 * (x1911 * e1)),
                     x7
-                        * (2.0 * (x1868 * e1) + 2.0 * (x1871 * e0) - 2.0 * (x1873 * e2)
-                            - 2.0 * (e3 * x1865)),
-                    (2.0 * (x1868 * e0) - 2.0 * (x1873 * e3) - 2.0 * (x1871 * e1)
-                        + 2.0 * (x1865 * e2)) * x7,
+                        * (2.0 * (x1907 * e0) - 2.0 * (x1911 * e2) - 2.0 * (e3 * x1910)
+                            + 2.0 * (x1904 * e1)),
+                    (2.0 * (e2 * x1910) - 2.0 * (x1907 * e1) + 2.0 * (x1904 * e0)
+                        - 2.0 * (e3 * x1911)) * x7,
                     x7
-                        * (-(e3 * x1855 + x1852 * e1) * x282
-                            - (e2 * x1854 + x1853 * e0) * x281) - x1838 * x38
-                        + x377 * x213 + x1007 * x197,
-                    x205 * x1009 - x53 * x1847
+                        * (-x280 * (e0 * x1893 + x1891 * e2)
+                            - (e3 * x1894 + x1892 * e1) * x281) + x1003 * x231
+                        + x225 * x371 - x38 * x1900,
+                    x219 * x1005 - x174 * x580 - x53 * x1878
                         + x7
-                            * (-x112 * (e3 * x1854 + e2 * x1855)
-                                - x114 * (x1852 * e0 + x1853 * e1)) + x236 * x581,
-                    -m2 * (x300 * x1845 + x1847 * x306 + x1849 * x582)
-                        - (x130 * x1854 + x171 * x1853 + x148 * x1855 + x161 * x1852)
-                            * x7 - (x1841 * x305 + x1836 * x583 + x1838 * x301) * m1,
-                    -(x175 * x1845 + x1849 * x183 + x1847 * x181) * m2
-                        - x7
-                            * (x1852 * x217 + x201 * x1854 + x240 * x1855 + x1853 * x229)
-                        - (x187 * x1838 + x193 * x1836 + x1841 * x179) * m1,
-                    -x7 * (x1852 * x265 + x260 * x1855 + x1853 * x270 + x1854 * x274)
-                        - (x1838 * x256 + x1841 * x243 + x1836 * x254) * m1
-                        - m2 * (x247 * x1849 + x252 * x1845 + x249 * x1847),
+                            * (-x112 * (x1894 * e2 + e3 * x1891)
+                                - x114 * (e1 * x1893 + x1892 * e0)),
+                    -m1 * (x304 * x1903 + x1898 * x582 + x300 * x1900)
+                        - m2 * (x305 * x1878 + x581 * x1880 + x1883 * x299)
+                        - (x148 * x1894 + x130 * x1891 + x160 * x1893 + x1892 * x169)
+                            * x7,
+                    -x7 * (x239 * x1894 + x229 * x1893 + x1891 * x199 + x215 * x1892)
+                        - m2 * (x1883 * x173 + x1878 * x179 + x1880 * x181)
+                        - (x195 * x1898 + x189 * x1900 + x1903 * x177) * m1,
+                    -x7 * (x269 * x1893 + x259 * x1891 + x1894 * x273 + x1892 * x265)
+                        - (x246 * x1900 + x249 * x1903 + x1898 * x244) * m1
+                        - m2 * (x255 * x1878 + x1883 * x242 + x253 * x1880),
                 ],
                 [
-                    x7
-                        * (2.0 * (x1910 * e0) - 2.0 * (x1907 * e2) - 2.0 * (x1913 * e1)
-                            + 2.0 * (e3 * x1914)),
-                    x7
-                        * (2.0 * (x1914 * e0) - 2.0 * (x1913 * e2) + 2.0 * (x1907 * e1)
-                            - 2.0 * (e3 * x1910)),
-                    x7
-                        * (2.0 * (x1907 * e0) - 2.0 * (e3 * x1913) - 2.0 * (x1914 * e1)
-                            + 2.0 * (e2 * x1910)),
-                    x7
-                        * (-x281 * (e0 * x1905 + x1906 * e2)
-                            - (e3 * x1904 + x1903 * e1) * x282) + x225 * x377
-                        - x38 * x1875 + x1007 * x231,
-                    x220 * x1009 - x176 * x581 - x53 * x1885
-                        + x7
-                            * (-x112 * (x1904 * e2 + e3 * x1906)
-                                - x114 * (e1 * x1905 + x1903 * e0)),
-                    -(x1877 * x583 + x305 * x1874 + x1875 * x301) * m1
-                        - x7
-                            * (x171 * x1905 + x161 * x1903 + x130 * x1906 + x1904 * x148)
-                        - m2 * (x1885 * x306 + x1887 * x582 + x1883 * x300),
-                    -x7 * (x229 * x1905 + x201 * x1906 + x1904 * x240 + x1903 * x217)
-                        - (x187 * x1875 + x193 * x1877 + x1874 * x179) * m1
-                        - m2 * (x1885 * x181 + x1887 * x183 + x1883 * x175),
-                    -(x1875 * x256 + x254 * x1877 + x243 * x1874) * m1
-                        - (x270 * x1905 + x1903 * x265 + x260 * x1904 + x1906 * x274)
-                            * x7 - m2 * (x247 * x1887 + x249 * x1885 + x1883 * x252),
-                ],
-                [
-                    (2.0 * (e2 * x1921) - 2.0 * (e3 * x1919) - 2.0 * (x1920 * e0)
-                        + 2.0 * (x1922 * e1)) * x7,
-                    x7
-                        * (2.0 * (e3 * x1920) - 2.0 * (x1919 * e0) + 2.0 * (x1922 * e2)
-                            - 2.0 * (e1 * x1921)),
-                    (2.0 * (e1 * x1919) + 2.0 * (e3 * x1922) - 2.0 * (x1921 * e0)
-                        - 2.0 * (x1920 * e2)) * x7,
+                    (2.0 * (x1916 * e2) - 2.0 * (e3 * x1917) - 2.0 * (x1918 * e0)
+                        + 2.0 * (x1919 * e1)) * x7,
+                    (2.0 * (e3 * x1918) - 2.0 * (x1917 * e0) + 2.0 * (e2 * x1919)
+                        - 2.0 * (x1916 * e1)) * x7,
+                    (2.0 * (e3 * x1919) + 2.0 * (x1917 * e1) - 2.0 * (x1916 * e0)
+                        - 2.0 * (x1918 * e2)) * x7,
                     0.0,
                     0.0,
-                    -((x305 * x1915 - 2.0 * (x375 * x583)) * x38),
-                    -((x1915 * x179 - 2.0 * (x193 * x375)) * x38),
-                    -((x1915 * x243 - 2.0 * (x254 * x375)) * x38),
+                    -((x304 * x1913 - 2.0 * (x369 * x582)) * x38),
+                    -((x1913 * x177 - 2.0 * (x195 * x369)) * x38),
+                    -((x1913 * x249 - 2.0 * (x244 * x369)) * x38),
                 ],
                 [
-                    (2.0 * (x1928 * e1) - 2.0 * (x1926 * e3) - 2.0 * (x1927 * e0)
-                        + 2.0 * (x1929 * e2)) * x7,
                     x7
-                        * (2.0 * (e2 * x1928) - 2.0 * (x1926 * e0) + 2.0 * (e3 * x1927)
-                            - 2.0 * (x1929 * e1)),
+                        * (2.0 * (e1 * x1924) - 2.0 * (e3 * x1923) - 2.0 * (x1925 * e0)
+                            + 2.0 * (x1926 * e2)),
                     x7
-                        * (2.0 * (e3 * x1928) + 2.0 * (x1926 * e1) - 2.0 * (x1927 * e2)
-                            - 2.0 * (x1929 * e0)),
+                        * (2.0 * (e2 * x1924) - 2.0 * (x1923 * e0) - 2.0 * (x1926 * e1)
+                            + 2.0 * (x1925 * e3)),
+                    x7
+                        * (2.0 * (x1923 * e1) - 2.0 * (x1926 * e0) - 2.0 * (x1925 * e2)
+                            + 2.0 * (e3 * x1924)),
                     0.0,
                     0.0,
-                    -(x53 * (2.0 * (x362 * x582) - 2.0 * (x353 * x300))),
-                    -(x53 * (2.0 * (x362 * x183) - 2.0 * (x175 * x353))),
-                    -((2.0 * (x362 * x247) - 2.0 * (x353 * x252)) * x53),
+                    -(x53 * (2.0 * (x332 * x581) - 2.0 * (x330 * x299))),
+                    -(x53 * (2.0 * (x332 * x181) - 2.0 * (x173 * x330))),
+                    -((2.0 * (x332 * x253) - 2.0 * (x330 * x242)) * x53),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             w: [
-                [x585, x587, x589, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x591, x589, 2.0 * x586, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [2.0 * x588, x591, x585, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x587, 2.0 * x584, x591, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x584, x586, x588, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x590, x588, 2.0 * x585, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [2.0 * x587, x590, x584, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x586, 2.0 * x583, x590, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [x7 * x450, x7 * x463, x7 * x422, x7 * x393, 0.0, 0.0, 0.0, 0.0, 0.0],
+            c: [x7 * x404, x7 * x461, x7 * x474, x7 * x448, 0.0, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
-                    [x1029, x1031, x1034, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1035, x1034, x1036, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1037, x1035, x1029, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1031, x1038, x1035, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1025, x1028, x1031, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1032, x1031, x1033, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1034, x1032, x1025, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1028, x1035, x1032, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8382,10 +8351,10 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x1241, x1243, x1245, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1038, x1245, x1246, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1247, x1038, x1241, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1243, x7 * (2.0 - 16.0 * x1240), x1038, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1238, x1240, x1242, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1035, x1242, x1243, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1244, x1035, x1238, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1240, x7 * (2.0 - 16.0 * x1237), x1035, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8393,10 +8362,10 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x1243, x1426, x1428, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1036, x1428, (2.0 - 16.0 * x1425) * x7, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1429, x1036, x1243, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1426, x1246, x1036, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1240, x1420, x1422, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1033, x1422, (2.0 - 16.0 * x1419) * x7, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1423, x1033, x1240, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1420, x1243, x1033, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8404,10 +8373,10 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x1245, x1428, x1555, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1037, x1555, x1429, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [(2.0 - 16.0 * x1554) * x7, x1037, x1245, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x1428, x1247, x1037, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1242, x1422, x1547, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1034, x1547, x1423, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [(2.0 - 16.0 * x1546) * x7, x1034, x1242, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x1422, x1244, x1034, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8570,12 +8539,12 @@ pub mod maggi {
                 ],
             ],
             d_c: [
-                [x7 * x890, x900 * x7, x862 * x7, x914 * x7, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x7 * x851, x827 * x7, x840 * x7, x864 * x7, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x1153 * x7,
-                    x7 * x1146,
-                    x7 * x1158,
-                    x1163 * x7,
+                    x1171 * x7,
+                    x7 * x1182,
+                    x7 * x1169,
+                    x1167 * x7,
                     0.0,
                     0.0,
                     0.0,
@@ -8583,10 +8552,10 @@ pub mod maggi {
                     0.0,
                 ],
                 [
-                    x1333 * x7,
-                    x7 * x1328,
-                    x7 * x1332,
-                    x7 * x1338,
+                    x1354 * x7,
+                    x7 * x1353,
+                    x7 * x1350,
+                    x7 * x1357,
                     0.0,
                     0.0,
                     0.0,
@@ -8594,10 +8563,10 @@ pub mod maggi {
                     0.0,
                 ],
                 [
-                    x7 * x1488,
-                    x1489 * x7,
+                    x7 * x1490,
+                    x1491 * x7,
                     x7 * x1487,
-                    x7 * x1492,
+                    x7 * x1486,
                     0.0,
                     0.0,
                     0.0,
@@ -8610,10 +8579,10 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x1753 * x7,
-                    x1759 * x7,
-                    x1755 * x7,
-                    x1757 * x7,
+                    x1762 * x7,
+                    x1764 * x7,
+                    x1768 * x7,
+                    x1766 * x7,
                     0.0,
                     0.0,
                     0.0,
@@ -8621,10 +8590,10 @@ pub mod maggi {
                     0.0,
                 ],
                 [
-                    x1819 * x7,
-                    x1817 * x7,
-                    x7 * x1821,
-                    x7 * x1820,
+                    x1785 * x7,
+                    x1783 * x7,
+                    x7 * x1781,
+                    x7 * x1782,
                     0.0,
                     0.0,
                     0.0,
@@ -8632,10 +8601,10 @@ pub mod maggi {
                     0.0,
                 ],
                 [
-                    x7 * x1855,
-                    x7 * x1854,
-                    x1852 * x7,
-                    x1853 * x7,
+                    x7 * x1830,
+                    x7 * x1833,
+                    x1832 * x7,
+                    x1831 * x7,
                     0.0,
                     0.0,
                     0.0,
@@ -8643,10 +8612,10 @@ pub mod maggi {
                     0.0,
                 ],
                 [
-                    x1904 * x7,
-                    x7 * x1906,
-                    x1903 * x7,
-                    x7 * x1905,
+                    x1894 * x7,
+                    x7 * x1891,
+                    x1892 * x7,
+                    x7 * x1893,
                     0.0,
                     0.0,
                     0.0,
@@ -8930,109 +8899,111 @@ pub mod kane {
         let x6 = d * m1;
         let x7 = x6 * d + J2;
         let x8 = f64::sin(gamma1);
-        let x9 = x8 * x8;
-        let x10 = m2 * d;
-        let x11 = J2 + x10 * d;
-        let x12 = f64::sin(gamma2);
-        let x13 = f64::cos(gamma1);
-        let x14 = x13 * x13;
-        let x15 = f64::cos(gamma2);
-        let x16 = x15 * x15;
-        let x17 = J1 - J2;
-        let x18 = a_ + x13 * d;
-        let x19 = x8 * (x13 * x17 - x18 * x6) - Ixy;
-        let x20 = J2 - J1;
-        let x21 = a_ + x15 * d;
-        let x22 = x12 * (x15 * x20 + x10 * x21) - Ixz;
-        let x23 = e3 * e0;
-        let x24 = e2 * e1;
-        let x25 = 2.0 * x24 - 2.0 * x23;
-        let x26 = m2 * x12;
-        let x27 = e2 * e0;
-        let x28 = e3 * e1;
-        let x29 = 2.0 * x27 + 2.0 * x28;
-        let x30 = x8 * m1;
-        let x31 = d * (x29 * x30 - x25 * x26);
-        let x32 = e1 * e0;
-        let x33 = e3 * e2;
-        let x34 = 2.0 * x33 - 2.0 * x32;
-        let x35 = x2 - x1;
-        let x36 = x35 - x0 + x3;
-        let x37 = d * (x30 * x34 - x26 * x36);
-        let x38 = 2.0 * x32 + 2.0 * x33;
-        let x39 = x1 - x0 + x2 - x3;
-        let x40 = (x39 * x30 - x38 * x26) * d;
-        let x41 = a_ * x12;
-        let x42 = d + x15 * a_;
-        let x43 = -(x18 * m1);
-        let x44 = -Iyz;
-        let x45 = x10 * x42 + J2;
-        let x46 = x0 + x35 - x3;
-        let x47 = x15 * x46 - x29 * x12;
-        let x48 = x15 * x29 + x12 * x46;
-        let x49 = m2 * (x48 * x42 - x41 * x47) + x43 * x29;
-        let x50 = 2.0 * x23 + 2.0 * x24;
-        let x51 = x15 * x50 - x12 * x34;
-        let x52 = x15 * x34 + x12 * x50;
-        let x53 = x43 * x34 + m2 * (x42 * x52 - x51 * x41);
-        let x54 = 2.0 * x28 - 2.0 * x27;
-        let x55 = x15 * x54 - x39 * x12;
-        let x56 = x15 * x39 + x54 * x12;
-        let x57 = m2 * (x56 * x42 - x55 * x41) + x39 * x43;
-        let x58 = x12 * J1;
-        let x59 = x13 * a_ + d;
-        let x60 = a_ * x8;
-        let x61 = -(m2 * x21);
-        let x62 = x6 * x59 + J2;
-        let x63 = x13 * x46 + x25 * x8;
-        let x64 = x13 * x25 - x8 * x46;
-        let x65 = (x63 * x60 + x64 * x59) * m1 + x25 * x61;
-        let x66 = x36 * x8 + x13 * x50;
-        let x67 = x13 * x36 - x8 * x50;
-        let x68 = x36 * x61 + m1 * (x66 * x60 + x67 * x59);
-        let x69 = x13 * x54 + x38 * x8;
-        let x70 = x13 * x38 - x8 * x54;
-        let x71 = m1 * (x60 * x69 + x70 * x59) + x38 * x61;
-        let x72 = x64 * x6;
-        let x73 = x67 * x6;
-        let x74 = x70 * x6;
-        let x75 = x10 * x48;
-        let x76 = x10 * x52;
-        let x77 = x56 * x10;
-        let x78 = 2.0 * x0 + 2.0 * x2;
-        let x79 = m0
-            + (x3 * (x3 + x78) + x1 * (x1 + 2.0 * x3 + x78) + f64::powi(e0, 4)
+        let x9 = m2 * d;
+        let x10 = J2 + x9 * d;
+        let x11 = f64::sin(gamma2);
+        let x12 = f64::cos(gamma1);
+        let x13 = x12 * x12;
+        let x14 = f64::cos(gamma2);
+        let x15 = x14 * x14;
+        let x16 = J1 - J2;
+        let x17 = a_ + x12 * d;
+        let x18 = x8 * (x12 * x16 - x17 * x6) - Ixy;
+        let x19 = J2 - J1;
+        let x20 = a_ + x14 * d;
+        let x21 = x11 * (x14 * x19 + x9 * x20) - Ixz;
+        let x22 = e3 * e0;
+        let x23 = e2 * e1;
+        let x24 = 2.0 * x23 - 2.0 * x22;
+        let x25 = m2 * x11;
+        let x26 = e2 * e0;
+        let x27 = e3 * e1;
+        let x28 = 2.0 * x26 + 2.0 * x27;
+        let x29 = x8 * m1;
+        let x30 = d * (x28 * x29 - x24 * x25);
+        let x31 = e1 * e0;
+        let x32 = e3 * e2;
+        let x33 = 2.0 * x32 - 2.0 * x31;
+        let x34 = x2 - x1;
+        let x35 = x34 - x0 + x3;
+        let x36 = d * (x29 * x33 - x25 * x35);
+        let x37 = 2.0 * x31 + 2.0 * x32;
+        let x38 = x1 - x0 + x2 - x3;
+        let x39 = (x38 * x29 - x37 * x25) * d;
+        let x40 = -(x17 * m1);
+        let x41 = a_ * x11;
+        let x42 = x14 * a_;
+        let x43 = x42 + d;
+        let x44 = x8 * J1;
+        let x45 = -Iyz;
+        let x46 = J2 + x9 * x43;
+        let x47 = x0 + x34 - x3;
+        let x48 = x14 * x47 - x28 * x11;
+        let x49 = x14 * x28 + x11 * x47;
+        let x50 = m2 * (x43 * x49 - x41 * x48) + x40 * x28;
+        let x51 = 2.0 * x22 + 2.0 * x23;
+        let x52 = x14 * x51 - x11 * x33;
+        let x53 = x14 * x33 + x11 * x51;
+        let x54 = x40 * x33 + m2 * (x43 * x53 - x52 * x41);
+        let x55 = 2.0 * x27 - 2.0 * x26;
+        let x56 = x14 * x55 - x38 * x11;
+        let x57 = x14 * x38 + x55 * x11;
+        let x58 = m2 * (x57 * x43 - x56 * x41) + x38 * x40;
+        let x59 = x11 * J1;
+        let x60 = x12 * a_;
+        let x61 = x60 + d;
+        let x62 = a_ * x8;
+        let x63 = -(m2 * x20);
+        let x64 = J2 + x61 * x6;
+        let x65 = x12 * x47 + x24 * x8;
+        let x66 = x12 * x24 - x8 * x47;
+        let x67 = m1 * (x65 * x62 + x66 * x61) + x24 * x63;
+        let x68 = x12 * x35 - x8 * x51;
+        let x69 = x35 * x8 + x12 * x51;
+        let x70 = x35 * x63 + (x68 * x61 + x69 * x62) * m1;
+        let x71 = x12 * x37 - x8 * x55;
+        let x72 = x12 * x55 + x37 * x8;
+        let x73 = (x71 * x61 + x62 * x72) * m1 + x37 * x63;
+        let x74 = x66 * x6;
+        let x75 = x68 * x6;
+        let x76 = x71 * x6;
+        let x77 = x9 * x49;
+        let x78 = x9 * x53;
+        let x79 = x57 * x9;
+        let x80 = 2.0 * x0 + 2.0 * x2;
+        let x81 = m0
+            + (x3 * (x3 + x80) + x1 * (x1 + 2.0 * x3 + x80) + f64::powi(e0, 4)
                 + x0 * (x0 + 2.0 * x2)) * (m2 + m1);
-        let x80 = u5 + u2;
-        let x81 = x15 * u1 - u3 * x12;
-        let x82 = ((2.0 * u5 + u2) * J2 - J1 * x80) * x81;
-        let x83 = u2 * x41;
-        let x84 = x12 * u1 + x15 * u3;
-        let x85 = a_ * u2;
-        let x86 = d * x80 + x15 * x85;
-        let x87 = -x83 * x84 - x81 * (u5 * d + x86);
-        let x88 = u2 * x8 + x13 * u1;
-        let x89 = -(u4 * x88);
-        let x90 = u3 * x60;
-        let x91 = x13 * u2 - x8 * u1;
-        let x92 = a_ * u3;
-        let x93 = u3 + u4;
-        let x94 = x13 * x92 + x93 * d;
-        let x95 = x94 * x88 - d * x89 - x90 * x91;
-        let x96 = x17 * x88;
-        let x97 = x93 * x96 + J2 * x89;
-        let x98 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x99 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x100 = x15 * u5;
-        let x101 = x13 * u4;
-        let x102 = x92 + d * x84;
-        let x103 = x86 * x80 - x85 * x100 + x102 * x84;
-        let x104 = u2 * x83 - x102 * x81;
-        let x105 = x81 * x84;
-        let x106 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x107 = d * x91 + x85;
-        let x108 = x90 * u3 + x107 * x88;
-        let x109 = x92 * x101 - x107 * x91 - x93 * x94;
+        let x82 = u3 + u4;
+        let x83 = u2 * x8 + x12 * u1;
+        let x84 = x16 * x83;
+        let x85 = -(u4 * x83);
+        let x86 = x82 * x84 + J2 * x85;
+        let x87 = x60 * u3;
+        let x88 = x87 + x82 * d;
+        let x89 = u3 * x62;
+        let x90 = x12 * u2 - x8 * u1;
+        let x91 = x83 * x88 - d * x85 - x89 * x90;
+        let x92 = x11 * u1 + x14 * u3;
+        let x93 = -(u5 * x92);
+        let x94 = u4 * x90;
+        let x95 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x96 = u2 * x41;
+        let x97 = x14 * u1 - u3 * x11;
+        let x98 = u2 * x42;
+        let x99 = u5 + u2;
+        let x100 = x98 + d * x99;
+        let x101 = -x96 * x92 - x97 * (u5 * d + x100);
+        let x102 = ((2.0 * u5 + u2) * J2 - J1 * x99) * x97;
+        let x103 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x104 = a_ * u3 + d * x92;
+        let x105 = u2 * x96 - x97 * x104;
+        let x106 = x100 * x99 - u5 * x98 + x104 * x92;
+        let x107 = x97 * x92;
+        let x108 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x109 = d * x90 + a_ * u2;
+        let x110 = x89 * u3 + x109 * x83;
+        let x111 = x87 * u4 - x109 * x90 - x82 * x88;
         Assembly {
             qdot: [
                 -(x5 * (2.0 * (u1 * e1) + 2.0 * (e3 * u3) + 2.0 * (u2 * e2))),
@@ -9047,58 +9018,58 @@ pub mod kane {
             ],
             matrix: [
                 [
-                    Ixx + x7 * x9 + x11 * x12 * x12 + (x14 + x16) * J1,
-                    x19,
-                    x22,
+                    x7 * x8 * x8 + Ixx + x10 * x11 * x11 + (x13 + x15) * J1,
+                    x18,
+                    x21,
                     0.0,
                     0.0,
-                    x31,
-                    x37,
-                    x40,
+                    x30,
+                    x36,
+                    x39,
                 ],
                 [
-                    x19,
-                    m2 * (x41 * x41 + x42 * x42) + Iyy + J2 * (x14 + 1.0) - x18 * x43
-                        + x9 * J1,
-                    x44,
-                    0.0,
+                    x18,
+                    Iyy + J2 * (x13 + 1.0) - x17 * x40 + m2 * (x41 * x41 + x43 * x43)
+                        + x44 * x8,
                     x45,
-                    x49,
-                    x53,
-                    x57,
+                    0.0,
+                    x46,
+                    x50,
+                    x54,
+                    x58,
                 ],
                 [
-                    x22,
-                    x44,
-                    x12 * x58 + (x59 * x59 + x60 * x60) * m1 + Izz + J2 * (x16 + 1.0)
-                        - x21 * x61,
-                    x62,
+                    x21,
+                    x45,
+                    x11 * x59 + m1 * (x61 * x61 + x62 * x62) + Izz + J2 * (x15 + 1.0)
+                        - x20 * x63,
+                    x64,
                     0.0,
-                    x65,
-                    x68,
-                    x71,
+                    x67,
+                    x70,
+                    x73,
                 ],
-                [0.0, 0.0, x62, x7, 0.0, x72, x73, x74],
-                [0.0, x45, 0.0, 0.0, x11, x75, x76, x77],
-                [x31, x49, x65, x72, x75, x79, 0.0, 0.0],
-                [x37, x53, x68, x73, x76, 0.0, x79, 0.0],
-                [x40, x57, x71, x74, x77, 0.0, 0.0, x79],
+                [0.0, 0.0, x64, x7, 0.0, x74, x75, x76],
+                [0.0, x46, 0.0, 0.0, x10, x77, x78, x79],
+                [x30, x50, x67, x74, x77, x81, 0.0, 0.0],
+                [x36, x54, x70, x75, x78, 0.0, x81, 0.0],
+                [x39, x58, x73, x76, x79, 0.0, 0.0, x81],
             ],
             force: [
-                x12 * (x10 * x87 - x82) + x8 * (x97 - x6 * x95) - u2 * x98 + x99 * u3
-                    - (x101 * x91 - x84 * x100) * J1,
-                x98 * u1 - x13 * x97 - x43 * x95 - m2 * (x104 * x42 - x103 * x41)
-                    - x8 * u4 * x91 * J1 - x105 * x17 - x106 * u3,
-                u2 * x106 - u5 * x84 * x58 - x15 * x82 - x87 * x61 - x20 * x91 * x88
-                    - x99 * u1 - (x108 * x59 + x60 * x109) * m1,
-                x96 * x91 - x108 * x6,
-                x20 * x105 - x10 * x104,
-                -((x29 * x95 + x64 * x108 + x63 * x109) * m1
-                    + m2 * (x103 * x47 + x25 * x87 + x104 * x48)),
-                -(m2 * (x36 * x87 + x103 * x51 + x104 * x52)
-                    + (x66 * x109 + x67 * x108 + x34 * x95) * m1),
-                -((x39 * x95 + x69 * x109 + x70 * x108) * m1
-                    + m2 * (x56 * x104 + x38 * x87 + x103 * x55)),
+                (x86 - x6 * x91) * x8 - (x14 * x93 + x12 * x94) * J1 - u2 * x95
+                    + x11 * (x101 * x9 - x102) + x103 * u3,
+                x95 * u1 - x40 * x91 - x12 * x86 - x44 * x94
+                    - m2 * (x43 * x105 - x106 * x41) - x107 * x16 - x108 * u3,
+                x93 * x59 - x101 * x63 - x14 * x102 + u2 * x108 - x19 * x90 * x83
+                    - (x61 * x110 + x111 * x62) * m1 - x103 * u1,
+                x84 * x90 - x6 * x110,
+                x19 * x107 - x9 * x105,
+                -(m2 * (x106 * x48 + x105 * x49 + x24 * x101)
+                    + (x65 * x111 + x66 * x110 + x28 * x91) * m1),
+                -(m2 * (x101 * x35 + x106 * x52 + x105 * x53)
+                    + (x33 * x91 + x69 * x111 + x68 * x110) * m1),
+                -(m2 * (x56 * x106 + x37 * x101 + x57 * x105)
+                    + (x71 * x110 + x38 * x91 + x111 * x72) * m1),
             ],
             checks: [x4],
         }
@@ -10080,11 +10051,11 @@ pub mod kane {
         let x426 = -(x27 * x97);
         let x427 = -(x27 * x102);
         let x428 = -(x27 * x105);
-        let x429 = x144 + x173 * x129;
-        let x430 = x118 - x119;
-        let x431 = x120 * x34;
-        let x432 = x126 * x430 + (x173 * x120 + x431 * x132);
-        let x433 = x141 * x120 - x430 * x137 - x139 * x120;
+        let x429 = x118 - x119;
+        let x430 = x141 * x120 - x429 * x137 - x139 * x120;
+        let x431 = x126 * x429 + (x286 * x120 + x173 * x120);
+        let x432 = x144 + x173 * x129;
+        let x433 = x120 * x120;
         let x434 = d * x129;
         let x435 = x139 * u3 - x434 * x129;
         let x436 = x195 + x435;
@@ -10120,10 +10091,10 @@ pub mod kane {
         let x466 = -(2.0 * x330);
         let x467 = 2.0 * x208;
         let x468 = -(2.0 * x373);
-        let x469 = x286 - x126;
-        let x470 = x18 * (x141 + x137) + x135 * x30;
-        let x471 = Ixy * u3;
-        let x472 = -x152 * x20 - x22 * x145;
+        let x469 = Ixy * u3;
+        let x470 = -x152 * x20 - x22 * x145;
+        let x471 = x286 - x126;
+        let x472 = x18 * (x141 + x137) + x135 * x30;
         let x473 = u2 * Ixz;
         let x474 = x20 * x178;
         let x475 = x155 * x22;
@@ -10479,7 +10450,7 @@ pub mod kane {
             ],
             d_force: [
                 [
-                    x295 * x214,
+                    x214 * x295,
                     x214 * x297,
                     x214 * x299,
                     x214 * x301,
@@ -10501,7 +10472,7 @@ pub mod kane {
                     -(m2 * (x316 + x323 * x331 + 2.0 * x371) + (x321 + x372 * e1) * m1),
                 ],
                 [
-                    x295 * x374,
+                    x374 * x295,
                     x374 * x297,
                     x374 * x299,
                     x374 * x301,
@@ -10524,15 +10495,15 @@ pub mod kane {
                     -((x365 + x329 * e3) * m1 + m2 * (x323 * x394 + x368)),
                 ],
                 [
-                    x18 * x429 + x30 * (x432 - x433 * x27),
-                    x30 * x429 - x433 * x63 - x18 * x432,
-                    -((x120 * x120 - x129 * x129) * x37
+                    x30 * (x431 - x430 * x27) + x18 * x432,
+                    x30 * x432 - x430 * x63 - x18 * x431,
+                    -(x37 * (x433 - x129 * x129)
                         + (x89 * x436 + a_ * (x18 * x197 + (x438 - x199) * x30)) * m1),
-                    x431 * x120 - x27 * x436 - x131 * x129,
+                    x433 * x34 - x27 * x436 - x131 * x129,
                     0.0,
-                    -(m1 * (x97 * x439 - x200 * x97 + x98 * x440 + x433 * x48)),
-                    -((x433 * x54 - x102 * x200 + x102 * x439 + x101 * x440) * m1),
-                    -((x106 * x440 + x59 * x433 + x105 * x439 - x105 * x200) * m1),
+                    -(m1 * (x97 * x439 - x200 * x97 + x98 * x440 + x430 * x48)),
+                    -((x430 * x54 - x102 * x200 + x102 * x439 + x101 * x440) * m1),
+                    -((x106 * x440 + x59 * x430 + x105 * x439 - x105 * x200) * m1),
                 ],
                 [
                     x22 * (x458 * x24 - x459 * x123) + x20 * (x163 - x460),
@@ -10549,27 +10520,26 @@ pub mod kane {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x18 * (x469 + x173) - x27 * x470) * x30 - x471
-                        + (x24 * x472 + x20 * x459) * x22 + x473,
-                    x31 * x173 - m2 * (x68 * x476 - x477 * x65) - x63 * x470
-                        - (x475 + x20 * x123) * x34 - x19 * x469 - x478 * u3 - x164
-                        - 2.0 * x165,
+                    (x24 * x470 + x20 * x459) * x22 - x469
+                        + (x18 * (x471 + x173) - x27 * x472) * x30 + x473,
+                    x31 * x173 - x19 * x471 - m2 * (x68 * x476 - x477 * x65) - x63 * x472
+                        - (x475 + x20 * x123) * x34 - x478 * u3 - x164 - 2.0 * x165,
                     x168 - x37 * x121 - x21 * x161 - x23 * x201 + 2.0 * x169
-                        - (x91 * x479 - x89 * x481) * m1 - x472 * x94 - u2 * x482
+                        - (x91 * x479 - x89 * x481) * m1 - x470 * x94 - u2 * x482
                         - x131 * x30,
                     x121 * x34 + x37 * x30 * x129 + x27 * x481,
                     x20 * x465 + x22 * x207 - x24 * x476,
-                    -((x479 * x97 + x48 * x470 - x98 * x481) * m1
-                        + m2 * (x477 * x75 + x44 * x472 + x74 * x476)),
-                    -((x54 * x470 - x101 * x481 + x479 * x102) * m1
-                        + m2 * (x57 * x472 + x477 * x80 + x79 * x476)),
-                    -((x479 * x105 - x106 * x481 + x59 * x470) * m1
-                        + m2 * (x85 * x476 + x60 * x472 + x477 * x84)),
+                    -((x479 * x97 + x48 * x472 - x98 * x481) * m1
+                        + m2 * (x477 * x75 + x44 * x470 + x74 * x476)),
+                    -((x54 * x472 - x101 * x481 + x479 * x102) * m1
+                        + m2 * (x57 * x470 + x477 * x80 + x79 * x476)),
+                    -((x479 * x105 - x106 * x481 + x59 * x472) * m1
+                        + m2 * (x85 * x476 + x60 * x470 + x477 * x84)),
                 ],
                 [
                     (-x24 * x485 - x207) * x22 - x484 * u3 + 2.0 * x164
-                        + (x469 - x486 * x27) * x31 + x165 - x19 * x173,
-                    x471 + x30 * (x18 * (x126 - x173 - x286) - x486 * x63) - x487
+                        + (x471 - x486 * x27) * x31 + x165 - x19 * x173,
+                    x469 + (x18 * (x126 - x286 - x173) - x486 * x63) * x30 - x487
                         - m2 * (2.0 * x291 - x488 - x489) * x65,
                     x485 * x94 - x187 - u1 * x482 - (x91 * x490 - x89 * x491) * m1
                         - 2.0 * x188 - x37 * (x172 + x492),
@@ -10875,126 +10845,128 @@ pub mod reduced_volterra {
         let x3 = e2 * e2;
         let x4 = 4.0 * x0 + 4.0 * x1 + 4.0 * x2 + 4.0 * x3;
         let x5 = 1.0 / x4;
-        let x6 = f64::cos(gamma1);
-        let x7 = e3 * e0;
-        let x8 = e2 * e1;
-        let x9 = 2.0 * x8 - 2.0 * x7;
-        let x10 = f64::sin(gamma1);
-        let x11 = x2 - x1;
-        let x12 = x0 + x11 - x3;
-        let x13 = x6 * x9 - x10 * x12;
-        let x14 = u4 * m1;
-        let x15 = f64::sin(gamma2);
-        let x16 = m2 * x15;
-        let x17 = e2 * e0;
-        let x18 = e3 * e1;
-        let x19 = 2.0 * x17 + 2.0 * x18;
-        let x20 = x10 * m1;
-        let x21 = x19 * x20 - x9 * x16;
-        let x22 = u5 * m2;
-        let x23 = f64::cos(gamma2);
-        let x24 = x23 * x19 + x15 * x12;
-        let x25 = x6 * a_ + d;
-        let x26 = x6 * x12 + x9 * x10;
-        let x27 = a_ * x10;
-        let x28 = a_ + x23 * d;
-        let x29 = -(m2 * x28);
-        let x30 = (x13 * x25 + x26 * x27) * m1 + x9 * x29;
-        let x31 = d + x23 * a_;
-        let x32 = a_ * x15;
-        let x33 = x23 * x12 - x19 * x15;
-        let x34 = a_ + x6 * d;
-        let x35 = -(x34 * m1);
-        let x36 = m2 * (x24 * x31 - x32 * x33) + x35 * x19;
-        let x37 = 2.0 * x0 + 2.0 * x2;
-        let x38 = m0
-            + (x3 * (x3 + x37) + x1 * (x1 + 2.0 * x3 + x37) + f64::powi(e0, 4)
+        let x6 = 2.0 * x0 + 2.0 * x2;
+        let x7 = m0
+            + (x3 * (x3 + x6) + x1 * (x1 + 2.0 * x3 + x6) + f64::powi(e0, 4)
                 + x0 * (x0 + 2.0 * x2)) * (m2 + m1);
-        let x39 = 1.0 / x38;
-        let x40 = e1 * e0;
-        let x41 = e3 * e2;
-        let x42 = 2.0 * x41 - 2.0 * x40;
-        let x43 = 2.0 * x7 + 2.0 * x8;
-        let x44 = x23 * x43 - x15 * x42;
-        let x45 = x23 * x42 + x15 * x43;
-        let x46 = (x31 * x45 - x44 * x32) * m2 + x35 * x42;
-        let x47 = x11 - x0 + x3;
-        let x48 = x47 * x10 + x6 * x43;
-        let x49 = x6 * x47 - x10 * x43;
-        let x50 = x47 * x29 + (x48 * x27 + x49 * x25) * m1;
-        let x51 = x20 * x42 - x16 * x47;
-        let x52 = x1 - x0 + x2 - x3;
-        let x53 = 2.0 * x18 - 2.0 * x17;
-        let x54 = x23 * x53 - x52 * x15;
-        let x55 = x23 * x52 + x53 * x15;
-        let x56 = m2 * (x55 * x31 - x54 * x32) + x52 * x35;
-        let x57 = 2.0 * x40 + 2.0 * x41;
-        let x58 = x6 * x57 - x10 * x53;
-        let x59 = x6 * x53 + x57 * x10;
-        let x60 = (x58 * x25 + x27 * x59) * m1 + x57 * x29;
-        let x61 = x52 * x20 - x57 * x16;
-        let x62 = x15 * x15;
-        let x63 = x10 * x10;
-        let x64 = x6 * x6;
-        let x65 = x23 * x23;
+        let x8 = 1.0 / x7;
+        let x9 = f64::cos(gamma1);
+        let x10 = e3 * e0;
+        let x11 = e2 * e1;
+        let x12 = 2.0 * x11 - 2.0 * x10;
+        let x13 = f64::sin(gamma1);
+        let x14 = x2 - x1;
+        let x15 = x0 + x14 - x3;
+        let x16 = x9 * x12 - x13 * x15;
+        let x17 = u4 * m1;
+        let x18 = f64::sin(gamma2);
+        let x19 = m2 * x18;
+        let x20 = e2 * e0;
+        let x21 = e3 * e1;
+        let x22 = 2.0 * x20 + 2.0 * x21;
+        let x23 = x13 * m1;
+        let x24 = x22 * x23 - x12 * x19;
+        let x25 = u5 * m2;
+        let x26 = f64::cos(gamma2);
+        let x27 = x26 * x22 + x18 * x15;
+        let x28 = a_ * x18;
+        let x29 = x26 * x15 - x22 * x18;
+        let x30 = x26 * a_;
+        let x31 = x30 + d;
+        let x32 = a_ + x9 * d;
+        let x33 = -(x32 * m1);
+        let x34 = m2 * (x31 * x27 - x28 * x29) + x33 * x22;
+        let x35 = x9 * x15 + x12 * x13;
+        let x36 = a_ * x13;
+        let x37 = x9 * a_;
+        let x38 = x37 + d;
+        let x39 = a_ + x26 * d;
+        let x40 = -(m2 * x39);
+        let x41 = (x35 * x36 + x16 * x38) * m1 + x12 * x40;
+        let x42 = e1 * e0;
+        let x43 = e3 * e2;
+        let x44 = 2.0 * x43 - 2.0 * x42;
+        let x45 = 2.0 * x10 + 2.0 * x11;
+        let x46 = x26 * x45 - x18 * x44;
+        let x47 = x26 * x44 + x18 * x45;
+        let x48 = x33 * x44 + m2 * (x31 * x47 - x46 * x28);
+        let x49 = x14 - x0 + x3;
+        let x50 = x49 * x13 + x9 * x45;
+        let x51 = x9 * x49 - x13 * x45;
+        let x52 = x49 * x40 + (x50 * x36 + x51 * x38) * m1;
+        let x53 = x23 * x44 - x19 * x49;
+        let x54 = 2.0 * x21 - 2.0 * x20;
+        let x55 = 2.0 * x42 + 2.0 * x43;
+        let x56 = x9 * x55 - x13 * x54;
+        let x57 = x9 * x54 + x55 * x13;
+        let x58 = (x56 * x38 + x36 * x57) * m1 + x55 * x40;
+        let x59 = x1 - x0 + x2 - x3;
+        let x60 = x59 * x23 - x55 * x19;
+        let x61 = x26 * x59 + x54 * x18;
+        let x62 = x26 * x54 - x59 * x18;
+        let x63 = m2 * (x61 * x31 - x62 * x28) + x59 * x33;
+        let x64 = x9 * x9;
+        let x65 = x26 * x26;
         let x66 = J1 - J2;
-        let x67 = (-(x61 * x56 + x36 * x21 + x51 * x46) * x39 - x34 * x20) * d - Ixy
-            + x6 * x66 * x10;
+        let x67 = x9 * x66 * x13 - Ixy
+            + d * (-(x48 * x53 + x60 * x63 + x34 * x24) * x8 - x32 * x23);
         let x68 = J2 - J1;
-        let x69 = d * (x16 * x28 - x39 * (x30 * x21 + x60 * x61 + x50 * x51))
-            + x23 * x68 * x15 - Ixz;
+        let x69 = d * (x19 * x39 - x8 * (x60 * x58 + x52 * x53 + x41 * x24))
+            + x26 * x68 * x18 - Ixz;
         let x70 = d * m1;
-        let x71 = x70 * d;
-        let x72 = -(x71 * (x49 * x51 + x58 * x61 + x13 * x21) * x39);
+        let x71 = x70 * x8;
+        let x72 = -((x51 * x53 + x56 * x60 + x16 * x24) * d * x71);
         let x73 = m2 * d;
-        let x74 = x73 * x39;
-        let x75 = -(x74 * d * (x51 * x45 + x55 * x61 + x24 * x21));
-        let x76 = -Iyz - (x50 * x46 + x36 * x30 + x60 * x56) * x39;
-        let x77 = -(x70 * x39 * (x49 * x46 + x13 * x36 + x58 * x56));
-        let x78 = J2 + x73 * (x31 - (x55 * x56 + x36 * x24 + x45 * x46) * x39);
-        let x79 = x70 * (x25 - x39 * (x49 * x50 + x13 * x30 + x60 * x58)) + J2;
-        let x80 = -(x74 * (x60 * x55 + x24 * x30 + x50 * x45));
-        let x81 = -(x74 * x70 * (x13 * x24 + x55 * x58 + x49 * x45));
-        let x82 = u5 + u2;
-        let x83 = x23 * u1 - u3 * x15;
-        let x84 = ((2.0 * u5 + u2) * J2 - J1 * x82) * x83;
-        let x85 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x86 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x87 = u3 + u4;
-        let x88 = u2 * x10 + x6 * u1;
-        let x89 = x66 * x88;
-        let x90 = -(u4 * x88);
-        let x91 = x87 * x89 + J2 * x90;
-        let x92 = u3 * x27;
-        let x93 = x6 * u2 - x10 * u1;
-        let x94 = a_ * u3;
-        let x95 = x6 * x94 + x87 * d;
-        let x96 = x95 * x88 - d * x90 - x92 * x93;
-        let x97 = u2 * x32;
-        let x98 = x15 * u1 + x23 * u3;
-        let x99 = a_ * u2;
-        let x100 = d * x82 + x23 * x99;
-        let x101 = -x97 * x98 - x83 * (u5 * d + x100);
-        let x102 = x23 * u5;
-        let x103 = x94 + d * x98;
-        let x104 = x100 * x82 - x99 * x102 + x103 * x98;
-        let x105 = x103 * x83;
-        let x106 = u2 * x97;
-        let x107 = x106 - x105;
-        let x108 = d * x93 + x99;
-        let x109 = x6 * u4;
-        let x110 = x94 * x109 - x108 * x93 - x87 * x95;
-        let x111 = x92 * u3;
-        let x112 = x108 * x88;
-        let x113 = x111 + x112;
-        let x114 = m2 * (x47 * x101 + x104 * x44 + x107 * x45)
-            + (x48 * x110 + x49 * x113 + x42 * x96) * m1;
-        let x115 = (x52 * x96 + x59 * x110 + x58 * x113) * m1
-            + m2 * (x55 * x107 + x57 * x101 + x104 * x54);
-        let x116 = (x19 * x96 + x13 * x113 + x26 * x110) * m1
-            + m2 * (x104 * x33 + x9 * x101 + x107 * x24);
-        let x117 = x83 * x98;
-        let x118 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x74 = x73 * x8;
+        let x75 = -(x74 * d * (x53 * x47 + x61 * x60 + x27 * x24));
+        let x76 = x13 * J1;
+        let x77 = -Iyz - (x34 * x41 + x52 * x48 + x63 * x58) * x8;
+        let x78 = -(x71 * (x16 * x34 + x51 * x48 + x56 * x63));
+        let x79 = J2 + x73 * (x31 - x8 * (x27 * x34 + x48 * x47 + x61 * x63));
+        let x80 = x18 * J1;
+        let x81 = J2 + x70 * (x38 - x8 * (x16 * x41 + x56 * x58 + x51 * x52));
+        let x82 = -(x74 * (x27 * x41 + x52 * x47 + x61 * x58));
+        let x83 = -(x74 * x70 * (x16 * x27 + x61 * x56 + x51 * x47));
+        let x84 = x18 * u1 + x26 * u3;
+        let x85 = -(u5 * x84);
+        let x86 = x9 * u2 - x13 * u1;
+        let x87 = u4 * x86;
+        let x88 = u5 + u2;
+        let x89 = x26 * u1 - u3 * x18;
+        let x90 = ((2.0 * u5 + u2) * J2 - J1 * x88) * x89;
+        let x91 = u2 * x13 + x9 * u1;
+        let x92 = x37 * u3;
+        let x93 = u3 + u4;
+        let x94 = x92 + x93 * d;
+        let x95 = -(u4 * x91);
+        let x96 = u3 * x36;
+        let x97 = x91 * x94 - d * x95 - x96 * x86;
+        let x98 = u2 * x28;
+        let x99 = u2 * x30;
+        let x100 = x99 + d * x88;
+        let x101 = -x98 * x84 - x89 * (u5 * d + x100);
+        let x102 = a_ * u3 + d * x84;
+        let x103 = x100 * x88 - u5 * x99 + x102 * x84;
+        let x104 = x89 * x102;
+        let x105 = u2 * x98;
+        let x106 = x105 - x104;
+        let x107 = d * x86 + a_ * u2;
+        let x108 = x92 * u4 - x107 * x86 - x93 * x94;
+        let x109 = x96 * u3;
+        let x110 = x107 * x91;
+        let x111 = x109 + x110;
+        let x112 = m2 * (x103 * x29 + x106 * x27 + x12 * x101)
+            + (x35 * x108 + x16 * x111 + x22 * x97) * m1;
+        let x113 = m2 * (x62 * x103 + x55 * x101 + x61 * x106)
+            + (x56 * x111 + x59 * x97 + x108 * x57) * m1;
+        let x114 = m2 * (x101 * x49 + x103 * x46 + x106 * x47)
+            + (x44 * x97 + x50 * x108 + x51 * x111) * m1;
+        let x115 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x116 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x117 = x66 * x91;
+        let x118 = x93 * x117 + J2 * x95;
+        let x119 = x89 * x84;
+        let x120 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
         Assembly {
             qdot: [
                 -(x5 * (2.0 * (u1 * e1) + 2.0 * (e3 * u3) + 2.0 * (u2 * e2))),
@@ -11003,18 +10975,19 @@ pub mod reduced_volterra {
                 (2.0 * (u2 * e1) - 2.0 * (u1 * e2) + 2.0 * (u3 * e0)) * x5,
                 u4,
                 u5,
-                (G_X - d * (x13 * x14 + u1 * x21 + x22 * x24) - u3 * x30 - u2 * x36)
-                    * x39,
-                (G_Y - u2 * x46 - x50 * u3 - d * (x49 * x14 + u1 * x51 + x22 * x45))
-                    * x39,
-                (G_Z - u2 * x56 - x60 * u3 - (x61 * u1 + x58 * x14 + x55 * x22) * d)
-                    * x39,
+                x8
+                    * (G_X - d * (x16 * x17 + u1 * x24 + x25 * x27) - u2 * x34
+                        - u3 * x41),
+                x8
+                    * (G_Y - u2 * x48 - u3 * x52
+                        - d * (x51 * x17 + u1 * x53 + x25 * x47)),
+                (G_Z - u3 * x58 - (x60 * u1 + x56 * x17 + x61 * x25) * d - u2 * x63) * x8,
             ],
             matrix: [
                 [
-                    (x62 + x63) * J2 + Ixx + (x64 + x65) * J1
-                        + (x16 * x15 - (x51 * x51 + x21 * x21 + x61 * x61) * x39
-                            + x10 * x20) * d * d,
+                    Ixx + (x64 + x65) * J1
+                        + (x19 * x18 - (x53 * x53 + x24 * x24 + x60 * x60) * x8
+                            + x13 * x23) * d * d + (x18 * x18 + x13 * x13) * J2,
                     x67,
                     x69,
                     x72,
@@ -11022,53 +10995,53 @@ pub mod reduced_volterra {
                 ],
                 [
                     x67,
-                    Iyy - x39 * (x36 * x36 + x56 * x56 + x46 * x46) + J2 * (x64 + 1.0)
-                        - x34 * x35 + x63 * J1 + m2 * (x32 * x32 + x31 * x31),
-                    x76,
+                    Iyy + J2 * (x64 + 1.0) + m2 * (x31 * x31 + x28 * x28) - x32 * x33
+                        - x8 * (x48 * x48 + x34 * x34 + x63 * x63) + x76 * x13,
                     x77,
                     x78,
+                    x79,
                 ],
                 [
                     x69,
-                    x76,
-                    x62 * J1 - x39 * (x50 * x50 + x60 * x60 + x30 * x30) + Izz
-                        + (x27 * x27 + x25 * x25) * m1 + J2 * (x65 + 1.0) - x28 * x29,
-                    x79,
-                    x80,
+                    x77,
+                    x18 * x80 - x8 * (x52 * x52 + x58 * x58 + x41 * x41) + Izz
+                        + (x38 * x38 + x36 * x36) * m1 + J2 * (x65 + 1.0) - x39 * x40,
+                    x81,
+                    x82,
                 ],
                 [
                     x72,
-                    x77,
-                    x79,
-                    x71 * (1.0 - (x58 * x58 + x49 * x49 + x13 * x13) * x39 * m1) + J2,
+                    x78,
                     x81,
+                    J2 + (1.0 - (x56 * x56 + x51 * x51 + x16 * x16) * x8 * m1) * x70 * d,
+                    x83,
                 ],
                 [
                     x75,
-                    x78,
-                    x80,
-                    x81,
-                    J2 + (1.0 - m2 * x39 * (x24 * x24 + x55 * x55 + x45 * x45)) * x73 * d,
+                    x79,
+                    x82,
+                    x83,
+                    J2 + (1.0 - m2 * x8 * (x27 * x27 + x61 * x61 + x47 * x47)) * x73 * d,
                 ],
             ],
             force: [
-                x86 * u3 - x15 * x84 - u2 * x85 + x10 * x91
-                    + d
-                        * (x16 * x101 - x20 * x96
-                            - x39 * (-x114 * x51 - x61 * x115 - x116 * x21))
-                    - (x109 * x93 - x98 * x102) * J1,
-                x85 * u1 - x6 * x91 - (-x114 * x46 - x56 * x115 - x116 * x36) * x39
-                    - x35 * x96 - m2 * (x107 * x31 - x104 * x32) - x10 * u4 * x93 * J1
-                    - x117 * x66 - x118 * u3,
-                u2 * x118 - (-x116 * x30 - x50 * x114 - x60 * x115) * x39
-                    - u5 * x15 * x98 * J1 - x23 * x84 - x101 * x29 - x68 * x93 * x88
-                    - x86 * u1 - m1 * (x113 * x25 + x27 * x110),
-                x70 * (-x111 - x112 - (-x58 * x115 - x49 * x114 - x13 * x116) * x39)
-                    + x89 * x93,
-                x68 * x117
-                    + (x105 - (-x116 * x24 - x55 * x115 - x114 * x45) * x39 - x106) * x73,
+                d
+                    * (x101 * x19 - x23 * x97
+                        - x8 * (-x112 * x24 - x60 * x113 - x114 * x53))
+                    - (x26 * x85 + x9 * x87) * J1 - x18 * x90 - u2 * x115 + x116 * u3
+                    + x13 * x118,
+                x115 * u1 - x9 * x118 - (-x114 * x48 - x34 * x112 - x113 * x63) * x8
+                    - x33 * x97 - (x31 * x106 - x103 * x28) * m2 - x76 * x87 - x119 * x66
+                    - x120 * u3,
+                x85 * x80 - (-x41 * x112 - x114 * x52 - x113 * x58) * x8 - x101 * x40
+                    - m1 * (x38 * x111 + x108 * x36) - x26 * x90 + u2 * x120
+                    - x68 * x86 * x91 - x116 * u1,
+                x70 * (-x109 - (-x16 * x112 - x51 * x114 - x56 * x113) * x8 - x110)
+                    + x117 * x86,
+                x73 * (x104 - x105 - (-x114 * x47 - x61 * x113 - x27 * x112) * x8)
+                    + x68 * x119,
             ],
-            checks: [x4, x38],
+            checks: [x4, x7],
         }
     }
     ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1, 2, 3, 4] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
@@ -11729,13 +11702,13 @@ pub mod reduced_volterra {
         let x106 = J2 - J1;
         let x107 = x36 * x27;
         let x108 = d * (-x104 - x105 * x61) + x106 * x107 - Ixz;
-        let x109 = d * x61;
-        let x110 = x109 * m1;
-        let x111 = d * x110;
+        let x109 = d * m1;
+        let x110 = d * x61;
+        let x111 = x109 * x110;
         let x112 = x64 * x70 + (x81 * x86 + x25 * x35);
         let x113 = -(x111 * x112);
-        let x114 = m2 * d;
-        let x115 = x114 * x109;
+        let x114 = m2 * x110;
+        let x115 = x114 * d;
         let x116 = (x37 * x35 + x86 * x83) + x70 * x71;
         let x117 = -(x115 * x116);
         let x118 = x42 * x42;
@@ -11746,27 +11719,27 @@ pub mod reduced_volterra {
         let x123 = x74 * x77 + (x89 * x92 + x56 * x47);
         let x124 = -x123 * x61 - Iyz;
         let x125 = (x81 * x92 + x64 * x74) + x25 * x47;
-        let x126 = -(x125 * x110);
-        let x127 = x92 * x83 + (x74 * x71 + x37 * x47);
-        let x128 = x114 * (x42 - x127 * x61) + J2;
-        let x129 = x94 * J1;
-        let x130 = (x89 * x89 + x56 * x56) + x77 * x77;
-        let x131 = x51 * x51;
-        let x132 = x48 * x48;
-        let x133 = x54 * x55;
-        let x134 = x25 * x56 + (x89 * x81 + x64 * x77);
-        let x135 = d * m1;
-        let x136 = J2 + (x51 - x134 * x61) * x135;
-        let x137 = m2 * x109;
+        let x126 = x110 * m1;
+        let x127 = -(x125 * x126);
+        let x128 = m2 * d;
+        let x129 = x92 * x83 + (x74 * x71 + x37 * x47);
+        let x130 = x128 * (x42 - x129 * x61) + J2;
+        let x131 = x94 * J1;
+        let x132 = (x89 * x89 + x56 * x56) + x77 * x77;
+        let x133 = x51 * x51;
+        let x134 = x48 * x48;
+        let x135 = x54 * x55;
+        let x136 = x25 * x56 + (x89 * x81 + x64 * x77);
+        let x137 = J2 + (x51 - x136 * x61) * x109;
         let x138 = x71 * x77 + (x56 * x37 + x89 * x83);
-        let x139 = -(x137 * x138);
-        let x140 = x135 * d;
+        let x139 = -(x114 * x138);
+        let x140 = x109 * d;
         let x141 = x64 * x64 + (x81 * x81 + x25 * x25);
         let x142 = x61 * m1;
         let x143 = (x25 * x37 + x64 * x71) + x81 * x83;
-        let x144 = x114 * x110;
+        let x144 = x114 * x109;
         let x145 = -(x143 * x144);
-        let x146 = x114 * d;
+        let x146 = x128 * d;
         let x147 = m2 * x61;
         let x148 = (x37 * x37 + x83 * x83) + x71 * x71;
         let x149 = x22 * u1;
@@ -11934,10 +11907,10 @@ pub mod reduced_volterra {
         let x308 = x307 * e0 - 2.0 * x305;
         let x309 = x298 * x26;
         let x310 = x309 + x265 * x38;
-        let x311 = x109 * x109 * x96 * x250
+        let x311 = x110 * x110 * x96 * x250
             + (x95 * (2.0 * x140 + 2.0 * J2) + 2.0 * Ixx + x94 * (2.0 * x146 + 2.0 * J2)
                 + (2.0 * x97 + 2.0 * x98) * J1) * x259;
-        let x312 = d * x109;
+        let x312 = d * x110;
         let x313 = 2.0 * J1 - 2.0 * J2;
         let x314 = x101 * x313 - 2.0 * Ixy;
         let x315 = x260 * x314
@@ -11953,8 +11926,9 @@ pub mod reduced_volterra {
         let x319 = x111
             * (x252 * x112 - x81 * x308 - x64 * x291 + x255 * x35 - x70 * x272
                 - x25 * x262 - x86 * x298);
-        let x320 = (x252 * x116 - x71 * x291 - x265 * x86 - x262 * x37 - x279 * x70
-            - x83 * x308 - x253 * x35) * x115;
+        let x320 = x115
+            * (x252 * x116 - x71 * x291 - x265 * x86 - x262 * x37 - x279 * x70
+                - x83 * x308 - x253 * x35);
         let x321 = x61 * x251;
         let x322 = x121 * x321
             + ((2.0 * x97 + 2.0) * J2 + 2.0 * Iyy - 2.0 * x120
@@ -11963,27 +11937,27 @@ pub mod reduced_volterra {
             * (x252 * x123 - x74 * x286 - x274 * x47 - x304 * x92 - x89 * x297
                 - x281 * x77 - x56 * x268) - 2.0 * (x260 * Iyz);
         let x324 = (x255 * x47 - x92 * x298 - x74 * x272 - x64 * x281 + x252 * x125
-            - x81 * x297 - x25 * x268) * x110;
+            - x81 * x297 - x25 * x268) * x126;
         let x325 = x260 * J2;
         let x326 = x325
-            + x114
+            + x128
                 * (x61
-                    * (x252 * x127 - x253 * x47 - x265 * x92 - x71 * x281 - x37 * x268
+                    * (x252 * x129 - x253 * x47 - x265 * x92 - x71 * x281 - x37 * x268
                         - x279 * x74 - x297 * x83) + x42 * x260);
-        let x327 = (J2 * (2.0 * x98 + 2.0) + 2.0 * x129 + 2.0 * Izz
-            + (2.0 * x131 + 2.0 * x132) * m1 - 2.0 * x133) * x259 + x130 * x321;
+        let x327 = (J2 * (2.0 * x98 + 2.0) + 2.0 * x131 + 2.0 * Izz
+            + (2.0 * x133 + 2.0 * x134) * m1 - 2.0 * x135) * x259 + x132 * x321;
         let x328 = x325
-            + x135
+            + x109
                 * ((x56 * x255 - x272 * x77 - x304 * x81 - x64 * x286 - x25 * x274
-                    + x252 * x134 - x89 * x298) * x61 + x260 * x51);
-        let x329 = x137
+                    + x252 * x136 - x89 * x298) * x61 + x260 * x51);
+        let x329 = x114
             * (x252 * x138 - x304 * x83 - x279 * x77 - x274 * x37 - x89 * x265
                 - x71 * x286 - x56 * x253);
-        let x330 = x135 * x110;
+        let x330 = x109 * x126;
         let x331 = x144
             * (x37 * x255 - x71 * x272 - x298 * x83 - x25 * x253 + x143 * x252
                 - x64 * x279 - x265 * x81);
-        let x332 = x137 * x114;
+        let x332 = x114 * x128;
         let x333 = x157 * x102;
         let x334 = (x333 + x102 * u3) * x160 + (x162 - 2.0 * x164);
         let x335 = u3 * x51;
@@ -11993,9 +11967,9 @@ pub mod reduced_volterra {
         let x339 = (x174 + x338) * x177;
         let x340 = x214 - x213;
         let x341 = x340 - J2 * (2.0 * u5 + 2.0 * u2) + (u5 + 2.0 * u2) * J1;
-        let x342 = x211 * x109 * x251
-            + (x22 * (x334 + x135 * x337) - 3.0 * x219
-                + ((-3.0 * x168 - x339 - x178) * x114 + x341 * x177) * x27
+        let x342 = x211 * x110 * x251
+            + (x22 * (x334 + x109 * x337) - 3.0 * x219
+                + ((-3.0 * x168 - x339 - x178) * x128 + x341 * x177) * x27
                 - (2.0 * x153 + 2.0 * x156) * J1 + 3.0 * x223) * x259;
         let x343 = e3 * x179;
         let x344 = x253 * x203;
@@ -12088,24 +12062,23 @@ pub mod reduced_volterra {
         let x411 = (x385 * x123 - x388 * x47 - x56 * x384 - x92 * x406 - x74 * x394
             - x396 * x77 - x89 * x405) * x61 - 2.0 * (Iyz * x381);
         let x412 = (x385 * x125 - x386 * x47 - x25 * x384 - x81 * x405 + x74 * x298
-            - x92 * x272 - x64 * x396) * x110;
+            - x92 * x272 - x64 * x396) * x126;
         let x413 = J2 * x381;
         let x414 = x413
-            + x114
+            + x128
                 * (x42 * x381
-                    + (x127 * x385 - x279 * x92 - x71 * x396 - x275 * x47 - x395 * x74
+                    + (x129 * x385 - x279 * x92 - x71 * x396 - x275 * x47 - x395 * x74
                         - x83 * x405 - x37 * x384) * x61);
         let x415 = x413
-            + x135
+            + x109
                 * (x61
-                    * (x298 * x77 - x89 * x272 - x64 * x394 - x25 * x388 + x134 * x385
+                    * (x298 * x77 - x89 * x272 - x64 * x394 - x25 * x388 + x136 * x385
                         - x56 * x386 - x81 * x406) + x51 * x381);
-        let x416 = x137
+        let x416 = x114
             * (x385 * x138 - x89 * x279 - x37 * x388 - x71 * x394 - x83 * x406
                 - x395 * x77 - x56 * x275);
-        let x417 = x144
-            * (x143 * x385 - x37 * x386 - x64 * x395 - x25 * x275 + x71 * x298
-                - x81 * x279 - x272 * x83);
+        let x417 = (x143 * x385 - x37 * x386 - x64 * x395 - x25 * x275 + x71 * x298
+            - x81 * x279 - x272 * x83) * x144;
         let x418 = x188 * e0;
         let x419 = 2.0 * x168 + x369 + 2.0 * x178;
         let x420 = (x386 * x197 - x362 - 2.0 * x418 + x371 * x381) * m1
@@ -12140,27 +12113,27 @@ pub mod reduced_volterra {
                     - x435 * x77 - x433 * x35) - 2.0 * (x431 * x104)) + x317 * x431;
         let x444 = (x430 * x112 - x81 * x439 - x25 * x434 - x298 * x35 - x64 * x435
             - x86 * x255 - x70 * x386) * x111;
-        let x445 = (x430 * x116 - x70 * x275 + x253 * x86 - x37 * x434 - x71 * x435
-            - x439 * x83 - x265 * x35) * x115;
+        let x445 = x115
+            * (x430 * x116 - x70 * x275 + x253 * x86 - x37 * x434 - x71 * x435
+                - x439 * x83 - x265 * x35);
         let x446 = (x430 * x123 - x56 * x432 - x436 * x74 - x89 * x438 - x441 * x92
             - x433 * x47 - x437 * x77) * x61 - 2.0 * (Iyz * x431);
         let x447 = (x430 * x125 - x81 * x438 - x25 * x432 - x298 * x47 - x74 * x386
-            - x437 * x64 - x255 * x92) * x110;
+            - x437 * x64 - x255 * x92) * x126;
         let x448 = J2 * x431;
-        let x449 = x114
+        let x449 = x128
             * ((x253 * x92 - x437 * x71 - x83 * x438 - x37 * x432 - x74 * x275
-                + x127 * x430 - x265 * x47) * x61 + x42 * x431) + x448;
+                + x129 * x430 - x265 * x47) * x61 + x42 * x431) + x448;
         let x450 = x448
-            + x135
+            + x109
                 * (x431 * x51
-                    + (x134 * x430 - x89 * x255 - x436 * x64 - x386 * x77 - x25 * x433
+                    + (x136 * x430 - x89 * x255 - x436 * x64 - x386 * x77 - x25 * x433
                         - x56 * x298 - x81 * x441) * x61);
-        let x451 = x137
+        let x451 = x114
             * (x89 * x253 - x56 * x265 - x37 * x433 - x441 * x83 - x436 * x71
                 + x430 * x138 - x275 * x77);
-        let x452 = x144
-            * (x143 * x430 - x255 * x83 - x37 * x298 + x81 * x253 - x64 * x275
-                - x71 * x386 - x25 * x265);
+        let x452 = (x143 * x430 - x255 * x83 - x37 * x298 + x81 * x253 - x64 * x275
+            - x71 * x386 - x25 * x265) * x144;
         let x453 = m2 * (x370 * e2 + x426) + (x371 * x431 + x425) * m1;
         let x454 = m2 * (2.0 * x343 + x359 * x431 + x395 * x207 - x344)
             + (x351 + x197 * x440 + x422 * e2) * m1;
@@ -12186,21 +12159,22 @@ pub mod reduced_volterra {
         let x470 = x111
             * (x112 * x461 - x86 * x386 - x25 * x459 - x35 * x440 + x70 * x255
                 - x64 * x462 - x81 * x465);
-        let x471 = (x116 * x461 - x253 * x70 - x462 * x71 - x37 * x459 - x465 * x83
-            - x86 * x275 - x382 * x35) * x115;
+        let x471 = x115
+            * (x116 * x461 - x253 * x70 - x462 * x71 - x37 * x459 - x465 * x83
+                - x86 * x275 - x382 * x35);
         let x472 = (x123 * x461 - x89 * x467 - x464 * x77 - x56 * x458 - x460 * x47
             - x463 * x74 - x92 * x466) * x61 - 2.0 * (Iyz * x457);
         let x473 = (x255 * x74 - x386 * x92 - x47 * x440 - x25 * x458 + x125 * x461
-            - x64 * x464 - x81 * x467) * x110;
+            - x64 * x464 - x81 * x467) * x126;
         let x474 = J2 * x457;
-        let x475 = x114
+        let x475 = x128
             * (x42 * x457
-                + (x127 * x461 - x71 * x464 - x37 * x458 - x92 * x275 - x382 * x47
+                + (x129 * x461 - x71 * x464 - x37 * x458 - x92 * x275 - x382 * x47
                     - x83 * x467 - x253 * x74) * x61) + x474;
-        let x476 = x135
-            * ((x255 * x77 - x81 * x466 - x89 * x386 + x134 * x461 - x56 * x440
+        let x476 = x109
+            * ((x255 * x77 - x81 * x466 - x89 * x386 + x136 * x461 - x56 * x440
                 - x64 * x463 - x25 * x460) * x61 + x51 * x457) + x474;
-        let x477 = x137
+        let x477 = x114
             * (x138 * x461 - x56 * x382 - x37 * x460 - x463 * x71 - x253 * x77
                 - x89 * x275 - x83 * x466);
         let x478 = (x255 * x71 - x64 * x253 - x25 * x382 - x386 * x83 - x81 * x275
@@ -12219,24 +12193,24 @@ pub mod reduced_volterra {
         let x489 = x32 * x47;
         let x490 = x74 * x67;
         let x491 = x22 * d;
-        let x492 = x135
+        let x492 = x109
             * (x61 * (-x18 * (x488 + x489 + x490) - x491 * (x485 + x486 + x487))
                 - x18 * x45 + x95 * d) + x97 * x102 + x106 * x95;
         let x493 = x89 * x82 + x67 * x77 + x56 * x32;
-        let x494 = (-x86 * x484 - x482 * x35 - x18 * x493 - x483 * x70) * x110;
+        let x494 = (-x86 * x484 - x482 * x35 - x18 * x493 - x483 * x70) * x126;
         let x495 = x82 * x81 + x25 * x32 + x64 * x67;
         let x496 = x111 * (x70 * x75 + x35 * x49 + x86 * x87 - x18 * x495 * m1);
         let x497 = -(x144 * (x82 * x83 + x71 * x67 + x37 * x32));
         let x498 = x18 * x497;
         let x499 = (-x483 * x74 - x484 * x92 - x491 * x493 - x482 * x47) * x142;
-        let x500 = (x92 * x87 - x495 * x135 * x22 + x74 * x75 + x49 * x47) * x110;
+        let x500 = (x92 * x87 - x495 * x109 * x22 + x74 * x75 + x49 * x47) * x126;
         let x501 = x22 * x497;
         let x502 = (x61
             * (x89 * x87 - m1 * (x81 * x484 + x483 * x64 + x25 * x482) + x75 * x77
-                + x56 * x49) - x48) * x135;
-        let x503 = m2 * x110;
+                + x56 * x49) - x48) * x109;
+        let x503 = x114 * m1;
         let x504 = -(x503 * (x37 * x482 + x484 * x83 + x483 * x71));
-        let x505 = -(x144 * (-x83 * x87 - x71 * x75 - x37 * x49));
+        let x505 = -((-x83 * x87 - x71 * x75 - x37 * x49) * x144);
         let x506 = x18 * x160;
         let x507 = x184 * u3;
         let x508 = -(x160 * x160);
@@ -12264,13 +12238,13 @@ pub mod reduced_volterra {
         let x530 = x21 * x35;
         let x531 = x70 * x63;
         let x532 = x80 * x92 + (x21 * x47 + x63 * x74);
-        let x533 = x137 * (x36 * x532 - x524 * x35 - x528 * x86 - x525 * x70);
+        let x533 = x114 * (x36 * x532 - x524 * x35 - x528 * x86 - x525 * x70);
         let x534 = d * x27;
         let x535 = x89 * x80;
         let x536 = x56 * x21;
         let x537 = x63 * x77;
         let x538 = x94 * x102 + x106 * x98
-            + x114
+            + x128
                 * (((x535 + x536 + x537) * x36 - (x529 + x530 + x531) * x534) * x61
                     + x36 * x54 - x94 * d);
         let x539 = x25 * x21 + (x80 * x81 + x64 * x63);
@@ -12278,13 +12252,13 @@ pub mod reduced_volterra {
         let x541 = (x63 * x71 + x21 * x37) + x80 * x83;
         let x542 = x115 * (x36 * m2 * x541 - x70 * x72 - x86 * x90 - x35 * x40);
         let x543 = (-x56 * x524 - x89 * x528 - x525 * x77 - x532 * x534) * x147;
-        let x544 = -(x503 * (x25 * x524 + x64 * x525 + x528 * x81));
-        let x545 = x114
+        let x544 = -((x25 * x524 + x64 * x525 + x528 * x81) * x503);
+        let x545 = x128
             * ((-m2 * (x528 * x83 + x525 * x71 + x524 * x37) - x74 * x72 - x47 * x40
                 - x92 * x90) * x61 - x39);
         let x546 = -(x144 * x27 * x539);
-        let x547 = x137 * (-x56 * x40 - x77 * x72 - x89 * x90 - x541 * x114 * x27);
-        let x548 = -(x144 * (x64 * x72 + x81 * x90 + x25 * x40));
+        let x547 = x114 * (-x56 * x40 - x77 * x72 - x89 * x90 - x541 * x128 * x27);
+        let x548 = -((x64 * x72 + x81 * x90 + x25 * x40) * x144);
         let x549 = x175 - x176;
         let x550 = u2 * x170;
         let x551 = x177 * x177;
@@ -12302,24 +12276,24 @@ pub mod reduced_volterra {
         let x563 = -(2.0 * x380);
         let x564 = 2.0 * x245;
         let x565 = -(2.0 * x429);
-        let x566 = Ixy * u3;
-        let x567 = x333 - x163;
-        let x568 = u2 * Ixz;
-        let x569 = -x174 * x36 - x27 * x167;
-        let x570 = x18 * (x186 + x182) + x180 * x22;
-        let x571 = x18 * x192;
-        let x572 = x491 * x160 - x571;
-        let x573 = x514 * x22;
-        let x574 = x554 * x27;
-        let x575 = x36 * x200;
-        let x576 = x177 * x534;
-        let x577 = -x575 - x576;
-        let x578 = (x573 * x49 - x25 * x572 + x32 * x570) * m1
-            + m2 * (x574 * x40 + x37 * x577 + x21 * x569);
-        let x579 = (x573 * x87 - x81 * x572 + x82 * x570) * m1
-            + m2 * (x577 * x83 + x80 * x569 + x574 * x90);
-        let x580 = m1 * (x67 * x570 - x64 * x572 + x573 * x75)
-            + m2 * (x71 * x577 + x63 * x569 + x574 * x72);
+        let x566 = x18 * x192;
+        let x567 = x491 * x160 - x566;
+        let x568 = x18 * (x186 + x182) + x180 * x22;
+        let x569 = x514 * x22;
+        let x570 = -x174 * x36 - x27 * x167;
+        let x571 = x554 * x27;
+        let x572 = x36 * x200;
+        let x573 = x212 * d;
+        let x574 = -x572 - x573;
+        let x575 = m1 * (x67 * x568 - x64 * x567 + x569 * x75)
+            + m2 * (x63 * x570 + x571 * x72 + x71 * x574);
+        let x576 = m2 * (x83 * x574 + x80 * x570 + x571 * x90)
+            + (x569 * x87 - x81 * x567 + x82 * x568) * m1;
+        let x577 = (x569 * x49 - x25 * x567 + x32 * x568) * m1
+            + m2 * (x571 * x40 + x21 * x570 + x37 * x574);
+        let x578 = Ixy * u3;
+        let x579 = x333 - x163;
+        let x580 = u2 * Ixz;
         let x581 = Ixx - Izz;
         let x582 = Iyy - Ixx;
         let x583 = x161 * x22;
@@ -12332,7 +12306,7 @@ pub mod reduced_volterra {
         let x590 = x588 + x589;
         let x591 = x182 + x185;
         let x592 = x591 * x22;
-        let x593 = -x571 - x45 * x151;
+        let x593 = -x566 - x45 * x151;
         let x594 = -x45 * x160 - x22 * x192;
         let x595 = m2 * (2.0 * (x71 * x167) - x63 * x587 + x590 * x72)
             + (x67 * x592 + x75 * x593 - x64 * x594) * m1;
@@ -12345,7 +12319,7 @@ pub mod reduced_volterra {
         let x600 = x177 * x54;
         let x601 = x27 * x200;
         let x602 = x601 - x600;
-        let x603 = -x575 - x54 * x154;
+        let x603 = -x572 - x54 * x154;
         let x604 = x169 + x172;
         let x605 = x604 * x27;
         let x606 = x50 * (u4 - u3) - x157 * (x50 + 2.0 * d);
@@ -12391,19 +12365,19 @@ pub mod reduced_volterra {
                     Iyy + m2 * (x118 + x119) - x120 - x61 * x121 + J2 * (x97 + 1.0)
                         + x122,
                     x124,
-                    x126,
-                    x128,
+                    x127,
+                    x130,
                 ],
                 [
                     x108,
                     x124,
-                    J2 * (x98 + 1.0) + x129 - x130 * x61 + Izz + (x131 + x132) * m1
-                        - x133,
-                    x136,
+                    J2 * (x98 + 1.0) + x131 - x132 * x61 + Izz + (x133 + x134) * m1
+                        - x135,
+                    x137,
                     x139,
                 ],
-                [x113, x126, x136, J2 + x140 * (1.0 - x141 * x142), x145],
-                [x117, x128, x139, x145, J2 + x146 * (1.0 - x147 * x148)],
+                [x113, x127, x137, J2 + x140 * (1.0 - x141 * x142), x145],
+                [x117, x130, x139, x145, J2 + x146 * (1.0 - x147 * x148)],
             ],
             force: [
                 x166 - J1 * (x153 + x156) + (x28 * x179 - x211 * x61 - x188 * x33) * d
@@ -12412,8 +12386,8 @@ pub mod reduced_volterra {
                     - x229 * x102 - x230 * x61 - x234,
                 x238 - (x197 * x48 + x51 * x194) * m1 - x215 * x235 - x179 * x55
                     - x239 * x61 + x240 - x241 - x106 * x242,
-                x242 * x102 + (-x243 * x61 - x189 - x193) * x135,
-                x114 * (x201 - x61 * x244 - x202) + x106 * x229,
+                x242 * x102 + (-x243 * x61 - x189 - x193) * x109,
+                x128 * (x201 - x61 * x244 - x202) + x106 * x229,
             ],
             checks: [x4, x60],
             d_qdot: [
@@ -12497,9 +12471,9 @@ pub mod reduced_volterra {
                     x565,
                     0.0,
                     0.0,
-                    (x29 - x34) * x109,
-                    (x69 - x68) * x109,
-                    x109 * (x85 - x84),
+                    (x29 - x34) * x110,
+                    (x69 - x68) * x110,
+                    x110 * (x85 - x84),
                 ],
                 [
                     x565,
@@ -12530,9 +12504,9 @@ pub mod reduced_volterra {
                     0.0,
                     1.0,
                     0.0,
-                    -(x25 * x110),
-                    -(x64 * x110),
-                    -(x81 * x110),
+                    -(x25 * x126),
+                    -(x64 * x126),
+                    -(x81 * x126),
                 ],
                 [
                     0.0,
@@ -12541,9 +12515,9 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     1.0,
-                    -(x137 * x37),
-                    -(x137 * x71),
-                    -(x137 * x83),
+                    -(x114 * x37),
+                    -(x114 * x71),
+                    -(x114 * x83),
                 ],
             ],
             d_matrix: [
@@ -12755,7 +12729,7 @@ pub mod reduced_volterra {
                     ],
                     [
                         x492,
-                        (x135
+                        (x109
                             * (-2.0 * a_ - (2.0 * x488 + 2.0 * x489 + 2.0 * x490) * x61
                                 - 2.0 * x44) + x18 * x313) * x22,
                         x499,
@@ -12809,7 +12783,7 @@ pub mod reduced_volterra {
                         x543,
                         (x36 * x313
                             + (-(2.0 * x535 + 2.0 * x536 + 2.0 * x537) * x61 - 2.0 * a_
-                                - 2.0 * x53) * x114) * x27,
+                                - 2.0 * x53) * x128) * x27,
                         x546,
                         x547,
                     ],
@@ -12885,7 +12859,7 @@ pub mod reduced_volterra {
                 [
                     x342 * e0
                         - (-x35 * x358 - x262 * x209 - x210 * x308 - x366 * x86
-                            - x208 * x291 - x70 * x375) * x109,
+                            - x208 * x291 - x70 * x375) * x110,
                     x376 * e0
                         - (-x268 * x209 - x297 * x210 - x74 * x375 - x358 * x47
                             - x366 * x92 - x208 * x281) * x61,
@@ -12896,8 +12870,8 @@ pub mod reduced_volterra {
                         + (x61
                             * (x208 * x272 + x64 * x375 + x366 * x81 + x252 * x243
                                 + x25 * x358 + x210 * x298 - x255 * x209) - x260 * x356)
-                            * x135,
-                    x114
+                            * x109,
+                    x128
                         * ((x265 * x210 + x366 * x83 + x253 * x209 + x37 * x358
                             + x279 * x208 + x252 * x244 + x71 * x375) * x61
                             - x260 * x346) + x260 * x379,
@@ -12905,7 +12879,7 @@ pub mod reduced_volterra {
                 [
                     x342 * e1
                         - (-x392 * x209 - x403 * x210 - x70 * x420 - x86 * x423
-                            - x35 * x428 - x208 * x399) * x109,
+                            - x35 * x428 - x208 * x399) * x110,
                     x376 * e1
                         - (-x423 * x92 - x74 * x420 - x208 * x396 - x384 * x209
                             - x210 * x405 - x47 * x428) * x61,
@@ -12915,16 +12889,16 @@ pub mod reduced_volterra {
                     x378 * x381
                         + ((x64 * x420 + x243 * x385 + x210 * x272 + x386 * x209
                             + x81 * x423 - x208 * x298 + x25 * x428) * x61 - x381 * x356)
-                            * x135,
+                            * x109,
                     x379 * x381
                         + ((x37 * x428 + x395 * x208 + x279 * x210 + x385 * x244
                             + x275 * x209 + x71 * x420 + x423 * x83) * x61 - x346 * x381)
-                            * x114,
+                            * x128,
                 ],
                 [
                     x342 * e2
                         - (-x208 * x435 - x453 * x70 - x86 * x454 - x210 * x439
-                            - x455 * x35 - x434 * x209) * x109,
+                            - x455 * x35 - x434 * x209) * x110,
                     e2 * x376
                         - (-x455 * x47 - x209 * x432 - x437 * x208 - x210 * x438
                             - x453 * x74 - x92 * x454) * x61,
@@ -12933,10 +12907,10 @@ pub mod reduced_volterra {
                             * (-x453 * x77 - x56 * x455 - x433 * x209 - x210 * x441
                                 - x89 * x454 - x436 * x208),
                     ((x298 * x209 + x243 * x430 + x25 * x455 + x255 * x210 + x453 * x64
-                        + x208 * x386 + x81 * x454) * x61 - x431 * x356) * x135
+                        + x208 * x386 + x81 * x454) * x61 - x431 * x356) * x109
                         + x378 * x431,
                     x431 * x379
-                        + x114
+                        + x128
                             * ((x430 * x244 - x253 * x210 + x83 * x454 + x453 * x71
                                 + x265 * x209 + x37 * x455 + x208 * x275) * x61
                                 - x346 * x431),
@@ -12944,7 +12918,7 @@ pub mod reduced_volterra {
                 [
                     e3 * x342
                         - (-x459 * x209 - x479 * x35 - x70 * x480 - x86 * x481
-                            - x208 * x462 - x210 * x465) * x109,
+                            - x208 * x462 - x210 * x465) * x110,
                     e3 * x376
                         - x61
                             * (-x210 * x467 - x479 * x47 - x209 * x458 - x74 * x480
@@ -12953,19 +12927,19 @@ pub mod reduced_volterra {
                         - (-x89 * x481 - x56 * x479 - x463 * x208 - x480 * x77
                             - x460 * x209 - x210 * x466) * x61,
                     x378 * x457
-                        + x135
+                        + x109
                             * ((x386 * x210 - x208 * x255 + x81 * x481 + x209 * x440
                                 + x64 * x480 + x243 * x461 + x25 * x479) * x61
                                 - x457 * x356),
                     x457 * x379
-                        + x114
+                        + x128
                             * (x61
                                 * (x71 * x480 + x253 * x208 + x210 * x275 + x461 * x244
                                     + x83 * x481 + x382 * x209 + x37 * x479) - x346 * x457),
                 ],
                 [
                     (x224 + x506) * x225
-                        + x135
+                        + x109
                             * ((x86 * x517 + x70 * x518 + x519 * x35 - x18 * x520) * x61
                                 - x18 * x188 - x513 * x22) + x22 * x521 + x228,
                     ((x74 * x518 + x517 * x92 + x519 * x47 - x491 * x520) * x61
@@ -12974,7 +12948,7 @@ pub mod reduced_volterra {
                     ((x56 * x519 + x210 * x484 + x518 * x77 + x89 * x517 + x482 * x209
                         + x483 * x208) * x61 - a_ * (x18 * x197 + (x515 - x193) * x22)
                         - x51 * (x195 + x510)) * m1 - x106 * (x522 + x508),
-                    x135
+                    x109
                         * (x61
                             * ((x64 * x518 + x25 * x519 + x81 * x517) * m1 - x208 * x75
                                 - x210 * x87 - x209 * x49) - x507 - x195 - x509)
@@ -12985,7 +12959,7 @@ pub mod reduced_volterra {
                     x236 * (x237 - x36 * x549) - (x237 + x235) * x215
                         + (x36 * x179
                             + x61 * (x557 * x70 + x35 * x558 + x559 * x86 + x36 * x560)
-                            + x556 * x27) * x114,
+                            + x556 * x27) * x128,
                     m2
                         * ((x525 * x208 + x524 * x209 + x528 * x210 + x557 * x74
                             + x559 * x92 + x47 * x558) * x61 - x553 * x42
@@ -12998,45 +12972,44 @@ pub mod reduced_volterra {
                     (x25 * x558 + x557 * x64 + x559 * x81) * x503,
                     (x61
                         * (x210 * x90 + m2 * (x557 * x71 + x37 * x558 + x559 * x83)
-                            + x208 * x72 + x209 * x40) - x550 - x206 + x552) * x114
+                            + x208 * x72 + x209 * x40) - x550 - x206 + x552) * x128
                         - x154 * x562 + x106 * x551,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x107 * x561 - x566 + x101 * (x567 + x225) + x568
-                        + d
-                            * (x28 * x569 - x33 * x570
-                                - (-x578 * x35 - x579 * x86 - x580 * x70) * x61),
-                    x95 * x225 - x46 * x570 - x102 * (x212 + x36 * x154) - x581 * u3
-                        - x97 * x567 - m2 * (x42 * x577 - x574 * x39) - x216 - 2.0 * x217
-                        - (-x580 * x74 - x578 * x47 - x579 * x92) * x61,
-                    x220 - x106 * x152 - m1 * (x48 * x573 - x572 * x51) - x98 * x215
-                        - (-x580 * x77 - x56 * x578 - x89 * x579) * x61 - x94 * x236
-                        + 2.0 * x221 - x569 * x55 - u2 * x582 - x583,
-                    x102 * x152
-                        + (x572 - (-x25 * x578 - x580 * x64 - x81 * x579) * x61) * x135
-                        + x106 * x22 * x160,
-                    x36 * x562 + x584
-                        + x114
-                            * (x575 + x576
-                                - (-x578 * x37 - x580 * x71 - x579 * x83) * x61),
+                    (x28 * x570 - x61 * (-x575 * x70 - x86 * x576 - x577 * x35)
+                        - x33 * x568) * d + x107 * x561 - x578 + x101 * (x579 + x225)
+                        + x580,
+                    x95 * x225 - (-x92 * x576 - x577 * x47 - x575 * x74) * x61
+                        - x46 * x568 - x102 * (x212 + x36 * x154)
+                        - m2 * (x42 * x574 - x571 * x39) - x581 * u3 - x97 * x579 - x216
+                        - 2.0 * x217,
+                    x220 - x106 * x152 - m1 * (x48 * x569 - x567 * x51) - x98 * x215
+                        - x94 * x236 + 2.0 * x221 - x570 * x55 - u2 * x582
+                        - (-x575 * x77 - x89 * x576 - x577 * x56) * x61 - x583,
+                    x102 * x152 + x106 * x22 * x160
+                        + x109 * (x567 - (-x64 * x575 - x81 * x576 - x25 * x577) * x61),
+                    x36 * x562
+                        + x128
+                            * (x572 + x573
+                                - (-x575 * x71 - x577 * x37 - x83 * x576) * x61) + x584,
                 ],
                 [
                     2.0 * x216 - x586 * u3 - x584
                         + d
                             * (-(-x70 * x595 - x596 * x35 - x86 * x597) * x61
-                                - x33 * x592 - x28 * x587) + x217 + x567 * x95 - x97 * x225,
-                    x22 * (x18 * (x163 - x333 - x225) - x591 * x46) + x566
+                                - x33 * x592 - x28 * x587) + x217 + x579 * x95 - x97 * x225,
+                    x22 * (x18 * (x163 - x333 - x225) - x591 * x46) + x578
                         - (-x92 * x597 - x596 * x47 - x74 * x595) * x61
                         - m2 * (2.0 * x338 - x588 - x589) * x39 - x598,
                     x587 * x55 - x231 - u1 * x582 - 2.0 * x232
                         - (-x595 * x77 - x56 * x596 - x89 * x597) * x61
                         - (x48 * x593 - x51 * x594) * m1 - x106 * (x224 + x599),
                     x102 * x224 + x18 * x161
-                        + (x594 - x61 * (-x64 * x595 - x25 * x596 - x81 * x597)) * x135,
-                    x114 * (-(-x71 * x595 - x596 * x37 - x83 * x597) * x61 - 2.0 * x167),
+                        + (x594 - x61 * (-x64 * x595 - x25 * x596 - x81 * x597)) * x109,
+                    x128 * (-(-x71 * x595 - x596 * x37 - x83 * x597) * x61 - 2.0 * x167),
                 ],
                 [
                     (x28 * x605 - (-x608 * x70 - x35 * x609 - x86 * x610) * x61
@@ -13047,10 +13020,10 @@ pub mod reduced_volterra {
                         - x27 * x562 - x581 * u1,
                     x27 * (-x604 * x55 - x36 * x561)
                         - (-x89 * x610 - x56 * x609 - x608 * x77) * x61
-                        - x48 * m1 * (2.0 * x335 + x606) - x568 + x598,
-                    x135 * (-2.0 * x180 - (-x81 * x610 - x64 * x608 - x25 * x609) * x61),
+                        - x48 * m1 * (2.0 * x335 + x606) - x580 + x598,
+                    x109 * (-2.0 * x180 - (-x81 * x610 - x64 * x608 - x25 * x609) * x61),
                     x102 * x27 * x154
-                        + x114
+                        + x128
                             * (x600 - x601
                                 - (-x37 * x609 - x610 * x83 - x608 * x71) * x61)
                         + x106 * x235,
@@ -13058,21 +13031,21 @@ pub mod reduced_volterra {
                 [
                     ((x612 * x86 + x613 * x35 + x70 * x614) * x61 - x22 * x611) * x140
                         + x615 * x22 - x152 * J1,
-                    x135 * (x45 * x611 + (x74 * x614 + x613 * x47 + x612 * x92) * x61)
+                    x109 * (x45 * x611 + (x74 * x614 + x613 * x47 + x612 * x92) * x61)
                         - x224 * J1 - x18 * x615,
-                    x135
+                    x109
                         * (x61 * (x614 * x77 + x56 * x613 + x89 * x612)
                             + 2.0 * (x157 * x48)),
                     x330 * (x25 * x613 + x64 * x614 + x612 * x81),
-                    x144 * (x71 * x614 + x37 * x613 + x612 * x83),
+                    (x71 * x614 + x37 * x613 + x612 * x83) * x144,
                 ],
                 [
                     x146 * (x61 * (x70 * x617 + x86 * x618 + x619 * x35) - 2.0 * x212)
                         - x212 * x616 - x155 * J1,
-                    x114
+                    x128
                         * ((x618 * x92 + x74 * x617 + x619 * x47) * x61
                             + 2.0 * (x171 * x39)),
-                    x114 * ((x56 * x619 + x89 * x618 + x617 * x77) * x61 - 2.0 * x600)
+                    x128 * ((x56 * x619 + x89 * x618 + x617 * x77) * x61 - 2.0 * x600)
                         - x235 * x616 + x237 * J1,
                     x144 * (x81 * x618 + x25 * x619 + x64 * x617),
                     x332 * (x37 * x619 + x71 * x617 + x618 * x83),

@@ -1292,7 +1292,7 @@ pub mod maggi {
             power: x16 * x19,
             d_power: [x19 * x22, x25 * x19, x26 * x23, m * ((x14 + x27 * x3) * x0 + g)],
             power_weights: [m * (x_dot - x4)],
-            d_power_weights: [[-x23], [x2 * x19], [m], [-x18]],
+            d_power_weights: [[-x23], [x20 * y_dot], [m], [-x18]],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1455,7 +1455,7 @@ pub mod maggi {
         let x15 = x1 * y_dot;
         let x16 = (x4 * (((x9 - x10) * A - x7) * w_ - x14) + (x15 - x_dot) * x_dot) * x0;
         let x17 = x16 + g;
-        let x18 = m * y_dot;
+        let x18 = x17 * y_dot;
         let x19 = x_dot - x15;
         let x20 = x7 + (x10 - x9) * A;
         let x21 = x3 * x0;
@@ -1495,8 +1495,8 @@ pub mod maggi {
                 [0.0, x25 * x0],
                 [0.0, x26 * x0],
             ],
-            power: x17 * x18,
-            d_power: [x17 * y_dot, x18, x23 * x22, x23 * x25, x23 * x26],
+            power: x18 * m,
+            d_power: [x18, m * y_dot, x23 * x22, x23 * x25, x23 * x26],
             power_weights: [m * x19],
             d_power_weights: [[x19], [0.0], [0.0], [0.0], [0.0]],
         }
@@ -2204,28 +2204,26 @@ pub mod kane {
         let x28 = u1 - x12 * x9;
         let x29 = m * x12;
         let x30 = x11 * x6 * (2.0 * x1 - x8 * x16) - w_ * x3;
-        let x31 = 2.0 * x4 + L0;
-        let x32 = w_ * x6;
-        let x33 = x31 * x32;
-        let x34 = w_
+        let x31 = (2.0 * x4 + L0) * x6;
+        let x32 = x29 * w_;
+        let x33 = w_
             * ((x22 * (x11 * (-2.0 * x21 - x4 * (4.0 * x4 + 6.0 * L0)) + 2.0)
                 - 2.0 * x23) * A - x20) + x18 * (4.0 * x4 + 2.0 * L0);
-        let x35 = x5 * x6 + x2 * ((x22 - x23) * A - x20);
-        let x36 = x35 * A;
-        let x37 = x19
-            + w_
-                * (A
-                    * (x23 * (-2.0 * (x17 * t) - 2.0)
-                        + x6
-                            * (x11
-                                * (t
-                                    * ((A
-                                        * ((4.0 * x20 + (2.0 * x23 - 2.0 * x22) * A) * x3
-                                            - 2.0 * (x22 * L0)) + 2.0 * (x20 * L0)) * w_
-                                        + 2.0 * (x1 * x6))
-                                    + x6 * (-2.0 * x21 - (2.0 * x4 + 4.0 * L0) * x4)) + 2.0 * x6
-                                - 4.0 * (x2 * x3)))
-                    + (-(2.0 * (x17 * x3) + x32) * t - 2.0 * x3) * L0);
+        let x34 = x5 * x6 + x2 * ((x22 - x23) * A - x20);
+        let x35 = x34 * A;
+        let x36 = x19
+            + (A
+                * (x23 * (-2.0 * (x17 * t) - 2.0)
+                    + x6
+                        * (x11
+                            * (t
+                                * ((A
+                                    * ((4.0 * x20 + (2.0 * x23 - 2.0 * x22) * A) * x3
+                                        - 2.0 * (x22 * L0)) + 2.0 * (x20 * L0)) * w_
+                                    + 2.0 * (x1 * x6))
+                                + x6 * (-2.0 * x21 - (2.0 * x4 + 4.0 * L0) * x4)) + 2.0 * x6
+                            - 4.0 * (x2 * x3)))
+                + (-t * (2.0 * (x17 * x3) + w_ * x6) - 2.0 * x3) * L0) * w_;
         ParameterDerivatives {
             qdot: [u1, x10],
             matrix: [[m * x14]],
@@ -2235,32 +2233,32 @@ pub mod kane {
                 [0.0, 0.0],
                 [0.0, 0.0],
                 [0.0, x8 * x0],
-                [0.0, x0 * x33],
-                [0.0, x36 * x0],
+                [0.0, x31 * w_ * x0],
+                [0.0, x35 * x0],
             ],
             d_matrix: [[[x14]], [[0.0]], [[0.0]], [[0.0]], [[0.0]]],
             d_force: [
                 [x26 * x0],
                 [x * x15],
                 [x29 * x30 * x7],
-                [x29 * w_ * x34],
-                [x29 * x37 * A],
+                [x32 * x33],
+                [x29 * x36 * A],
             ],
             power: x27 * x25,
             d_power: [
                 x25 * x10,
                 x27,
                 x15 * x7 * (x6 * g + (x6 * x24 + x30 * x9) * x0),
-                w_ * x15 * (x31 * x6 * x25 + x34 * x10),
-                x15 * A * (x37 * x10 + x35 * x25),
+                w_ * x15 * (x31 * x25 + x33 * x10),
+                x15 * (x34 * x25 + x36 * x10) * A,
             ],
             power_weights: [m * x28],
             d_power_weights: [
                 [x28],
                 [0.0],
                 [-(x29 * x8)],
-                [-(x29 * x33)],
-                [-(x29 * x36)],
+                [-(x31 * x32)],
+                [-(x29 * x35)],
             ],
         }
     }
@@ -2955,28 +2953,26 @@ pub mod reduced_volterra {
         let x28 = u1 - x12 * x9;
         let x29 = m * x12;
         let x30 = x11 * x6 * (2.0 * x1 - x8 * x16) - w_ * x3;
-        let x31 = 2.0 * x4 + L0;
-        let x32 = w_ * x6;
-        let x33 = x31 * x32;
-        let x34 = w_
+        let x31 = (2.0 * x4 + L0) * x6;
+        let x32 = x29 * w_;
+        let x33 = w_
             * ((x22 * (x11 * (-2.0 * x21 - x4 * (4.0 * x4 + 6.0 * L0)) + 2.0)
                 - 2.0 * x23) * A - x20) + x18 * (4.0 * x4 + 2.0 * L0);
-        let x35 = x5 * x6 + x2 * ((x22 - x23) * A - x20);
-        let x36 = x35 * A;
-        let x37 = x19
-            + w_
-                * (A
-                    * (x23 * (-2.0 * (x17 * t) - 2.0)
-                        + x6
-                            * (x11
-                                * (t
-                                    * ((A
-                                        * ((4.0 * x20 + (2.0 * x23 - 2.0 * x22) * A) * x3
-                                            - 2.0 * (x22 * L0)) + 2.0 * (x20 * L0)) * w_
-                                        + 2.0 * (x1 * x6))
-                                    + x6 * (-2.0 * x21 - (2.0 * x4 + 4.0 * L0) * x4)) + 2.0 * x6
-                                - 4.0 * (x2 * x3)))
-                    + (-(2.0 * (x17 * x3) + x32) * t - 2.0 * x3) * L0);
+        let x34 = x5 * x6 + x2 * ((x22 - x23) * A - x20);
+        let x35 = x34 * A;
+        let x36 = x19
+            + (A
+                * (x23 * (-2.0 * (x17 * t) - 2.0)
+                    + x6
+                        * (x11
+                            * (t
+                                * ((A
+                                    * ((4.0 * x20 + (2.0 * x23 - 2.0 * x22) * A) * x3
+                                        - 2.0 * (x22 * L0)) + 2.0 * (x20 * L0)) * w_
+                                    + 2.0 * (x1 * x6))
+                                + x6 * (-2.0 * x21 - (2.0 * x4 + 4.0 * L0) * x4)) + 2.0 * x6
+                            - 4.0 * (x2 * x3)))
+                + (-t * (2.0 * (x17 * x3) + w_ * x6) - 2.0 * x3) * L0) * w_;
         ParameterDerivatives {
             qdot: [u1, x10],
             matrix: [[m * x14]],
@@ -2986,32 +2982,32 @@ pub mod reduced_volterra {
                 [0.0, 0.0],
                 [0.0, 0.0],
                 [0.0, x8 * x0],
-                [0.0, x0 * x33],
-                [0.0, x36 * x0],
+                [0.0, x31 * w_ * x0],
+                [0.0, x35 * x0],
             ],
             d_matrix: [[[x14]], [[0.0]], [[0.0]], [[0.0]], [[0.0]]],
             d_force: [
                 [x26 * x0],
                 [x * x15],
                 [x29 * x30 * x7],
-                [x29 * w_ * x34],
-                [x29 * x37 * A],
+                [x32 * x33],
+                [x29 * x36 * A],
             ],
             power: x27 * x25,
             d_power: [
                 x25 * x10,
                 x27,
                 x15 * x7 * (x6 * g + (x6 * x24 + x30 * x9) * x0),
-                w_ * x15 * (x31 * x6 * x25 + x34 * x10),
-                x15 * A * (x37 * x10 + x35 * x25),
+                w_ * x15 * (x31 * x25 + x33 * x10),
+                x15 * (x34 * x25 + x36 * x10) * A,
             ],
             power_weights: [m * x28],
             d_power_weights: [
                 [x28],
                 [0.0],
                 [-(x29 * x8)],
-                [-(x29 * x33)],
-                [-(x29 * x36)],
+                [-(x31 * x32)],
+                [-(x29 * x35)],
             ],
         }
     }
