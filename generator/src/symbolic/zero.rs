@@ -46,7 +46,7 @@
 use super::eval::Env;
 use super::expr::{Expr, Func, Node, Symbol};
 use super::number::{Rat, rat_from_f64};
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// How a zero verdict was reached.
 #[derive(Clone, Debug, PartialEq)]
@@ -663,34 +663,61 @@ fn modular_zero(e: Expr) -> Result<Modular, &'static str> {
 /// may be NaN where the expression has no real value there.
 fn numeric_witness(e: Expr) -> ZeroVerdict {
     let syms = e.free_symbols();
+    let applied = applied_functions(e);
     let mut rng = SplitMix(0x317_7E55 ^ e.key());
     let mut last = (f64::NAN, vec![]);
     for _ in 0..NUMERIC_POINTS {
-        let (env, at) = random_env(&syms, &mut rng);
+        let (env, values) = random_env(&syms, &applied, &mut rng);
         if let Ok(v) = e.eval(&env) {
             if v.is_finite() && v != 0.0 {
-                return ZeroVerdict::NonZero { value: v, at };
+                return ZeroVerdict::NonZero { value: v, at: named(&syms, &values) };
             }
-            last = (v, at);
+            last = (v, values);
         }
     }
-    ZeroVerdict::NonZero { value: last.0, at: last.1 }
+    ZeroVerdict::NonZero { value: last.0, at: named(&syms, &last.1) }
 }
 
-/// Values in `[0.1, 2)` for the symbols, and random smooth definitions for named functions.
-fn random_env(syms: &[Symbol], rng: &mut SplitMix) -> (Env, Vec<(String, f64)>) {
+/// The symbols `e` applies as named functions (`F` in `F(t)`).
+fn applied_functions(e: Expr) -> FxHashSet<Symbol> {
+    let mut out = FxHashSet::default();
+    let mut seen = FxHashSet::default();
+    let mut stack = vec![e];
+    while let Some(x) = stack.pop() {
+        if !seen.insert(x) {
+            continue;
+        }
+        if let Node::Apply(name, _) = &*x.node() {
+            out.insert(*name);
+        }
+        stack.extend(x.children());
+    }
+    out
+}
+
+/// Values in `[0.1, 2)` for the symbols, and random smooth definitions for those `applied` as
+/// named functions (every symbol draws its definition's numbers, so a point does not depend
+/// on which are applied).
+fn random_env(syms: &[Symbol], applied: &FxHashSet<Symbol>, rng: &mut SplitMix) -> (Env, Vec<f64>) {
     let mut env = Env::default();
-    let mut at = Vec::new();
+    let mut values = Vec::with_capacity(syms.len());
     let arg = Symbol::internal("arg");
     for s in syms {
         let v = rng.uniform(0.1, 2.0);
         env.set(*s, v);
         let (a, b) = (rng.uniform(0.5, 1.5), rng.uniform(0.0, 1.0));
-        let num = |x: f64| Expr::num(rat_from_f64(x).unwrap_or_else(Rat::one));
-        env.define(*s, arg, (arg.expr() * num(a) + num(b)).sin());
-        at.push((s.name(), v));
+        if applied.contains(s) {
+            let num = |x: f64| Expr::num(rat_from_f64(x).unwrap_or_else(Rat::one));
+            env.define(*s, arg, (arg.expr() * num(a) + num(b)).sin());
+        }
+        values.push(v);
     }
-    (env, at)
+    (env, values)
+}
+
+/// The point a witness was found at, by the symbols' names.
+fn named(syms: &[Symbol], values: &[f64]) -> Vec<(String, f64)> {
+    syms.iter().zip(values).map(|(s, v)| (s.name(), *v)).collect()
 }
 
 /// For what the exact test could not decide: a real point where `e` is clearly not zero (its
@@ -698,15 +725,16 @@ fn random_env(syms: &[Symbol], rng: &mut SplitMix) -> (Env, Vec<(String, f64)>) 
 /// [`ZeroVerdict::Undecided`], never zero.
 fn numeric_check(e: Expr, reason: &'static str) -> ZeroVerdict {
     let syms = e.free_symbols();
+    let applied = applied_functions(e);
     let mut rng = SplitMix(0x5EED_0F2E_4055 ^ e.key());
     for _ in 0..NUMERIC_POINTS {
-        let (env, at) = random_env(&syms, &mut rng);
+        let (env, values) = random_env(&syms, &applied, &mut rng);
         let (Ok(value), Ok(scale)) = (e.eval(&env), magnitude(e, &env, 3)) else { continue };
         if !value.is_finite() || !scale.is_finite() {
             continue;
         }
         if value.abs() > 1e-10 * scale.max(1e-300) || (scale == 0.0 && value != 0.0) {
-            return ZeroVerdict::NonZero { value, at };
+            return ZeroVerdict::NonZero { value, at: named(&syms, &values) };
         }
     }
     ZeroVerdict::Undecided { reason }
@@ -776,6 +804,20 @@ mod tests {
         let t = Expr::sym("t");
         assert!(zero(Expr::apply_named(f, t * 2) - Expr::apply_named(f, t + t)));
         assert!(!zero(Expr::apply_named(f, t * 2) - Expr::apply_named(f, t)));
+    }
+
+    #[test]
+    fn a_witness_defines_the_functions_it_applies() {
+        // The witness evaluates `F` by a random smooth stand-in: a finite, nonzero value at a
+        // point that names every symbol, with `t` drawn from [0.1, 2).
+        let (f, t, a) = (Symbol::new("F"), Expr::sym("t"), Expr::sym("a"));
+        let e = Expr::apply_named(f, t * 2) * a - Expr::apply_named(f, t) * a;
+        let ZeroVerdict::NonZero { value, at } = zero_test(e) else { panic!("F(2t) a - F(t) a is not zero") };
+        assert!(value.is_finite() && value != 0.0, "{value}");
+        let names: Vec<&str> = at.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["F", "a", "t"]);
+        let t_value = at.iter().find(|(n, _)| n == "t").unwrap().1;
+        assert!((0.1..2.0).contains(&t_value), "{t_value}");
     }
 
     #[test]
