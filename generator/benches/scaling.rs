@@ -454,10 +454,8 @@ fn goals(m: &Measured) -> String {
     if !against_sympy.is_empty() {
         let cells: Vec<String> =
             against_sympy.iter().map(|(s, sympy_s, ours_ms, _)| format!("{s} {:.1} ({sympy_s:.2} s / {ours_ms:.0} ms)", sympy_s * 1e3 / ours_ms)).collect();
-        let kane_cells: Vec<String> = against_sympy
-            .iter()
-            .map(|(s, sympy_s, _, kane_ms)| format!("{s} {:.1} ({sympy_s:.2} s / {kane_ms:.0} ms)", sympy_s * 1e3 / kane_ms))
-            .collect();
+        let kane_cells: Vec<String> =
+            against_sympy.iter().map(|(s, sympy_s, _, kane_ms)| format!("{s} {:.1} ({sympy_s:.2} s / {kane_ms:.0} ms)", sympy_s * 1e3 / kane_ms)).collect();
         let ok = against_sympy.iter().all(|(_, sympy_s, ours_ms, _)| sympy_s * 1e3 / ours_ms >= 30.0);
         md += &format!(
             "| derivation CPU, SymPy's `KanesMethod` / ours, each paper scene (SymPy: the model and `kanes_equations`, best of {SYMPY_SCENE_RUNS} fresh processes, `docs/scaling/sympy_kane.py`; ours: load, derive and emit all four formulations, best of {SCENE_RUNS}) | at least 30 | {} | {} |\n",
