@@ -109,8 +109,12 @@ def ours(model_file, out_file):
     """CPU seconds of the generator's whole generation, its Kane right-hand side's count, and
     the nodes its simplifier kept as built."""
     seconds, summary = generate(model_file, out_file)
-    kept = re.search(r"(\d+) nodes over the term limit \(kept as built\)", summary)
-    return seconds, rhs_ops(summary, "kane", False), int(kept.group(1)) if kept else 0
+    line = re.search(r"simplifier: ([^\n]*)\(kept as built\)", summary)
+    kept = 0
+    if line:
+        # The nodes over the term limit and the products kept for combining too many angles.
+        kept = sum(int(n) for n in re.findall(r"(\d+) (?:nodes over the term limit|products combining)", line.group(1)))
+    return seconds, rhs_ops(summary, "kane", False), kept
 
 
 def ours_lagrange(model_file, out_file):

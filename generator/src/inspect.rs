@@ -155,12 +155,8 @@ pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], la
     }
     let mut cuts = Vec::new();
     let simplified = mech.tidy.report();
-    if simplified.over_term_limit > 0 || simplified.work_limit_reached {
-        cuts.push(format!(
-            "simplifier: {} nodes over the term limit{} (kept as built: exact, only larger)",
-            simplified.over_term_limit,
-            if simplified.work_limit_reached { ", work limit reached" } else { "" }
-        ));
+    if let Some(cut) = simplified.summary() {
+        cuts.push(format!("simplifier: {cut}: exact, only larger"));
     }
     cuts.extend(d.cuts.lines());
     if !cuts.is_empty() {

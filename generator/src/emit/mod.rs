@@ -189,12 +189,8 @@ impl Summary {
     /// was): the equations stay exact, only larger, or they took the safe side named.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
-        if self.simplifier.over_term_limit > 0 || self.simplifier.work_limit_reached {
-            out.push(format!(
-                "simplifier: {} nodes over the term limit{} (kept as built)",
-                self.simplifier.over_term_limit,
-                if self.simplifier.work_limit_reached { ", work limit reached" } else { "" }
-            ));
+        if let Some(cut) = self.simplifier.summary() {
+            out.push(format!("simplifier: {cut}"));
         }
         out.extend(self.cuts.lines());
         out

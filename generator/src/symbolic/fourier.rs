@@ -162,14 +162,54 @@ impl Default for FourierLimits {
 
 /// What a simplifier did, for the summary: how many nodes were kept as they are because a
 /// limit was reached.
+///
+/// ```
+/// use generator::symbolic::fourier::SimplifyReport;
+/// assert_eq!(SimplifyReport::default().summary(), None);
+/// let cut = SimplifyReport { over_term_limit: 2, over_angle_limit: 5, ..SimplifyReport::default() };
+/// assert_eq!(
+///     cut.summary().unwrap(),
+///     "2 nodes over the term limit, 5 products combining more angles than one harmonic may (kept as built)"
+/// );
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SimplifyReport {
     /// Nodes whose normal form exceeded `max_terms`.
     pub over_term_limit: usize,
+    /// Products kept as built because a harmonic of theirs would combine more than
+    /// `max_angle_atoms` angles (by design: the sine of such a sum costs more than the product).
+    pub over_angle_limit: usize,
     /// True when `max_work` was reached (everything after it was kept as built).
     pub work_limit_reached: bool,
     /// Term products computed.
     pub work: u64,
+}
+
+impl SimplifyReport {
+    /// One line saying what the limits cut, or `None` when nothing was.
+    pub fn summary(&self) -> Option<String> {
+        let mut parts = Vec::new();
+        if self.over_term_limit > 0 {
+            parts.push(format!("{} nodes over the term limit", self.over_term_limit));
+        }
+        if self.over_angle_limit > 0 {
+            parts.push(format!("{} products combining more angles than one harmonic may", self.over_angle_limit));
+        }
+        if self.work_limit_reached {
+            parts.push("work limit reached".to_string());
+        }
+        (!parts.is_empty()).then(|| format!("{} (kept as built)", parts.join(", ")))
+    }
+}
+
+/// Why a product of normal forms was not formed.
+enum Cut {
+    /// The work budget is spent.
+    Work,
+    /// A harmonic would combine more than `max_angle_atoms` angles.
+    Angles,
+    /// The product grew past the term limit.
+    Terms,
 }
 
 /// A node's normal form and the expression chosen for it.
@@ -338,12 +378,12 @@ impl Simplifier {
     }
 
     /// The product of two forms (real functions stored by their canonical half).
-    fn mul(&mut self, a: &Form, b: &Form) -> Option<Form> {
+    fn mul(&mut self, a: &Form, b: &Form) -> Result<Form, Cut> {
         let work = (a.len() * b.len()) as u64;
         self.report.work += work;
         if self.report.work > self.limits.max_work {
             self.report.work_limit_reached = true;
-            return None;
+            return Err(Cut::Work);
         }
         let mut out = Form { terms: FxHashMap::with_capacity_and_hasher((a.len() * b.len()).min(64), Default::default()) };
         for (&(ma, ka), ca) in &a.terms {
@@ -365,7 +405,7 @@ impl Simplifier {
                 // (c_a e^{iA} + conj) (c_b e^{iB} + conj) = c_a c_b e^{i(A+B)} + c_a conj(c_b) e^{i(A-B)} + conj.
                 let ((sum, neg_s), (diff, neg_d)) = self.angle_sum_difference(ka, kb);
                 if self.angles[sum as usize].len() > self.limits.max_angle_atoms || self.angles[diff as usize].len() > self.limits.max_angle_atoms {
-                    return None;
+                    return Err(Cut::Angles);
                 }
                 let p = ca.mul(cb);
                 out.add_term((m, sum), if neg_s { p.conj() } else { p });
@@ -381,12 +421,12 @@ impl Simplifier {
                 out.add_term((m, diff), q);
             }
             if out.len() > self.limits.max_terms * 4 {
-                return None;
+                return Err(Cut::Terms);
             }
         }
         // Terms of e^{i(A+B)} with A + B = 0 cannot occur (both leading positive), so the
         // form is complete; the constant (angle 0) carries its full real value.
-        Some(out)
+        Ok(out)
     }
 
     /// The angle `form` describes, when it is a linear combination of atoms: `(atom, k)`.
@@ -557,7 +597,7 @@ impl Simplifier {
             }
             Node::Mul { coefficient, factors } => {
                 let mut acc = self.constant(coefficient);
-                let mut ok = true;
+                let mut cut = None;
                 for (b, x) in factors {
                     let power = x.to_i64().filter(|n| (1..=MAX_EXPANDED_POWER).contains(n));
                     let fb = match power {
@@ -566,20 +606,27 @@ impl Simplifier {
                     };
                     for _ in 0..power.unwrap_or(1) {
                         match self.mul(&acc, &fb) {
-                            Some(f) => acc = f,
-                            None => {
-                                ok = false;
+                            Ok(f) => acc = f,
+                            Err(why) => {
+                                cut = Some(why);
                                 break;
                             }
                         }
                     }
-                    if !ok || acc.len() > self.limits.max_terms {
-                        ok = false;
+                    if cut.is_none() && acc.len() > self.limits.max_terms {
+                        cut = Some(Cut::Terms);
+                    }
+                    if cut.is_some() {
                         break;
                     }
                 }
-                if !ok {
-                    self.report.over_term_limit += 1;
+                if let Some(why) = cut {
+                    match why {
+                        Cut::Terms => self.report.over_term_limit += 1,
+                        Cut::Angles => self.report.over_angle_limit += 1,
+                        // Reported once, by `work_limit_reached`.
+                        Cut::Work => {}
+                    }
                     return opaque(self, direct);
                 }
                 acc
@@ -678,5 +725,21 @@ mod tests {
         let mut tiny = Simplifier::new(FourierLimits { max_terms: 50, max_work: 10, max_angle_atoms: 3 });
         assert_eq!(tiny.simplify(e), e);
         assert!(tiny.report().work_limit_reached);
+    }
+
+    #[test]
+    fn products_of_more_angles_than_a_harmonic_may_combine_are_counted_apart() {
+        let qs: Vec<Expr> = (0..4).map(|i| Expr::sym(&format!("aq{i}"))).collect();
+        let product = Expr::product(qs.iter().map(|q| q.cos()));
+        let limits = FourierLimits { max_terms: 1000, max_work: 1_000_000, max_angle_atoms: 3 };
+        let mut s = Simplifier::new(limits);
+        assert_eq!(s.simplify(product), product);
+        assert_eq!((s.report().over_angle_limit, s.report().over_term_limit), (1, 0));
+        assert!(s.report().summary().unwrap().contains("1 products combining more angles"));
+        // Three angles combine (the product is kept for its cost, not cut): nothing to report.
+        let mut three = Simplifier::new(limits);
+        three.simplify(Expr::product(qs[..3].iter().map(|q| q.cos())));
+        assert_eq!(three.report(), SimplifyReport { work: three.report().work, ..SimplifyReport::default() });
+        assert_eq!(three.report().summary(), None);
     }
 }
