@@ -164,7 +164,7 @@ pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
         }
         candidates.moved(p, *n);
     };
-    while let Some((_, pair)) = candidates.next(&count) {
+    while let Some(pair) = candidates.next(&count) {
         if work > PAIR_BUDGET {
             break;
         }
@@ -226,11 +226,11 @@ impl Candidates {
         }
     }
 
-    /// The next pair to merge, taken off its queue, with its count.
-    fn next(&mut self, count: &FxHashMap<Pair, usize>) -> Option<(usize, Pair)> {
+    /// The next pair to merge, taken off its queue.
+    fn next(&mut self, count: &FxHashMap<Pair, usize>) -> Option<Pair> {
         while self.top >= 2 {
             match self.buckets[self.top].pop_front() {
-                Some(p) if count.get(&p) == Some(&self.top) => return Some((self.top, p)),
+                Some(p) if count.get(&p) == Some(&self.top) => return Some(p),
                 Some(_) => {}
                 None => self.top -= 1,
             }
