@@ -52,8 +52,6 @@ pub struct Volterra {
     pub determinant: Option<Expr>,
     /// `q'` as a function of `(q, u, G, t)`: `W u + X`.
     pub qdot: Vec<Expr>,
-    /// `c = d/dt(W u + X)` at `u' = 0`, so that `q'' = W u' + c`.
-    pub drift: Vec<Expr>,
     /// `M_NI` (Eq. 47).
     pub mass_ni: Matrix,
     /// `U_NI = W^T (Q - dV/dq)` (Eq. 33).
@@ -77,7 +75,6 @@ impl crate::symbolic::transfer::Transfer for Volterra {
         self.singular_factors.visit(v);
         self.determinant.visit(v);
         self.qdot.visit(v);
-        self.drift.visit(v);
         self.mass_ni.visit(v);
         self.u_ni.visit(v);
         self.inertia_ni.visit(v);
@@ -289,8 +286,6 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         }
     }
     let x: Vec<Expr> = Expr::subs_all(&qdot, &zero_n);
-    let chain = TimeChain::new(model.t, model.coordinates.iter().copied().zip(qdot.iter().copied()).collect());
-    let drift: Vec<Expr> = qdot.iter().map(|e| tidy.of(chain.dt(*e))).collect();
     let mut singular_factors = kane.singular_factors.clone();
     for f in v_i.pivots.iter().chain(&zs.pivots) {
         if !singular_factors.contains(f) {
@@ -308,7 +303,6 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         singular_factors,
         determinant: None,
         qdot,
-        drift,
         mass_ni,
         u_ni,
         inertia_ni,
@@ -453,7 +447,6 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         singular_factors: sol.pivots,
         determinant: sol.determinant,
         qdot,
-        drift,
         mass_ni,
         u_ni,
         inertia_ni,
@@ -524,10 +517,17 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
 /// inertia forces: compact where `W` is simple (quasi-velocities that are rates).
 fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &HashMap<Symbol, Expr>) -> (Matrix, Vec<Expr>) {
     let tidy = &mech.tidy;
+    // Where `W` is not numeric (a base's angular velocity), an entry combines simplified
+    // entries of M and h with W's sines and cosines: on small models simplified, on large ones
+    // left as built, as the Schur complement's (simplifying them found nothing on the spatial
+    // chains, where the recursions give the right-hand sides, and spent 1.1 of the 8-link
+    // chain's 4 million term products; the emitted operations were the same).
+    let small = mech.m <= super::mechanics::MAX_FOUR_ANGLE_COORDINATES;
+    let simplify = |e: Expr| if small { tidy.of(e) } else { e };
     let wt = w.transpose();
-    let mass = tidy.matrix(&wt.mul(&mech.mass.mul(w)));
+    let mass = wt.mul(&mech.mass.mul(w)).map(|e| simplify(*e));
     let inertial = Expr::subs_all(&mech.inertial, to_u);
     let mc = mech.mass.mul(&Matrix::column(drift.to_vec()));
     let rest: Vec<Expr> = (0..mech.m).map(|j| -(inertial[j] + mc.get(j, 0))).collect();
-    (mass, wt.mul(&Matrix::column(rest)).col(0).into_iter().map(|e| tidy.of(e)).collect())
+    (mass, wt.mul(&Matrix::column(rest)).col(0).into_iter().map(simplify).collect())
 }
