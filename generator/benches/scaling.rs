@@ -65,6 +65,10 @@ struct Record {
     /// runs it), timed the same way in the same child.
     #[serde(default)]
     jit_ns_per_call: Vec<(String, f64)>,
+    /// The Fourier simplifier's term products, its nodes over the term limit, and whether it
+    /// reached its work limit (`Summary::simplifier`).
+    #[serde(default)]
+    simplifier: (u64, usize, bool),
 }
 
 #[derive(Clone, Debug, Default, serde::Deserialize)]
@@ -137,6 +141,12 @@ fn one(exe: &Path, kind: &str, n: usize, compile: &str, work: &Path) -> Record {
     serde_json::from_slice(&child.stdout).expect("the child's record")
 }
 
+/// A table's simplifier cell: the term products in millions and the nodes over the term limit,
+/// and the work limit where it was reached (everything after it kept as built).
+fn simplifier_cell((work, over, reached): (u64, usize, bool)) -> String {
+    format!("{:.2}, {over}{}", work as f64 / 1e6, if reached { " (work limit reached)" } else { "" })
+}
+
 /// The models the benchmark scales, by their key.
 const KINDS: [&str; 3] = ["pendulum", "floating", "planar"];
 
@@ -161,6 +171,7 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         peak_mb: peak_mb(),
         ops: FORMS.iter().filter_map(|f| s.ops(&format!("{f}::rhs")).map(|c| (f.to_string(), c.ops.total(), c.solve.total()))).collect(),
         code_bytes: out.code.len(),
+        simplifier: (s.simplifier.work, s.simplifier.over_term_limit, s.simplifier.work_limit_reached),
         ..Record::default()
     };
     if compile {
@@ -229,7 +240,7 @@ fn main() {
     }
     let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
     let mut pendulum = vec![2, 5, 10, 20, 30, 50];
-    let mut floating = vec![2, 4, 6, 8, 12, 20];
+    let mut floating = vec![2, 4, 6, 8, 12, 16, 20];
     let mut planar = vec![5, 10, 20];
     let mut compile_up_to = 20;
     let mut out = root.join("docs");
@@ -561,8 +572,8 @@ fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], c
     };
     for kind in KINDS {
         md += &format!("## {}\n\n", title(kind));
-        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | CPU s | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call |\n";
-        md += "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | CPU s | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call | simplifier: million term products, nodes over the term limit |\n";
+        md += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         for r in records.iter().filter(|r| r.model == kind) {
             let stages: Vec<String> = r.stages_ms.iter().map(|(_, v)| format!("{v:.0}")).collect();
             let asm: Vec<String> = FORMS.iter().map(|f| ops_of(r, f).map_or("-".into(), |(a, _)| a.to_string())).collect();
@@ -570,7 +581,7 @@ fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], c
             let ns: Vec<String> = FORMS.iter().map(|f| r.ns_per_call.iter().find(|(n, _)| n == f).map_or("-".into(), |(_, v)| format!("{v:.0}"))).collect();
             let jit: Vec<String> = jit_ratios(r).iter().map(|x| format!("{x:.2}")).collect();
             md += &format!(
-                "| {} | {:.0} ({}) | {:.0} | {:.2} | {:.0} | {} | {} | {:.0} | {} | {} | {} |\n",
+                "| {} | {:.0} ({}) | {:.0} | {:.2} | {:.0} | {} | {} | {:.0} | {} | {} | {} | {} |\n",
                 r.n,
                 r.derive_ms,
                 stages.join(" / "),
@@ -583,6 +594,7 @@ fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], c
                 r.rustc_s.map_or("-".into(), |s| format!("{s:.1}")),
                 ns.join(" / "),
                 if jit.is_empty() { "-".to_string() } else { jit.join(" / ") },
+                simplifier_cell(r.simplifier),
             );
         }
         if let Some((_, peer)) = peers.iter().find(|(k, _)| k == kind) {

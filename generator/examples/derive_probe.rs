@@ -10,7 +10,7 @@ fn main() {
     let chosen = ignorable::choose(&model, &ignorable::analyze(&model, &mech)).unwrap();
     eprintln!("ignorable {:.3} s", t.elapsed().as_secs_f64());
     let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
-    eprintln!("kane {:.3} s", t.elapsed().as_secs_f64());
+    eprintln!("kane {:.3} s {:?}", t.elapsed().as_secs_f64(), mech.tidy.report());
     let _r = volterra::derive_reduced(&model, &mech, &chosen, &model.quasi_reduced, &kane).unwrap();
     eprintln!("reduced {:.3} s {:?}", t.elapsed().as_secs_f64(), mech.tidy.report());
 }
