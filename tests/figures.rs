@@ -354,7 +354,8 @@ fn the_symengine_figures_are_the_script_file() {
 }
 
 /// docs/goals.md quotes the scaling benchmark's measured cells for the goals it measures: SymPy's
-/// derivation time on the paper's scenes against ours, and the planar chain in absolute angles.
+/// derivation time on the paper's scenes against ours, the planar chain in absolute angles, and
+/// the simplifier's work on the spatial chains.
 #[test]
 fn the_goals_quote_the_scaling_rows() {
     let goals = read("docs/goals.md");
@@ -366,5 +367,13 @@ fn the_goals_quote_the_scaling_rows() {
         assert!(goals.contains(measured), "docs/goals.md does not quote `{measured}` from docs/scaling.md");
         let word = if verdict.starts_with("met") { "met" } else { "missed" };
         assert!(goals.contains(&format!("{measured}: {word}")), "docs/goals.md does not say `{measured}: {word}` as docs/scaling.md does");
+    }
+    // The simplifier's work on the spatial chain, per size (the last column of its table).
+    let spatial = scaling.split("## The spatial chain on a floating base").nth(1).unwrap().split("\n## ").next().unwrap();
+    let sizes = ["8 links", "12", "16", "20"];
+    for (n, said) in [8, 12, 16, 20].into_iter().zip(sizes) {
+        let line = spatial.lines().find(|l| l.starts_with(&format!("| {n} |"))).unwrap_or_else(|| panic!("docs/scaling.md has no spatial chain of {n} links"));
+        let cell = line.split('|').map(str::trim).nth(12).unwrap();
+        assert!(goals.contains(&format!("`{cell}` at {said}")), "docs/goals.md does not quote the spatial chain's `{cell}` at {n} links from docs/scaling.md");
     }
 }
