@@ -146,8 +146,11 @@ pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
         }
     }
     let shared = |a: usize| a >= first_group || holding[a] >= 2;
-    for (k, bag) in bags.iter().enumerate() {
-        for p in pairs_of(&view(bag, &shared)) {
+    // Each bag's view, kept as its last replacement left it (whether an atom is shared does
+    // not change while merging: a group is, and so is an atom held twice from the start).
+    let mut views: Vec<_> = bags.iter().map(|bag| view(bag, &shared)).collect();
+    for (k, v) in views.iter().enumerate() {
+        for p in pairs_of(v) {
             *count.entry(p).or_default() += 1;
             holders.entry(p).or_default().push(k);
             work += 1;
@@ -173,13 +176,13 @@ pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
         let mut seen = FxHashSet::default();
         let bag_ids: Vec<usize> = holders.remove(&pair).unwrap_or_default().into_iter().filter(|k| seen.insert(*k)).collect();
         for k in bag_ids {
-            let old = view(&bags[k], &shared);
-            if !holds(&old, pair) {
+            if !holds(&views[k], pair) {
                 continue;
             }
             replace_pair(&mut bags[k], pair, group);
-            let new = view(&bags[k], &shared);
-            let (lost, gained) = (pairs_lost(&old, &new), pairs_lost(&new, &old));
+            let old = std::mem::replace(&mut views[k], view(&bags[k], &shared));
+            let new = &views[k];
+            let (lost, gained) = (pairs_lost(&old, new), pairs_lost(new, &old));
             work += old.len() + new.len() + lost.len() + gained.len();
             for p in lost.into_iter().filter(|&p| p != pair) {
                 change(&mut count, &mut candidates, p, false);

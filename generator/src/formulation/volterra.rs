@@ -56,8 +56,6 @@ pub struct Volterra {
     pub mass_ni: Matrix,
     /// `U_NI = W^T (Q - dV/dq)` (Eq. 33).
     pub u_ni: Vec<Expr>,
-    /// `K_NI - A_NI = -W^T (h + M c)` (Eqs. 51-63 through Eq. 39).
-    pub inertia_ni: Vec<Expr>,
     /// `L_NI = U_NI + K_NI - A_NI` (Eq. 65).
     pub l_ni: Vec<Expr>,
     /// How `q' = W u + X` was eliminated and the inertia terms formed.
@@ -77,7 +75,6 @@ impl crate::symbolic::transfer::Transfer for Volterra {
         self.qdot.visit(v);
         self.mass_ni.visit(v);
         self.u_ni.visit(v);
-        self.inertia_ni.visit(v);
         self.l_ni.visit(v);
     }
 }
@@ -277,7 +274,6 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
     }
     let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(simplify(l_k[map[k]] - coupling(k, n_u)), &g)).collect();
     let u_ni: Vec<Expr> = (0..n_u).map(|k| u_k[map[k]] - coupling(k, n_u + 1)).collect();
-    let inertia_ni: Vec<Expr> = (0..n_u).map(|k| l_ni[k] - u_ni[k]).collect();
     let mut w = Matrix::zeros(m, n_u);
     let zero_n: HashMap<Symbol, Expr> = u.iter().map(|s| (*s, Expr::zero())).collect();
     for i in 0..m {
@@ -305,7 +301,6 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         qdot,
         mass_ni,
         u_ni,
-        inertia_ni,
         l_ni,
         route: "Schur complement of Kane's equations: the momenta eliminate the ignorable rates",
     })
@@ -452,7 +447,6 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         qdot,
         mass_ni,
         u_ni,
-        inertia_ni,
         l_ni,
         route,
     })
