@@ -821,8 +821,25 @@ impl Expr {
 
     /// All symbols occurring in the expression, sorted by name.
     pub fn free_symbols(self) -> Vec<Symbol> {
+        self.symbols_and_applied().0
+    }
+
+    /// [`Expr::free_symbols`], and those of them the expression applies as named functions
+    /// (`F` in `F(t)`): one walk for both.
+    ///
+    /// ```
+    /// use generator::symbolic::{Expr, Symbol};
+    /// let (f, t, a) = (Symbol::new("F"), Expr::sym("t"), Expr::sym("a"));
+    /// let e = Expr::apply_named(f, t * 2) * a + t.sin();
+    /// let (symbols, applied) = e.symbols_and_applied();
+    /// assert_eq!(symbols, e.free_symbols());
+    /// assert_eq!(symbols.iter().map(|s| s.name()).collect::<Vec<_>>(), ["F", "a", "t"]);
+    /// assert_eq!(applied.into_iter().collect::<Vec<_>>(), [f]);
+    /// ```
+    pub fn symbols_and_applied(self) -> (Vec<Symbol>, rustc_hash::FxHashSet<Symbol>) {
         let mut seen = std::collections::HashSet::new();
         let mut syms = std::collections::BTreeSet::new();
+        let mut applied = rustc_hash::FxHashSet::default();
         let mut stack = vec![self];
         while let Some(e) = stack.pop() {
             if !seen.insert(e) {
@@ -834,12 +851,13 @@ impl Expr {
                 }
                 Node::Apply(name, _) => {
                     syms.insert((name.name(), *name));
+                    applied.insert(*name);
                     stack.extend(e.children());
                 }
                 _ => stack.extend(e.children()),
             }
         }
-        syms.into_iter().map(|(_, s)| s).collect()
+        (syms.into_iter().map(|(_, s)| s).collect(), applied)
     }
 
     /// True when `sym` occurs in the expression (exact, not the bloom mask).

@@ -666,7 +666,7 @@ fn modular_zero(e: Expr) -> Result<Modular, &'static str> {
 /// A real point where `e` is not zero (for a verdict already known to be "not zero"); the value
 /// may be NaN where the expression has no real value there.
 fn numeric_witness(e: Expr) -> ZeroVerdict {
-    let (syms, applied) = symbols_and_applied(e);
+    let (syms, applied) = e.symbols_and_applied();
     let mut rng = SplitMix(0x317_7E55 ^ e.key());
     let mut last = (f64::NAN, vec![]);
     for _ in 0..NUMERIC_POINTS {
@@ -679,32 +679,6 @@ fn numeric_witness(e: Expr) -> ZeroVerdict {
         }
     }
     ZeroVerdict::NonZero { value: last.0, at: named(&syms, &last.1) }
-}
-
-/// The symbols of `e` in [`Expr::free_symbols`]' order (by name), and those of them it applies
-/// as named functions (`F` in `F(t)`): one walk for both.
-fn symbols_and_applied(e: Expr) -> (Vec<Symbol>, FxHashSet<Symbol>) {
-    let mut applied = FxHashSet::default();
-    let mut syms = std::collections::BTreeSet::new();
-    let mut seen = FxHashSet::default();
-    let mut stack = vec![e];
-    while let Some(x) = stack.pop() {
-        if !seen.insert(x) {
-            continue;
-        }
-        match &*x.node() {
-            Node::Sym(s) => {
-                syms.insert((s.name(), *s));
-            }
-            Node::Apply(name, _) => {
-                syms.insert((name.name(), *name));
-                applied.insert(*name);
-                stack.extend(x.children());
-            }
-            _ => stack.extend(x.children()),
-        }
-    }
-    (syms.into_iter().map(|(_, s)| s).collect(), applied)
 }
 
 /// Values in `[0.1, 2)` for the symbols, and random smooth definitions for those `applied` as
@@ -736,7 +710,7 @@ fn named(syms: &[Symbol], values: &[f64]) -> Vec<(String, f64)> {
 /// value beyond the rounding of its terms) makes it [`ZeroVerdict::NonZero`]; otherwise it is
 /// [`ZeroVerdict::Undecided`], never zero.
 fn numeric_check(e: Expr, reason: &'static str) -> ZeroVerdict {
-    let (syms, applied) = symbols_and_applied(e);
+    let (syms, applied) = e.symbols_and_applied();
     let mut rng = SplitMix(0x5EED_0F2E_4055 ^ e.key());
     for _ in 0..NUMERIC_POINTS {
         let (env, values) = random_env(&syms, &applied, &mut rng);
@@ -839,16 +813,6 @@ mod tests {
         assert_eq!(names, ["F", "a", "t"]);
         let t_value = at.iter().find(|(n, _)| n == "t").unwrap().1;
         assert!((0.1..2.0).contains(&t_value), "{t_value}");
-    }
-
-    #[test]
-    fn one_walk_finds_the_symbols_and_the_applied_functions() {
-        let (f, t, a) = (Symbol::new("F"), Expr::sym("t"), Expr::sym("a"));
-        let e = Expr::apply_named(f, t * 2) * a + t.sin();
-        let (syms, applied) = symbols_and_applied(e);
-        assert_eq!(syms, e.free_symbols());
-        assert_eq!(syms.iter().map(|s| s.name()).collect::<Vec<_>>(), ["F", "a", "t"]);
-        assert_eq!(applied.into_iter().collect::<Vec<_>>(), [f]);
     }
 
     #[test]
