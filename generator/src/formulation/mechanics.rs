@@ -93,6 +93,23 @@ impl Tidy {
         let p = self.of(f.simplify_trig(crate::symbolic::limits::Limits { max_terms: 2_000, max_work: 200_000 }));
         if p.tree_size() < f.tree_size() { p } else { f }
     }
+    /// A combination of parts already simplified (a sum of results, a transformation applied
+    /// to them) in a model with `m` coordinates: simplified on a small model ([`is_small`]),
+    /// left as built on a larger one, where simplifying such combinations spent most of the
+    /// spatial chains' work limit and changed no emitted operation (`docs/goals.md`).
+    ///
+    /// ```
+    /// use generator::formulation::mechanics::Tidy;
+    /// use generator::symbolic::{Expr, fourier::FourierLimits};
+    /// let tidy = Tidy::new(FourierLimits::default());
+    /// let (a, b) = (Expr::sym("a"), Expr::sym("b"));
+    /// let e = a.sin() * b.cos() + a.cos() * b.sin();
+    /// assert_eq!(tidy.combination(e, 3), (a + b).sin());
+    /// assert_eq!(tidy.combination(e, 20), e);
+    /// ```
+    pub fn combination(&self, e: Expr, m: usize) -> Expr {
+        if is_small(m) { self.of(e) } else { e }
+    }
     /// What the limits cut so far.
     pub fn report(&self) -> SimplifyReport {
         self.0.borrow().report()
@@ -301,10 +318,17 @@ impl Transfer for Quantities {
 /// [`FourierLimits::max_angle_atoms`]).
 pub const MAX_FOUR_ANGLE_COORDINATES: usize = 8;
 
+/// Whether a model with `m` coordinates is small (at most [`MAX_FOUR_ANGLE_COORDINATES`]): its
+/// simplifier combines four angles ([`derivation_limits`]) and simplifies combinations of parts
+/// already simplified ([`Tidy::combination`]).
+pub fn is_small(m: usize) -> bool {
+    m <= MAX_FOUR_ANGLE_COORDINATES
+}
+
 /// Limits for the simplifications made while deriving a model with `m` coordinates.
 pub fn derivation_limits(m: usize) -> FourierLimits {
     let limits = FourierLimits::default();
-    if m <= MAX_FOUR_ANGLE_COORDINATES { FourierLimits { max_angle_atoms: 4, ..limits } } else { limits }
+    if is_small(m) { FourierLimits { max_angle_atoms: 4, ..limits } } else { limits }
 }
 
 /// Splits a velocity-linear expression into `(d/dq', value at q' = 0)`.
@@ -413,7 +437,7 @@ pub fn derive(model: &Model) -> Mechanics {
     // simplifying it cost the 40-link pendulum 20 nodes over the term limit and a tenth of its
     // memory and changed no emitted operation; on small models it is the smaller (the cart
     // pendulum's energy 50 operations against 56 as built).
-    let kinetic = if m <= MAX_FOUR_ANGLE_COORDINATES { tidy.of(Expr::sum(kinetic_terms)) } else { Expr::sum(kinetic_terms) };
+    let kinetic = tidy.combination(Expr::sum(kinetic_terms), m);
 
     // Forces: potentials into V, the rest into Q by virtual power.
     let mut potential_terms = Vec::new();

@@ -22,7 +22,7 @@
 //! assert_eq!((v.w.rows, v.w.cols), (3, 1));
 //! ```
 
-use super::mechanics::{MAX_FOUR_ANGLE_COORDINATES, Mechanics, Translation};
+use super::mechanics::{Mechanics, Translation, is_small};
 use crate::kinematics::{TimeChain, add3, cross, dot, mat_vec};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::limits::Limits;
@@ -253,7 +253,7 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
     // shape only): on small models simplified, and kept where that is smaller; on large ones the
     // combination of already simplified entries is left as it is (simplifying it costs more
     // than the rest of the reduction and finds little: 1.1 s of 2.4 s on the 50-link chain).
-    let small = m <= MAX_FOUR_ANGLE_COORDINATES;
+    let small = is_small(m);
     // A free system's shape equations do not depend on where it is or how it is turned: the
     // coordinates an entry does not depend on (decided exactly) are set to zero before it is
     // simplified, which takes the absolute orientation's sines and cosines out of it (scene 2).
@@ -430,10 +430,14 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
             "[Y; M'; a] with orthogonal rows, inverted as its transpose over the rows' squared norms; M_NI = W^T M W, L_NI = W^T (Q - dV/dq - h - M c)"
         }
     };
-    // Past [`MAX_FOUR_ANGLE_COORDINATES`], where the quasi-velocities are not rates, the
-    // inertia forces are left as built (`inertia_by_coordinates`): so is their sum with U_NI.
-    let combine = rates_only || by_bodies || m <= MAX_FOUR_ANGLE_COORDINATES;
-    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(if combine { tidy.of(u_ni[k] + inertia_ni[k]) } else { u_ni[k] + inertia_ni[k] }, &g)).collect();
+    // Where the quasi-velocities are not rates and the inertia forces came from the coordinates,
+    // they are a combination (`inertia_by_coordinates`): so is their sum with U_NI.
+    let l_ni: Vec<Expr> = (0..n_u)
+        .map(|k| {
+            let l = u_ni[k] + inertia_ni[k];
+            drop_absent(if rates_only || by_bodies { tidy.of(l) } else { tidy.combination(l, m) }, &g)
+        })
+        .collect();
     Ok(Volterra {
         ignorable: ignorable.to_vec(),
         g,
@@ -515,12 +519,10 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
 fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &HashMap<Symbol, Expr>) -> (Matrix, Vec<Expr>) {
     let tidy = &mech.tidy;
     // Where `W` is not numeric (a base's angular velocity), an entry combines simplified
-    // entries of M and h with W's sines and cosines: on small models simplified, on large ones
-    // left as built, as the Schur complement's (simplifying them found nothing on the spatial
-    // chains, where the recursions give the right-hand sides, and spent 1.1 of the 8-link
-    // chain's 4 million term products; the emitted operations were the same).
-    let small = mech.m <= MAX_FOUR_ANGLE_COORDINATES;
-    let simplify = |e: Expr| if small { tidy.of(e) } else { e };
+    // entries of M and h with W's sines and cosines ([`Tidy::combination`]: simplifying them
+    // found nothing on the spatial chains, where the recursions give the right-hand sides, and
+    // spent 1.1 of the 8-link chain's 4 million term products).
+    let simplify = |e: Expr| tidy.combination(e, mech.m);
     let wt = w.transpose();
     let mass = wt.mul(&mech.mass.mul(w)).map(|e| simplify(*e));
     let inertial = Expr::subs_all(&mech.inertial, to_u);
