@@ -31,6 +31,21 @@ pub fn prefers_articulated(by_recursion: usize, by_matrix: usize) -> bool {
     by_recursion < by_matrix
 }
 
+/// True when the articulated-body recursion's `by_recursion` operations are already fewer than
+/// the matrix's solve alone, `solve`: it then wins whatever the matrix's assembly costs
+/// ([`prefers_articulated`] with an assembly of zero operations), and the matrix's bodies need
+/// not be built to decide (the 60-link pendulum's Kane: 7923 against a solve of 84912).
+///
+/// ```
+/// use generator::emit::assembly::{beats_solve_alone, prefers_articulated};
+/// assert!(beats_solve_alone(7923, 84912));
+/// assert!(!beats_solve_alone(2550, 2550)); // a tie builds the matrix's bodies to compare
+/// assert!(prefers_articulated(7923, 84912 + 28026));
+/// ```
+pub fn beats_solve_alone(by_recursion: usize, solve: usize) -> bool {
+    prefers_articulated(by_recursion, solve)
+}
+
 /// True where the articulated-body recursion may win and its body is worth building: its
 /// program's operations before the emitter's sharing, `articulated`, are at most the
 /// composite-body recursion's, `composite` (counted the same way), and the solve it saves

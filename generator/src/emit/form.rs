@@ -271,15 +271,16 @@ impl Emitter<'_> {
     /// frames where its body takes fewer operations ([`super::assembly::prefers_recursion`]:
     /// both bodies are built, and the counts compared are the emitted code's); then, where the
     /// articulated-body recursion gives the rates with fewer operations than that body and its
-    /// solve ([`super::assembly::prefers_articulated`]), that one, with no matrix.
+    /// solve ([`super::assembly::prefers_articulated`]), that one, with no matrix. Where the
+    /// articulated body already takes fewer operations than the solve alone
+    /// ([`super::assembly::beats_solve_alone`]), the matrix's bodies are not built: they could
+    /// only add to the solve.
     pub(super) fn assembly(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<Assembled, ModelError> {
-        let by_matrix = self.matrix_assembly(f, shared, checks)?;
         let plan = Solve::for_equations(f);
-        let ByMatrix { body, reads, description } = by_matrix;
-        let (assembly_total, solve_total) = (body.ops.total(), plan.cost().total());
-        let matrix_route = |description: String| Assembled { body, reads, description, solve: plan.clone() };
+        let solve_total = plan.cost().total();
         let Some(a) = f.articulated.as_ref().filter(|_| f.post.is_none() && f.stabilization.is_none() && f.constraint_power.is_none()) else {
-            return Ok(matrix_route(description));
+            let ByMatrix { body, reads, description } = self.matrix_assembly(f, shared, checks)?;
+            return Ok(Assembled { body, reads, description, solve: plan });
         };
         let estimate = super::function::program_ops(&a.definitions, &a.accelerations.iter().chain(&a.pivots).copied().collect::<Vec<_>>());
         let composite = f.recursion.as_ref().map(|r| {
@@ -288,9 +289,15 @@ impl Emitter<'_> {
         });
         if !super::assembly::worth_building_articulated(estimate, composite, solve_total) {
             let c = composite.expect("built without a composite recursion");
-            return Ok(matrix_route(format!(
-                "{description} (articulated-body recursion not built: {estimate} operations before sharing against the composite recursion's {c} and the solve's {solve_total})"
-            )));
+            let ByMatrix { body, reads, description } = self.matrix_assembly(f, shared, checks)?;
+            return Ok(Assembled {
+                body,
+                reads,
+                description: format!(
+                    "{description} (articulated-body recursion not built: {estimate} operations before sharing against the composite recursion's {c} and the solve's {solve_total})"
+                ),
+                solve: plan,
+            });
         }
         let rhs_name = format!("{}::rhs", f.name());
         let args = state_args();
@@ -304,12 +311,26 @@ impl Emitter<'_> {
         let reads = rates.iter().copied().chain(all_checks.iter().copied()).chain(a.definitions.iter().map(|(_, e)| *e)).collect();
         let direct = self.trial_body(&rhs_name, &a.definitions, &Self::rhs_outputs(f, rates, &all_checks), &inputs, &args)?;
         let by_recursion = direct.ops.total();
+        let articulated = |direct, reads, matrix: String| Assembled {
+            body: direct,
+            reads,
+            description: format!("assembly: articulated-body recursion, {by_recursion} operations and no solve ({matrix})"),
+            solve: Solve::Articulated { pivots: a.pivots.len() },
+        };
+        if super::assembly::beats_solve_alone(by_recursion, solve_total) {
+            return Ok(articulated(direct, reads, format!("the matrix's solve alone: {solve_total}")));
+        }
+        let ByMatrix { body, reads: matrix_reads, description } = self.matrix_assembly(f, shared, checks)?;
+        let assembly_total = body.ops.total();
         Ok(if super::assembly::prefers_articulated(by_recursion, assembly_total + solve_total) {
-            let description =
-                format!("assembly: articulated-body recursion, {by_recursion} operations and no solve (the matrix's: {assembly_total} + solve {solve_total})");
-            Assembled { body: direct, reads, description, solve: Solve::Articulated { pivots: a.pivots.len() } }
+            articulated(direct, reads, format!("the matrix's: {assembly_total} + solve {solve_total}"))
         } else {
-            matrix_route(format!("{description} (articulated-body recursion: {by_recursion} operations, no solve)"))
+            Assembled {
+                body,
+                reads: matrix_reads,
+                description: format!("{description} (articulated-body recursion: {by_recursion} operations, no solve)"),
+                solve: plan,
+            }
         })
     }
 
