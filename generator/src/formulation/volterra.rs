@@ -407,7 +407,10 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     // M_NI and K_NI - A_NI from the coordinates' M and h; where the quasi-velocities are not
     // plain rates (a body's angular velocity), also from the bodies' velocities in u, which
     // cancels the rate transformation body by body; the smaller is kept (both are exact).
-    let (mass_ni, inertia_ni, by_bodies) = if rates_only || m > MAX_COMPARED_ROUTE_COORDINATES {
+    let renamed = renamed_force(mech, &w, &x, &to_u);
+    let (mass_ni, inertia_ni, by_bodies) = if renamed.is_some() {
+        (mass_by_coordinates(mech, &w), Vec::new(), false)
+    } else if rates_only || m > MAX_COMPARED_ROUTE_COORDINATES {
         let (mass, inertia) = inertia_by_coordinates(mech, &w, &drift, &to_u);
         (mass, inertia, false)
     } else if m <= MAX_BODY_ROUTE_COORDINATES {
@@ -431,13 +434,17 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         }
     };
     // Where the quasi-velocities are not rates and the inertia forces came from the coordinates,
-    // they are a combination (`inertia_by_coordinates`): so is their sum with U_NI.
-    let l_ni: Vec<Expr> = (0..n_u)
-        .map(|k| {
-            let l = u_ni[k] + inertia_ni[k];
-            drop_absent(if rates_only || by_bodies { tidy.of(l) } else { tidy.combination(l, m) }, &g)
-        })
-        .collect();
+    // they are a combination (`inertia_by_coordinates`): so is their sum with U_NI. Where they
+    // only rename the rates, L_NI is Lagrange's f renamed (`renamed_force`).
+    let l_ni: Vec<Expr> = match renamed {
+        Some(f) => f,
+        None => (0..n_u)
+            .map(|k| {
+                let l = u_ni[k] + inertia_ni[k];
+                drop_absent(if rates_only || by_bodies { tidy.of(l) } else { tidy.combination(l, m) }, &g)
+            })
+            .collect(),
+    };
     Ok(Volterra {
         ignorable: ignorable.to_vec(),
         g,
@@ -516,6 +523,38 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
 
 /// `M_NI = W^T M W` and `K_NI - A_NI = -W^T (h + M c)` from the coordinates' mass matrix and
 /// inertia forces: compact where `W` is simple (quasi-velocities that are rates).
+/// True when `q' = W u + X` only renames each rate to one quasi-velocity: `W` a permutation
+/// matrix and `X = 0` (Kane's default on chains, `u` the rates in another order).
+fn renames_rates(w: &Matrix, x: &[Expr]) -> bool {
+    // Exactly one nonzero entry, and that one is 1.
+    let single_unit = |entries: &mut dyn Iterator<Item = Expr>| {
+        let mut nonzero = entries.filter(|e| !e.is_zero());
+        nonzero.next().is_some_and(|e| e.as_num().is_some_and(|v| v.is_one())) && nonzero.next().is_none()
+    };
+    x.iter().all(|e| e.is_zero())
+        && (0..w.rows).all(|i| single_unit(&mut (0..w.cols).map(|k| w.get(i, k))))
+        && (0..w.cols).all(|k| single_unit(&mut (0..w.rows).map(|i| w.get(i, k))))
+}
+
+/// `L_NI` where `q' = W u` only renames the rates ([`renames_rates`]): then `c = 0`, and
+/// `W^T (Q - dV/dq - h)` in the quasi-velocities is Lagrange's `f` ([`Mechanics::lagrange_force`])
+/// with each rate renamed, each entry simplified once in the rates (the node Lagrange's form
+/// takes too, one memo entry) rather than again under the new names, where the inertia forces
+/// over the term limit were tried anew (the 60-link pendulum's Kane stage). `None` elsewhere.
+fn renamed_force(mech: &Mechanics, w: &Matrix, x: &[Expr], to_u: &HashMap<Symbol, Expr>) -> Option<Vec<Expr>> {
+    if !renames_rates(w, x) {
+        return None;
+    }
+    let f = Expr::subs_all(&mech.lagrange_force(), to_u);
+    Some((0..w.cols).map(|k| (0..w.rows).find(|&i| !w.get(i, k).is_zero()).map(|i| f[i]).expect("a permutation")).collect())
+}
+
+/// `M_NI = W^T M W`, each entry a combination of simplified entries of `M`
+/// ([`super::mechanics::Tidy::combination`]).
+fn mass_by_coordinates(mech: &Mechanics, w: &Matrix) -> Matrix {
+    w.transpose().mul(&mech.mass.mul(w)).map(|e| mech.tidy.combination(*e, mech.m))
+}
+
 fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &HashMap<Symbol, Expr>) -> (Matrix, Vec<Expr>) {
     let tidy = &mech.tidy;
     // Where `W` is not numeric (a base's angular velocity), an entry combines simplified
@@ -524,7 +563,7 @@ fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &H
     // spent 1.1 of the 8-link chain's 4 million term products).
     let simplify = |e: Expr| tidy.combination(e, mech.m);
     let wt = w.transpose();
-    let mass = wt.mul(&mech.mass.mul(w)).map(|e| simplify(*e));
+    let mass = mass_by_coordinates(mech, w);
     let inertial = Expr::subs_all(&mech.inertial, to_u);
     let mc = mech.mass.mul(&Matrix::column(drift.to_vec()));
     let rest: Vec<Expr> = (0..mech.m).map(|j| -(inertial[j] + mc.get(j, 0))).collect();
