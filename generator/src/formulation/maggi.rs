@@ -34,7 +34,8 @@ impl Method for Maggi {
         let mass = mech.tidy.matrix(&wt.mul(&mech.mass).mul(&w));
         let mc = mech.mass.mul(&Matrix::column(drift.clone()));
         let rest = Matrix::column((0..m).map(|j| c.force[j] - mc.get(j, 0)).collect());
-        let forcing = wt.mul(&rest).col(0).into_iter().map(|e| mech.tidy.of(e)).collect();
+        // Lagrange's `f` is a combination of simplified parts past 8 coordinates, and so is this.
+        let forcing = wt.mul(&rest).col(0).into_iter().map(|e| mech.tidy.combination(e, m)).collect();
         let qd: Vec<Expr> = model.velocities.iter().map(|s| s.expr()).collect();
         Ok(Equations {
             kind: self.kind(),

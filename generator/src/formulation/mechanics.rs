@@ -254,7 +254,13 @@ pub struct Quantities {
     pub q_forces: Vec<Expr>,
     /// `dV/dq`.
     pub potential_gradient: Vec<Expr>,
-    /// Generalized inertia forces `h`: `d/dt dT/dq' - dT/dq = M q'' + h`.
+    /// Generalized inertia forces `h`: `d/dt dT/dq' - dT/dq = M q'' + h`. On small models (at
+    /// most [`MAX_FOUR_ANGLE_COORDINATES`] coordinates) simplified, elsewhere each entry the sum
+    /// over the bodies of their simplified partial velocities and accelerations as built
+    /// ([`Tidy::combination`]): expanded, a chain's entries sum a term per body and link (past
+    /// the term limit from 50 links on the pendulum on a cart), and the emitted code shares the
+    /// built form's per-body parts (the 60-link pendulum's Lagrange assembly 19499 operations
+    /// against 28026 expanded).
     pub inertial: Vec<Expr>,
     /// Constraint Jacobian a (r x m).
     pub a: Matrix,
@@ -431,7 +437,7 @@ pub fn derive(model: &Model) -> Mechanics {
         }
     }
     let n: Vec<Expr> = n_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect();
-    let inertial: Vec<Expr> = inertial_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect();
+    let inertial: Vec<Expr> = inertial_terms.into_iter().map(|t| tidy.combination(Expr::sum(t), m)).collect();
     let t0 = tidy.of(Expr::sum(t0_terms));
     // Expanded, T is the larger form on long chains (`n^3 / 6` terms on the n-link pendulum):
     // simplifying it cost the 40-link pendulum 20 nodes over the term limit and a tenth of its
@@ -567,9 +573,10 @@ impl Quantities {
 
 impl Mechanics {
     /// `f = Q - dV/dq - h`: everything in Lagrange's equations but `M q''` and the constraint
-    /// forces, in `q`, `q'`, `t`.
+    /// forces, in `q`, `q'`, `t`; a combination of its simplified parts past
+    /// [`MAX_FOUR_ANGLE_COORDINATES`] coordinates, as `h` is ([`Tidy::combination`]).
     pub fn lagrange_force(&self) -> Vec<Expr> {
-        (0..self.m).map(|j| self.tidy.of(self.q_forces[j] - self.potential_gradient[j] - self.inertial[j])).collect()
+        (0..self.m).map(|j| self.tidy.combination(self.q_forces[j] - self.potential_gradient[j] - self.inertial[j], self.m)).collect()
     }
 }
 
