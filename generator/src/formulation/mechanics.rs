@@ -491,7 +491,10 @@ pub fn derive(model: &Model) -> Mechanics {
         }
     }
     let q_forces: Vec<Expr> = q_forces.into_iter().map(|e| tidy.of(e)).collect();
-    let potential = tidy.of(Expr::sum(potential_terms));
+    // Expanded, a chain's V sums a term per body and link (past the term limit from 60 links on
+    // the pendulum on a cart, each link's mass its own symbol): past 8 coordinates it is the sum
+    // of each body's simplified term, as built.
+    let potential = if is_small(m) { tidy.of(Expr::sum(potential_terms)) } else { Expr::sum(potential_terms.into_iter().map(|t| tidy.of(t))) };
     let potential_gradient: Vec<Expr> = model.coordinates.iter().map(|q| tidy.of(potential.diff(*q))).collect();
 
     // Constraints a q' + b = 0.

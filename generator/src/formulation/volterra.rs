@@ -216,9 +216,11 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         for (b, &rb) in rates.iter().enumerate() {
             m_ii.set(a, b, mk.get(rates[a], rb));
         }
-        let n = tidy.of(Expr::sum((0..m).map(|c| mech.mass.get(j, c) * kane.x[c])) + mech.n[j]);
+        // Combinations of simplified entries ([`Tidy::combination`]): the n-link pendulum's
+        // momentum of the cart sums a term per link and mass (past the term limit at 60 links).
+        let n = tidy.combination(Expr::sum((0..m).map(|c| mech.mass.get(j, c) * kane.x[c])) + mech.n[j], m);
         let coupled = Expr::sum(map.iter().zip(&u).map(|(&r, uk)| mk.get(rates[a], r) * uk.expr()));
-        rhs.set(a, 0, tidy.of(g[a].expr() - n - coupled));
+        rhs.set(a, 0, tidy.combination(g[a].expr() - n - coupled, m));
     }
     let opts =
         SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
