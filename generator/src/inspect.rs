@@ -17,13 +17,13 @@ use std::fmt::Write;
 pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     crate::model::in_own_context(model, |model| {
         let d = crate::formulation::derive(model, &Request::all())?;
-        let assemblies = crate::emit::assembly::describe(model, &d, &crate::emit::Options::from_model(model))?;
+        let assemblies = crate::emit::module::assemblies(model, &d, &crate::emit::Options::from_model(model))?;
         Ok(report(model, &d, &assemblies, latex))
     })
 }
 
 /// The report of a derivation, as text or LaTeX, with each formulation's assembly as
-/// [`crate::emit::assembly::describe`] gives it.
+/// [`crate::emit::module::assemblies`] gives it.
 pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], latex: bool) -> String {
     let mech = &d.mechanics;
     let reports = &d.reports;

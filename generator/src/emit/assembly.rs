@@ -10,9 +10,6 @@
 //! assert!(!prefers_recursion(1000, 1000)); // a tie keeps the dense entries
 //! ```
 
-use crate::formulation::Derivation;
-use crate::model::{Model, ModelError};
-
 /// True when the recursion's `by_tree` operations are fewer than the dense entries'
 /// `by_entries`.
 pub fn prefers_recursion(by_tree: usize, by_entries: usize) -> bool {
@@ -68,19 +65,4 @@ pub fn worth_building_articulated(articulated: usize, composite: Option<usize>, 
 /// assembles.
 pub(super) fn summary_line(solve: &super::ldl::Solve, assembly: &str) -> String {
     format!("{}; {assembly}", solve.describe())
-}
-
-/// Each formulation's solve and assembly, `(name, description)`, as the generator chooses them
-/// from the derivation `d` under `options` (the summary's text).
-///
-/// ```
-/// use generator::{emit, formulation};
-/// let model = generator::model::load("../models/three_body.ron").unwrap();
-/// let d = formulation::derive(&model, &formulation::Request::all()).unwrap();
-/// let chosen = emit::assembly::describe(&model, &d, &emit::Options::from_model(&model)).unwrap();
-/// assert_eq!(chosen.len(), 4);
-/// assert!(chosen.iter().all(|(_, how)| how.contains("; assembly: ")));
-/// ```
-pub fn describe(model: &Model, d: &Derivation, options: &super::Options) -> Result<Vec<(String, String)>, ModelError> {
-    super::module::assemblies(model, d, options)
 }

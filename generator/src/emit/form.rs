@@ -6,12 +6,13 @@
 //! `singular_margin`. Each big expression is emitted once per formulation.
 
 use super::FunctionCost;
-use super::function::{Arg, Input, arg_list};
+use super::function::{Input, arg_list, state_args};
 use super::jacobian::Wrt;
 use super::ldl::Solve;
-use super::module::{Emitter, doc, usize_lit};
+use super::module::Emitter;
 use super::ops::OpCount;
 use super::shared::FromMechanics;
+use super::syntax::{doc, usize_lit};
 use crate::formulation::Equations;
 use crate::model::ModelError;
 use crate::symbolic::expr::any_contains;
@@ -51,32 +52,6 @@ struct ByMatrix {
 
 /// Largest singular factor (tree nodes) named by its formula in `Failure::Singular`.
 const MAX_CONDITION_TREE: u32 = 200;
-
-/// The cost of `solve_spd` (`LDL^T`, no pivoting) for `n` unknowns: the factorization's
-/// `n^3 / 6` multiply-adds, one reciprocal per pivot, two triangular solves and the scaling.
-pub fn spd_cost(n: usize) -> OpCount {
-    let factor_mul: usize = (0..n).map(|j| j + (n - 1 - j) * (j + 1)).sum();
-    let factor_add: usize = (0..n).map(|j| j + (n - 1 - j) * j).sum();
-    let triangles = n * n.saturating_sub(1);
-    OpCount { add: factor_add + triangles, mul: factor_mul + triangles + n, div: n, neg: 0, calls: Default::default() }
-}
-
-/// The worst-case cost of `solve_dense` for `n` unknowns.
-pub fn solve_cost(n: usize) -> OpCount {
-    let elim_div = n * n.saturating_sub(1) / 2;
-    let elim_mul: usize = (0..n).map(|c| (n - 1 - c) * (n - c)).sum();
-    let back = n * n.saturating_sub(1) / 2;
-    OpCount { add: elim_mul + back, mul: elim_mul + back, div: elim_div + n, neg: 0, calls: Default::default() }
-}
-
-pub(super) fn state_args() -> Vec<Arg> {
-    vec![
-        Arg::new("t", quote!(f64)),
-        Arg::new("state", quote!(&[f64; STATES])),
-        Arg::new("params", quote!(&Params)),
-        Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
-    ]
-}
 
 fn ident(name: &str) -> proc_macro2::Ident {
     super::function::ident(name)

@@ -326,3 +326,13 @@ fn let_names(n: usize, taken: &HashSet<String>) -> Vec<String> {
     }
     out
 }
+
+/// The arguments of a function of the state: `t`, `state`, `params` and `g_i`.
+pub(super) fn state_args() -> Vec<Arg> {
+    vec![
+        Arg::new("t", quote!(f64)),
+        Arg::new("state", quote!(&[f64; STATES])),
+        Arg::new("params", quote!(&Params)),
+        Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
+    ]
+}

@@ -7,10 +7,12 @@
 //! `dx/ds_k = A^-1 (dF/ds_k - dA/ds_k x)`, with the LU factors of `A` computed once and reused
 //! for every column. Maggi's speeds `W x + c` add `dW/ds_k x + W dx/ds_k + dc/ds_k`.
 
-use super::form::{solve_cost, state_args};
-use super::module::{Emitter, usize_lit};
+use super::function::state_args;
+use super::module::Emitter;
 use super::ops::OpCount;
 use super::shared::FromMechanics;
+use super::solvers::solve_cost;
+use super::syntax::usize_lit;
 use crate::formulation::Equations;
 use crate::model::ModelError;
 use crate::symbolic::Expr;
@@ -323,61 +325,5 @@ impl Dims {
         let power = if self.work { take(1).remove(0) } else { quote!(0.0) };
         let weights = if self.weighted { take(self.n) } else { Vec::new() };
         (quote!([#(#qd),*]), quote!([#(#rows),*]), quote!([#(#force),*]), quote!([#(#w_rows),*]), quote!([#(#c),*]), (power, quote!([#(#weights),*])))
-    }
-}
-
-/// `lu_factor` and `lu_solve`: the factorization `solve_dense` performs, kept for many
-/// right-hand sides.
-pub(super) fn lu_items() -> TokenStream {
-    quote! {
-        #[doc = "Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry."]
-        fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
-            let mut scale = 0.0f64;
-            for row in a.iter() {
-                for x in row.iter() {
-                    scale = scale.max(x.abs());
-                }
-            }
-            let mut pivots = [0usize; N];
-            for c in 0..N {
-                let mut p = c;
-                for r in c + 1..N {
-                    if a[r][c].abs() > a[p][c].abs() {
-                        p = r;
-                    }
-                }
-                if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-                    return Err(c);
-                }
-                pivots[c] = p;
-                a.swap(c, p);
-                for r in c + 1..N {
-                    let f = a[r][c] / a[c][c];
-                    a[r][c] = f;
-                    for k in c + 1..N {
-                        a[r][k] -= f * a[c][k];
-                    }
-                }
-            }
-            Ok(pivots)
-        }
-        #[doc = "Solves `a x = b` in place with the factors of `lu_factor`."]
-        fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
-            for c in 0..N {
-                b.swap(c, pivots[c]);
-            }
-            for c in 0..N {
-                for r in c + 1..N {
-                    b[r] -= a[r][c] * b[c];
-                }
-            }
-            for r in (0..N).rev() {
-                let mut s = b[r];
-                for k in r + 1..N {
-                    s -= a[r][k] * b[k];
-                }
-                b[r] = s / a[r][r];
-            }
-        }
     }
 }

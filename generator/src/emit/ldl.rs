@@ -248,7 +248,7 @@ impl LdlPlan {
             for &e in &st.row_entries[row.clone()] {
                 dj -= l[e] * u[e];
             }
-            if !(dj > super::module::PIVOT_TOLERANCE * scale) {
+            if !(dj > super::solvers::PIVOT_TOLERANCE * scale) {
                 return Err(o[j]);
             }
             inv[j] = 1.0 / dj;
@@ -406,7 +406,7 @@ impl Solve {
     /// Operations of the solve (LU: its worst case).
     pub fn cost(&self) -> OpCount {
         match self {
-            Solve::Lu(n) => super::form::solve_cost(*n),
+            Solve::Lu(n) => super::solvers::solve_cost(*n),
             Solve::Ldl(plan) => plan.cost(),
             Solve::Articulated { .. } => OpCount::default(),
         }
@@ -540,7 +540,7 @@ mod tests {
     #[test]
     fn the_dense_plan_costs_what_the_generic_solve_does() {
         for n in 1..10 {
-            assert_eq!(LdlPlan::dense(n).cost(), super::super::form::spd_cost(n), "n = {n}");
+            assert_eq!(LdlPlan::dense(n).cost(), super::super::solvers::spd_cost(n), "n = {n}");
             assert!(LdlPlan::new(n, |_, _| true).is_dense());
         }
     }

@@ -31,6 +31,7 @@ pub mod reuse;
 pub mod seam;
 pub mod share;
 pub mod shared;
+pub mod solvers;
 pub mod splice;
 pub mod syntax;
 pub mod tape;

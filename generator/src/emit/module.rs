@@ -8,7 +8,9 @@ use super::names::Names;
 use super::prepare::Preparer;
 use super::reuse::{Bodies, Signature};
 use super::shared::FromMechanics;
+use super::solvers::PIVOT_TOLERANCE;
 use super::splice::Splices;
+use super::syntax::{doc, usize_lit};
 use super::{Function, FunctionCost, Generated, Options, Parameters, Summary};
 use crate::formulation::mechanics::{Mechanics, Quantities};
 use crate::formulation::{self, Equations, Request, ignorable};
@@ -23,8 +25,6 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Duration;
 use std::time::Instant;
 
-/// Relative size below which a pivot of the mass matrix counts as zero.
-pub(crate) const PIVOT_TOLERANCE: f64 = 1e-13;
 /// Absolute size below which a singular factor of `[Y; M'; a]` counts as zero.
 pub(crate) const SINGULAR_TOLERANCE: f64 = 1e-12;
 /// Relative size of a constraint residual, against its triangle-inequality magnitude, above
@@ -196,11 +196,20 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     })
 }
 
-/// Each formulation's solve and assembly of its right-hand side, as the summary describes them
-/// ([`super::assembly`]): the same bodies [`generate`] compares, built from a derivation by
-/// emitters that emit what [`generate`]'s two emit (every formulation but the last, and the
-/// last), so that a body reused there is reused here.
-pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
+/// Each formulation's solve and assembly of its right-hand side, `(name, description)`, as the
+/// summary describes them ([`super::assembly`]): the same bodies [`generate`] compares, built
+/// from a derivation by emitters that emit what [`generate`]'s two emit (every formulation but
+/// the last, and the last), so that a body reused there is reused here.
+///
+/// ```
+/// use generator::{emit, formulation};
+/// let model = generator::model::load("../models/three_body.ron").unwrap();
+/// let d = formulation::derive(&model, &formulation::Request::all()).unwrap();
+/// let chosen = emit::module::assemblies(&model, &d, &emit::Options::from_model(&model)).unwrap();
+/// assert_eq!(chosen.len(), 4);
+/// assert!(chosen.iter().all(|(_, how)| how.contains("; assembly: ")));
+/// ```
+pub fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
     let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
     let (sent, kept) = split_between_emitters(d.equations.iter().map(|e| e.kind).collect());
     let last = sent.len();
@@ -297,13 +306,13 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
         let kinds: Vec<seam::FormulationKind> = options.formulations.iter().map(|f| f.kind()).collect();
         let lagrange_indefinite = mech.r > 0;
         if kinds.iter().any(|k| !k.solves_positive_definite()) && lagrange_indefinite {
-            head.push(solve_dense());
+            head.push(super::solvers::solve_dense());
         }
         if kinds.iter().any(|k| k.solves_positive_definite() || !lagrange_indefinite) {
-            head.push(solve_spd());
+            head.push(super::solvers::solve_spd());
         }
         if options.jacobian || em.emits_parameter_jacobian() {
-            head.push(super::jacobian::lu_items());
+            head.push(super::solvers::lu_items());
         }
     }
     for f in &options.functions {
@@ -481,23 +490,11 @@ pub(super) fn one_line(text: &str) -> String {
     files::printable(text)
 }
 
-pub(super) fn usize_lit(n: usize) -> Literal {
-    Literal::usize_unsuffixed(n)
-}
-
 pub(super) fn f64_lit(x: f64) -> TokenStream {
     match rat_from_f64(x) {
         Some(r) => literal(&r).unwrap_or_else(|_| quote!(f64::NAN)),
         None => quote!(f64::NAN),
     }
-}
-
-/// A doc attribute. prettyplease prints it as `///` lines, so a line break in the text would end
-/// the comment and let the rest through as code: every control character (model names and
-/// descriptions come from the user) becomes a space.
-pub(super) fn doc(text: &str) -> TokenStream {
-    let text: String = text.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
-    quote!(#[doc = #text])
 }
 
 impl Emitter<'_> {
@@ -943,96 +940,6 @@ fn simple_fn(name: &str, text: &str, args: &[Arg], b: &Placed, ret: TokenStream,
             #value
         }
         #helpers
-    }
-}
-
-fn solve_dense() -> TokenStream {
-    quote! {
-        #[doc = "Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry."]
-        fn solve_dense<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
-            let mut scale = 0.0f64;
-            for row in a.iter() {
-                for x in row.iter() {
-                    scale = scale.max(x.abs());
-                }
-            }
-            for c in 0..N {
-                let mut p = c;
-                for r in c + 1..N {
-                    if a[r][c].abs() > a[p][c].abs() {
-                        p = r;
-                    }
-                }
-                if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-                    return Err(c);
-                }
-                a.swap(c, p);
-                b.swap(c, p);
-                for r in c + 1..N {
-                    let f = a[r][c] / a[c][c];
-                    for k in c + 1..N {
-                        a[r][k] -= f * a[c][k];
-                    }
-                    b[r] -= f * b[c];
-                }
-            }
-            for r in (0..N).rev() {
-                let mut s = b[r];
-                for k in r + 1..N {
-                    s -= a[r][k] * b[k];
-                }
-                b[r] = s / a[r][r];
-            }
-            Ok(())
-        }
-    }
-}
-
-fn solve_spd() -> TokenStream {
-    quote! {
-        #[doc = "Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them."]
-        #[allow(dead_code)]
-        fn solve_spd<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
-            let mut scale = 0.0f64;
-            for i in 0..N {
-                scale = scale.max(a[i][i].abs());
-            }
-            let mut inv = [0.0f64; N];
-            // `L` in `a` below the diagonal; `L D` in `u` (each entry before its division by the pivot).
-            let mut u = [[0.0f64; N]; N];
-            for j in 0..N {
-                let mut d = a[j][j];
-                for k in 0..j {
-                    d -= a[j][k] * u[j][k];
-                }
-                if !(d > PIVOT_TOLERANCE * scale) {
-                    return Err(j);
-                }
-                inv[j] = 1.0 / d;
-                for i in j + 1..N {
-                    let mut s = a[i][j];
-                    for k in 0..j {
-                        s -= a[i][k] * u[j][k];
-                    }
-                    u[i][j] = s;
-                    a[i][j] = s * inv[j];
-                }
-            }
-            for i in 0..N {
-                for k in 0..i {
-                    b[i] -= a[i][k] * b[k];
-                }
-            }
-            for i in 0..N {
-                b[i] *= inv[i];
-            }
-            for i in (0..N).rev() {
-                for k in i + 1..N {
-                    b[i] -= a[k][i] * b[k];
-                }
-            }
-            Ok(())
-        }
     }
 }
 

@@ -120,7 +120,7 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
     let seam = parts.seam;
     let module = parts.module;
     let forms: Vec<proc_macro2::Ident> = parts.formulations.iter().map(|f| ident(f)).collect();
-    let nf = super::module::usize_lit(forms.len());
+    let nf = super::syntax::usize_lit(forms.len());
     let initial = if parts.has_initial { quote!(Some((&INITIAL_Q, &INITIAL_QDOT))) } else { quote!(None) };
     let run = if parts.has_run { quote!(Some((T_START, T_END, DT_OUT))) } else { quote!(None) };
     let has = |f: Function| parts.functions.contains(&f);

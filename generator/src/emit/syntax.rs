@@ -9,7 +9,8 @@
 //! assert_eq!(quote::ToTokens::to_token_stream(&e).to_string(), "- a * (b)");
 //! ```
 
-use proc_macro2::{Ident, Literal, Span};
+use proc_macro2::{Ident, Literal, Span, TokenStream};
+use quote::quote;
 use syn::punctuated::Punctuated;
 
 /// The path `a::b::c` as an expression.
@@ -90,6 +91,19 @@ pub fn let_stmt(name: &str, value: syn::Expr) -> syn::Stmt {
 pub fn assign_stmt(target: syn::Expr, value: syn::Expr) -> syn::Stmt {
     let e = syn::Expr::Assign(syn::ExprAssign { attrs: vec![], left: Box::new(target), eq_token: Default::default(), right: Box::new(value) });
     syn::Stmt::Expr(e, Some(Default::default()))
+}
+
+/// An unsuffixed `usize` literal (an array length, an index).
+pub fn usize_lit(n: usize) -> Literal {
+    Literal::usize_unsuffixed(n)
+}
+
+/// A doc attribute. prettyplease prints it as `///` lines, so a line break in the text would end
+/// the comment and let the rest through as code: every control character (model names and
+/// descriptions come from the user) becomes a space.
+pub fn doc(text: &str) -> TokenStream {
+    let text: String = text.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+    quote!(#[doc = #text])
 }
 
 #[cfg(test)]

@@ -571,3 +571,33 @@ fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &H
     let rest: Vec<Expr> = (0..mech.m).map(|j| -(inertial[j] + mc.get(j, 0))).collect();
     (mass, wt.mul(&Matrix::column(rest)).col(0).into_iter().map(simplify).collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::renames_rates;
+    use crate::symbolic::{Expr, Matrix, Symbol};
+
+    fn matrix(rows: &[&[i64]]) -> Matrix {
+        Matrix::from_rows(rows.iter().map(|r| r.iter().map(|&v| Expr::int(v)).collect()).collect())
+    }
+
+    #[test]
+    fn a_permutation_without_drift_renames_the_rates() {
+        let zero = [Expr::zero(), Expr::zero()];
+        assert!(renames_rates(&matrix(&[&[0, 1], &[1, 0]]), &zero));
+        assert!(renames_rates(&matrix(&[&[1, 0], &[0, 1]]), &zero));
+    }
+
+    #[test]
+    fn scaled_mixed_or_drifting_rates_are_not_a_renaming() {
+        let zero = [Expr::zero(), Expr::zero()];
+        // A rate scaled, two rates in one quasi-velocity, a rate in none.
+        assert!(!renames_rates(&matrix(&[&[0, 2], &[1, 0]]), &zero));
+        assert!(!renames_rates(&matrix(&[&[1, 1], &[0, 1]]), &zero));
+        assert!(!renames_rates(&matrix(&[&[1, 0], &[1, 0]]), &zero));
+        // A symbolic entry, and a drift X.
+        let c = Symbol::new("c_renames").expr();
+        assert!(!renames_rates(&Matrix::from_rows(vec![vec![c, Expr::zero()], vec![Expr::zero(), Expr::one()]]), &zero));
+        assert!(!renames_rates(&matrix(&[&[0, 1], &[1, 0]]), &[Expr::zero(), c]));
+    }
+}
