@@ -439,7 +439,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     // they are a combination (`inertia_by_coordinates`): so is their sum with U_NI. Where they
     // only rename the rates, L_NI is Lagrange's f renamed (`renamed_force`).
     let l_ni: Vec<Expr> = match renamed {
-        Some(f) => f,
+        Some(f) => f.into_iter().map(|e| drop_absent(e, &g)).collect(),
         None => (0..n_u)
             .map(|k| {
                 let l = u_ni[k] + inertia_ni[k];
