@@ -254,14 +254,12 @@ pub struct Quantities {
     pub q_forces: Vec<Expr>,
     /// `dV/dq`.
     pub potential_gradient: Vec<Expr>,
-    /// Generalized inertia forces `h`: `d/dt dT/dq' - dT/dq = M q'' + h`. On small models (at
-    /// most [`MAX_FOUR_ANGLE_COORDINATES`] coordinates) simplified, elsewhere each entry the sum
-    /// over the bodies of their simplified partial velocities and accelerations as built
-    /// ([`Tidy::combination`]): expanded, a chain's entries sum a term per body and link (past
-    /// the term limit from 50 links on the pendulum on a cart), and the emitted code shares the
-    /// built form's per-body parts (the 60-link pendulum's Lagrange assembly 19499 operations
-    /// against 28026 expanded).
-    pub inertial: Vec<Expr>,
+    /// Generalized inertia forces `h` (`d/dt dT/dq' - dT/dq = M q'' + h`) as built: each entry
+    /// the sum over the bodies of their simplified partial velocities and accelerations.
+    /// [`Mechanics::inertial`] gives them simplified where the model is small; only the routes
+    /// through the coordinates' `h` ask for it (Lagrange's and Maggi's forms, Kane's through
+    /// `W^T h`), so Kane's form from the bodies' velocities (scenes 2 and 3) never simplifies it.
+    pub inertial_built: Vec<Expr>,
     /// Constraint Jacobian a (r x m).
     pub a: Matrix,
     /// Constraint bias b (r).
@@ -311,7 +309,7 @@ impl Transfer for Quantities {
         self.t0.visit(v);
         self.q_forces.visit(v);
         self.potential_gradient.visit(v);
-        self.inertial.visit(v);
+        self.inertial_built.visit(v);
         self.a.visit(v);
         self.b.visit(v);
         self.holonomic.iter_mut().for_each(|(_, e)| e.visit(v));
@@ -437,7 +435,7 @@ pub fn derive(model: &Model) -> Mechanics {
         }
     }
     let n: Vec<Expr> = n_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect();
-    let inertial: Vec<Expr> = inertial_terms.into_iter().map(|t| tidy.combination(Expr::sum(t), m)).collect();
+    let inertial_built: Vec<Expr> = inertial_terms.into_iter().map(Expr::sum).collect();
     let t0 = tidy.of(Expr::sum(t0_terms));
     // Expanded, T is the larger form on long chains (`n^3 / 6` terms on the n-link pendulum):
     // simplifying it cost the 40-link pendulum 20 nodes over the term limit and a tenth of its
@@ -531,7 +529,7 @@ pub fn derive(model: &Model) -> Mechanics {
             t0,
             q_forces,
             potential_gradient,
-            inertial,
+            inertial_built,
             a,
             b,
             holonomic,
@@ -575,11 +573,31 @@ impl Quantities {
 }
 
 impl Mechanics {
+    /// Generalized inertia forces `h`: `d/dt dT/dq' - dT/dq = M q'' + h`. On small models (at
+    /// most [`MAX_FOUR_ANGLE_COORDINATES`] coordinates) simplified, elsewhere each entry the sum
+    /// over the bodies of their simplified partial velocities and accelerations as built
+    /// ([`Tidy::combination`]): expanded, a chain's entries sum a term per body and link (past
+    /// the term limit from 50 links on the pendulum on a cart), and the emitted code shares the
+    /// built form's per-body parts (the 60-link pendulum's Lagrange assembly 19499 operations
+    /// against 28026 expanded). Simplified when first asked for (the simplifier's memo makes
+    /// later calls lookups): 5 of scene 2's 13 ms of mechanics, which Kane's form alone skips.
+    ///
+    /// ```
+    /// use generator::formulation::mechanics;
+    /// let model = generator::model::examples::n_link_pendulum_on_cart(1).build().unwrap();
+    /// let mech = mechanics::derive(&model);
+    /// assert_eq!(mech.inertial().len(), model.m());
+    /// ```
+    pub fn inertial(&self) -> Vec<Expr> {
+        self.inertial_built.iter().map(|e| self.tidy.combination(*e, self.m)).collect()
+    }
+
     /// `f = Q - dV/dq - h`: everything in Lagrange's equations but `M q''` and the constraint
     /// forces, in `q`, `q'`, `t`; a combination of its simplified parts past
     /// [`MAX_FOUR_ANGLE_COORDINATES`] coordinates, as `h` is ([`Tidy::combination`]).
     pub fn lagrange_force(&self) -> Vec<Expr> {
-        (0..self.m).map(|j| self.tidy.combination(self.q_forces[j] - self.potential_gradient[j] - self.inertial[j], self.m)).collect()
+        let inertial = self.inertial();
+        (0..self.m).map(|j| self.tidy.combination(self.q_forces[j] - self.potential_gradient[j] - inertial[j], self.m)).collect()
     }
 }
 
@@ -587,6 +605,26 @@ impl Mechanics {
 mod tests {
     use super::*;
     use crate::symbolic::zero::zero_test;
+
+    /// `h` is simplified only when asked for: Kane's form from the bodies' velocities (scene 2)
+    /// never asks, and asking afterwards still finds work to do; asked again, the memo answers.
+    #[test]
+    fn the_inertia_forces_are_simplified_only_when_asked_for() {
+        let model = crate::model::load("../models/three_body.ron").unwrap();
+        let mech = derive(&model);
+        let kane = crate::formulation::volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+        assert!(kane.route.contains("from the bodies' velocities"), "{}", kane.route);
+        let before = mech.tidy.report().work;
+        let h = mech.inertial();
+        let after = mech.tidy.report().work;
+        assert!(after > before, "h was already simplified: {before} term products before asking, {after} after");
+        assert_eq!(mech.inertial(), h);
+        assert_eq!(mech.tidy.report().work, after, "asked again, h is simplified anew");
+        // Simplified, each entry is the sum it was built as (a zero difference at a state).
+        for (built, simple) in mech.inertial_built.iter().zip(&h) {
+            assert!(zero_test(*built - *simple).is_zero(), "{built} against {simple}");
+        }
+    }
 
     /// Where the body's components win, deriving them alone (the absent rates by the zero test
     /// on the raw world acceleration) gives exactly what comparing both forms gave.
@@ -621,7 +659,7 @@ mod tests {
             let chain = model.velocity_chain();
             for j in 0..mech.m {
                 let lagrange = chain.dt(mech.kinetic.diff(model.velocities[j])) - mech.kinetic.diff(model.coordinates[j]);
-                let ours = Expr::sum((0..mech.m).map(|k| mech.mass.get(j, k) * model.accelerations[k].expr())) + mech.inertial[j];
+                let ours = Expr::sum((0..mech.m).map(|k| mech.mass.get(j, k) * model.accelerations[k].expr())) + mech.inertial()[j];
                 assert!(zero_test(lagrange - ours).is_zero(), "{name}: equation {j}");
             }
         }

@@ -566,7 +566,7 @@ fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &H
     let simplify = |e: Expr| tidy.combination(e, mech.m);
     let wt = w.transpose();
     let mass = mass_by_coordinates(mech, w);
-    let inertial = Expr::subs_all(&mech.inertial, to_u);
+    let inertial = Expr::subs_all(&mech.inertial(), to_u);
     let mc = mech.mass.mul(&Matrix::column(drift.to_vec()));
     let rest: Vec<Expr> = (0..mech.m).map(|j| -(inertial[j] + mc.get(j, 0))).collect();
     (mass, wt.mul(&Matrix::column(rest)).col(0).into_iter().map(simplify).collect())
