@@ -368,19 +368,36 @@ fn the_symengine_figures_are_the_script_file() {
 }
 
 /// docs/goals.md quotes the scaling benchmark's measured cells for the goals it measures: SymPy's
-/// derivation time on the paper's scenes against ours, the planar chain in absolute angles, and
-/// the simplifier's work on the spatial chains.
+/// derivation time on the paper's scenes against ours (the same work, and our whole generation),
+/// the planar chain in absolute angles, and the simplifier's work on the spatial chains.
 #[test]
 fn the_goals_quote_the_scaling_rows() {
     let goals = read("docs/goals.md");
     let scaling = read("docs/scaling.md");
-    for row in ["| derivation CPU, SymPy's `KanesMethod` / ours, each paper scene", "| planar free chain of 20 rods in absolute angles"] {
+    for row in [
+        "| derivation CPU, SymPy's `KanesMethod` / ours, each paper scene, the same work",
+        "| SymPy's `KanesMethod` / our whole generation, each paper scene",
+        "| planar free chain of 20 rods in absolute angles",
+    ] {
         let line = scaling.lines().find(|l| l.starts_with(row)).unwrap_or_else(|| panic!("docs/scaling.md has no row `{row}`"));
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
         let (measured, verdict) = (cells[3], cells[4]);
         assert!(goals.contains(measured), "docs/goals.md does not quote `{measured}` from docs/scaling.md");
         let word = if verdict.starts_with("met") { "met" } else { "missed" };
         assert!(goals.contains(&format!("{measured}: {word}")), "docs/goals.md does not say `{measured}: {word}` as docs/scaling.md does");
+    }
+    // The README's status row quotes the range of the two SymPy rows' ratios.
+    let readme = read("README.md");
+    for (row, what) in [
+        ("| derivation CPU, SymPy's `KanesMethod` / ours, each paper scene, the same work", "on the same work"),
+        ("| SymPy's `KanesMethod` / our whole generation, each paper scene", "against our whole generation"),
+    ] {
+        let line = scaling.lines().find(|l| l.starts_with(row)).unwrap();
+        let measured = line.split('|').map(str::trim).nth(3).unwrap();
+        // "scene R (a s / b ms), ...": the ratio follows each scene's name.
+        let ratios: Vec<f64> = measured.split(", ").map(|cell| cell.split_whitespace().nth(1).unwrap().parse().unwrap()).collect();
+        let (low, high) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+        assert_quoted(&readme, &format!("{low:.1} to {high:.1}"), &format!("docs/scaling.md ({what})"));
     }
     // The simplifier's work on the spatial chain, per size (the last column of its table).
     let spatial = scaling.split("## The spatial chain on a floating base").nth(1).unwrap().split("\n## ").next().unwrap();
