@@ -618,7 +618,7 @@ fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], c
     };
     for kind in KINDS {
         md += &format!("## {}\n\n", title(kind));
-        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | CPU s | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call | simplifier: million term products, nodes over the term limit |\n";
+        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations / trees / hand-off) | emit ms after the derivation | CPU s | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call | simplifier: million term products, nodes over the term limit |\n";
         md += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         for r in records.iter().filter(|r| r.model == kind) {
             let stages: Vec<String> = r.stages_ms.iter().map(|(_, v)| format!("{v:.0}")).collect();

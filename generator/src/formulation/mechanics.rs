@@ -254,12 +254,6 @@ pub struct Quantities {
     pub q_forces: Vec<Expr>,
     /// `dV/dq`.
     pub potential_gradient: Vec<Expr>,
-    /// Generalized inertia forces `h` (`d/dt dT/dq' - dT/dq = M q'' + h`) as built: each entry
-    /// the sum over the bodies of their simplified partial velocities and accelerations.
-    /// [`Mechanics::inertial`] gives them simplified where the model is small; only the routes
-    /// through the coordinates' `h` ask for it (Lagrange's and Maggi's forms, Kane's through
-    /// `W^T h`), so Kane's form from the bodies' velocities (scenes 2 and 3) never simplifies it.
-    pub inertial_built: Vec<Expr>,
     /// Constraint Jacobian a (r x m).
     pub a: Matrix,
     /// Constraint bias b (r).
@@ -276,6 +270,13 @@ pub struct Quantities {
 pub struct Mechanics {
     pub quantities: Quantities,
     pub tidy: Tidy,
+    /// Generalized inertia forces `h` (`d/dt dT/dq' - dT/dq = M q'' + h`) as built: each entry
+    /// the sum over the bodies of their simplified partial velocities and accelerations.
+    /// [`Mechanics::inertial`] gives them simplified where the model is small; only the routes
+    /// through the coordinates' `h` ask for it (Lagrange's and Maggi's forms, Kane's through
+    /// `W^T h`), so Kane's form from the bodies' velocities (scenes 2 and 3) never simplifies
+    /// it. Not among the [`Quantities`]: the emitting thread, which gets those, never reads it.
+    pub inertial_built: Vec<Expr>,
 }
 
 impl std::ops::Deref for Mechanics {
@@ -309,7 +310,6 @@ impl Transfer for Quantities {
         self.t0.visit(v);
         self.q_forces.visit(v);
         self.potential_gradient.visit(v);
-        self.inertial_built.visit(v);
         self.a.visit(v);
         self.b.visit(v);
         self.holonomic.iter_mut().for_each(|(_, e)| e.visit(v));
@@ -517,25 +517,9 @@ pub fn derive(model: &Model) -> Mechanics {
         b.push(tidy.of(bias));
     }
     Mechanics {
-        quantities: Quantities {
-            m,
-            r,
-            p: m - r,
-            bodies,
-            kinetic,
-            potential,
-            mass,
-            n,
-            t0,
-            q_forces,
-            potential_gradient,
-            inertial_built,
-            a,
-            b,
-            holonomic,
-            constraint_names,
-        },
+        quantities: Quantities { m, r, p: m - r, bodies, kinetic, potential, mass, n, t0, q_forces, potential_gradient, a, b, holonomic, constraint_names },
         tidy,
+        inertial_built,
     }
 }
 

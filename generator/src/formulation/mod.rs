@@ -115,7 +115,8 @@ pub trait Stages {
     /// The mechanics are derived (first, once).
     fn mechanics(&mut self, _mech: &Mechanics) {}
     /// Definition 1 for every coordinate, and the set the reduced method uses. Asked for after
-    /// Kane's form (which does not need it) and before the reduced form; its error comes first.
+    /// Maggi's and Kane's forms (which do not need it) and before the reduced form; its error
+    /// is reported before theirs.
     fn ignorable(&mut self, model: &Model, mech: &Mechanics) -> Result<Ignorable, ModelError> {
         let clock = Instant::now();
         let reports = ignorable::analyze(model, mech);
@@ -192,12 +193,18 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     let mech = mechanics::derive(model);
     every_coordinate_has_inertia(model, &mech)?;
     times.push(("mechanics", clock.elapsed()));
+    // Time in the stages' hands (where they hand the results to another thread, packing them,
+    // and wait for Definition 1 beyond its own time).
+    let mut handoff = Duration::ZERO;
+    clock = Instant::now();
     stages.mechanics(&mech);
+    handoff += clock.elapsed();
     let wants = |f: FormulationDef| request.formulations.contains(&f);
     // Where a constraint moves, each formulation also gives the power of its forces.
     let moving_force = power::constraints_move(&mech).then(|| mech.lagrange_force());
     let mut equations = Vec::new();
     let mut formulate = |stages: &mut dyn Stages,
+                         handoff: &mut Duration,
                          def: FormulationDef,
                          method: &dyn Method,
                          kane: Option<&Volterra>,
@@ -212,12 +219,14 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
                 eqs.constraint_power = Some(power::constraint_power(model, &mech, force, &eqs));
             }
             formulations += start.elapsed();
+            let start = Instant::now();
             stages.equations(&eqs);
+            *handoff += start.elapsed();
             equations.push(eqs);
         }
         Ok(())
     };
-    formulate(stages, FormulationDef::Lagrange, &lagrange::Lagrange, None, None, Trees::default())?;
+    formulate(stages, &mut handoff, FormulationDef::Lagrange, &lagrange::Lagrange, None, None, Trees::default())?;
     clock = Instant::now();
     // Kane's form serves Kane, Maggi, and the reduced method's Schur route.
     let kane = if wants(FormulationDef::Kane) || wants(FormulationDef::Maggi) || wants(FormulationDef::ReducedVolterra) {
@@ -226,28 +235,46 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
         Ok(None)
     };
     let kane_time = clock.elapsed();
-    let decided = stages.ignorable(model, &mech)?;
-    let kane = kane?;
-    times.push(("ignorable", decided.time));
-    times.push(("kane", kane_time));
-    formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None, Trees::default())?;
+    // Definition 1 may be decided on another thread (generation's emitting one) while Maggi's
+    // and Kane's forms are formulated here: its answer is read before the reduced form, the one
+    // that needs it, and its error still comes before theirs (the order the stages run alone).
+    let mut pending: Result<(), ModelError> = Ok(());
+    let kane = kane.unwrap_or_else(|e| {
+        pending = Err(e);
+        None
+    });
+    if pending.is_ok() {
+        pending = formulate(stages, &mut handoff, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None, Trees::default());
+    }
     // The tree of frames, once, for both recursions of Kane's and the reduced form.
+    clock = Instant::now();
     let frames = match &kane {
-        Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => recursive::tree(model, &mech, k).zip(Some(k)),
+        Some(k) if pending.is_ok() && (wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra)) => recursive::tree(model, &mech, k).zip(Some(k)),
         _ => None,
     };
     let recursion = frames.as_ref().and_then(|(t, k)| recursive::on_tree(t, k));
     let articulated = frames.as_ref().and_then(|(t, k)| articulated::on_tree(t, &mech, k));
     let trees = Trees { frames: frames.as_ref().map(|(t, _)| t), composite: recursion.as_ref(), articulated: articulated.as_ref() };
-    formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None, trees)?;
+    let trees_time = clock.elapsed();
+    if pending.is_ok() {
+        pending = formulate(stages, &mut handoff, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None, trees);
+    }
+    clock = Instant::now();
+    let decided = stages.ignorable(model, &mech)?;
+    handoff += clock.elapsed().saturating_sub(decided.time);
+    pending?;
+    times.push(("ignorable", decided.time));
+    times.push(("kane", kane_time));
     clock = Instant::now();
     let reduced = match &kane {
         Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &decided.chosen, &model.quasi_reduced, k)?),
         _ => None,
     };
     times.push(("reduced", clock.elapsed()));
-    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), trees)?;
+    formulate(stages, &mut handoff, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), trees)?;
     times.push(("formulations", formulations));
+    times.push(("trees", trees_time));
+    times.push(("handoff", handoff));
     let cuts = crate::symbolic::report::take();
     Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times, cuts })
 }
