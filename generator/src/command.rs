@@ -70,7 +70,7 @@ pub struct GenerateArgs {
     /// runtime parameters.
     #[arg(long)]
     pub parameter_jacobian: bool,
-    /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies: build the module with
+    /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies and the unrolled solves: build the module with
     /// `-C target-cpu=native` or `-C target-feature=+fma` where the CPU has them.
     #[arg(long)]
     pub fma: bool,

@@ -5,8 +5,9 @@
 //! or `-C target-feature=+fma`) each is one instruction; elsewhere `mul_add` is the C
 //! library's `fma`, correct but slow. The values differ from the plain code's by round-off.
 //!
-//! Only the straight-line bodies are rewritten (their values are all `f64`); the solves and
-//! the code around them are left as they are.
+//! The straight-line code is rewritten (its values are all `f64`): the bodies, and the
+//! unrolled `L D L^T` solves (`solve_ldl`, whose eliminations subtract products); the generic
+//! solvers with loops and the code around them are left as they are.
 //!
 //! ```
 //! use generator::emit::fma::fuse;

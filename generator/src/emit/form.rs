@@ -512,7 +512,7 @@ impl Emitter<'_> {
             }
         };
         let (solve_stmts, solve_item) = match (plan.sparse(), &plan) {
-            (Some(sparse), _) => (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.splices)),
+            (Some(sparse), _) => (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.splices, self.options.fma)),
             (None, Solve::Ldl(_)) => (solve_with(quote!(solve_spd(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
             (None, Solve::Lu(_)) => (solve_with(quote!(solve_dense(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
             (None, Solve::Articulated { .. }) => (quote!(let (qdot, force) = (a.qdot, a.force);), TokenStream::new()),

@@ -286,8 +286,9 @@ impl LdlPlan {
     }
 
     /// The solve as straight-line code: `fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
-    /// b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize>`, the same operations as [`Self::solve`].
-    pub fn emit(&self, splices: &mut Splices) -> TokenStream {
+    /// b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize>`, the same operations as [`Self::solve`];
+    /// with `fma`, each product subtracted is fused ([`super::fma`]).
+    pub fn emit(&self, splices: &mut Splices, fma: bool) -> TokenStream {
         use super::syntax::{assign_stmt, binary, ident, index, let_stmt, literal};
         let n = self.size();
         let o = &self.order;
@@ -342,6 +343,9 @@ impl LdlPlan {
             let products = self.cols[i].iter().map(|&k| (l(k, i), x(k))).collect();
             stmts.push(let_stmt(&x(i), minus_products(mul(y(i), inv(i)), products)));
             stmts.push(assign_stmt(index("b", o[i]), ident(&x(i))));
+        }
+        if fma {
+            super::fma::fuse_stmts(&mut stmts);
         }
         let stmts = splices.stmts(stmts);
         let order: Vec<String> = self.order.iter().map(|i| i.to_string()).collect();

@@ -64,7 +64,7 @@ pub struct Options {
     /// Also compile every emitted function into a tape for in-process evaluation
     /// ([`crate::eval`]), returned as [`Generated::program`].
     pub tapes: bool,
-    /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies, for targets that
+    /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies and the unrolled solves, for targets that
     /// have the instruction ([`fma`]). The tapes are the plain code's.
     pub fma: bool,
 }
