@@ -27,7 +27,7 @@ use crate::kinematics::{TimeChain, add3, cross, dot, mat_vec};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::limits::Limits;
 use crate::symbolic::matrix::{SolveError, SolveOptions, solve};
-use crate::symbolic::zero::zero_test;
+use crate::symbolic::zero::settle_absent;
 use crate::symbolic::{Expr, Matrix, Symbol};
 use std::collections::HashMap;
 
@@ -77,20 +77,6 @@ impl crate::symbolic::transfer::Transfer for Volterra {
         self.u_ni.visit(v);
         self.l_ni.visit(v);
     }
-}
-
-/// `e` with each symbol in `symbols` it does not depend on set to zero (exact: `L_NI` is
-/// polynomial in `G_I`, and the derivative is decided by the exact zero test). It removes terms
-/// that cancel only across bodies, such as the total momentum in the relative motion of
-/// scene 2.
-fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
-    let mut out = e;
-    for s in symbols {
-        if out.contains(*s) && zero_test(out.diff(*s)).is_zero() {
-            out = out.subs(&HashMap::from([(*s, Expr::zero())]));
-        }
-    }
-    out
 }
 
 /// Largest model (coordinates) for which the body route of `inertia_by_bodies` is taken, when the
@@ -263,7 +249,7 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         if !small {
             return e;
         }
-        let e = crate::symbolic::zero::settle_absent(e, &model.coordinates);
+        let e = settle_absent(e, &model.coordinates);
         let s = tidy.of(e);
         if crate::symbolic::expr::dag_ops(&[s]) < crate::symbolic::expr::dag_ops(&[e]) { s } else { e }
     };
@@ -274,7 +260,7 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
             mass_ni.set(l, k, e);
         }
     }
-    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(simplify(l_k[map[k]] - coupling(k, n_u)), &g)).collect();
+    let l_ni: Vec<Expr> = (0..n_u).map(|k| settle_absent(simplify(l_k[map[k]] - coupling(k, n_u)), &g)).collect();
     let u_ni: Vec<Expr> = (0..n_u).map(|k| u_k[map[k]] - coupling(k, n_u + 1)).collect();
     let mut w = Matrix::zeros(m, n_u);
     let zero_n: HashMap<Symbol, Expr> = u.iter().map(|s| (*s, Expr::zero())).collect();
@@ -439,11 +425,11 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     // they are a combination (`inertia_by_coordinates`): so is their sum with U_NI. Where they
     // only rename the rates, L_NI is Lagrange's f renamed (`renamed_force`).
     let l_ni: Vec<Expr> = match renamed {
-        Some(f) => f.into_iter().map(|e| drop_absent(e, &g)).collect(),
+        Some(f) => f.into_iter().map(|e| settle_absent(e, &g)).collect(),
         None => (0..n_u)
             .map(|k| {
                 let l = u_ni[k] + inertia_ni[k];
-                drop_absent(if rates_only || by_bodies { tidy.of(l) } else { tidy.combination(l, m) }, &g)
+                settle_absent(if rates_only || by_bodies { tidy.of(l) } else { tidy.combination(l, m) }, &g)
             })
             .collect(),
     };
