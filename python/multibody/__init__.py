@@ -215,7 +215,8 @@ class Model:
         time. A pandas DataFrame when pandas is installed (``frame=False`` for a
         ``Trajectory`` of numpy arrays). Defaults: the file's run, DOP853 at rtol = atol =
         1e-10 (the paper's DOPRI5 where the file asks for it); ``method`` is one of
-        ``METHODS``."""
+        ``METHODS``. Ctrl-C stops the run within a few milliseconds (``KeyboardInterrupt``, its
+        note saying the time reached)."""
         kind, columns, table, events, used = self._native.simulate_columns(
             formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start
         )
@@ -298,7 +299,7 @@ def ensemble(
     one at least is 2-D. Returns the states of ``formulation`` at ``t_eval`` (the first time is
     the start), an array (N, len(t_eval), states); with ``return_reached``, also how many output
     times each member reached (a terminal event stops a member early: its later rows are NaN,
-    and a warning says which members stopped)."""
+    and a warning says which members stopped). Ctrl-C stops every member (``KeyboardInterrupt``)."""
     states, reached = _multibody.ensemble(
         model._native, np.asarray(t_eval, dtype=float), params, q0, qdot0, formulation, method, rtol, atol, h, threads
     )

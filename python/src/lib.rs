@@ -13,10 +13,19 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReado
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use runtime::integrate::{Method, Settings};
+use runtime::integrate::{Method, Reason, Settings};
 use runtime::system::System;
+use runtime::trajectory::TrajectoryError;
 use seam::FormulationKind;
+use std::ops::ControlFlow;
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
+use std::time::Duration;
+
+/// How often an ensemble's caller runs Python's signal handlers while the members run (a Ctrl-C
+/// answers within it).
+const INTERRUPT_POLL: Duration = Duration::from_millis(50);
 
 pyo3::create_exception!(
     _multibody,
@@ -40,6 +49,46 @@ fn model_error(e: ::load::LoadError) -> PyErr {
 
 fn run_error(e: impl std::fmt::Display) -> PyErr {
     SimulationError::new_err(e.to_string())
+}
+
+/// Ctrl-C during a run: the interpreter's signal handlers, run every
+/// [`runtime::events::INTERRUPT_CHECK_CALLS`] right-hand sides from the thread that holds the
+/// run with the GIL released (the caller's: Python runs its handlers on the main thread). The
+/// exception a handler raises (`KeyboardInterrupt`) stops the run and reaches the caller.
+#[derive(Default)]
+struct Interrupt {
+    calls: u32,
+    raised: Option<PyErr>,
+}
+
+impl Interrupt {
+    /// Called before each right-hand side, the GIL released: breaks once a handler raised.
+    fn check(&mut self) -> ControlFlow<()> {
+        self.calls = self.calls.wrapping_add(1);
+        if !self.calls.is_multiple_of(runtime::events::INTERRUPT_CHECK_CALLS) {
+            return ControlFlow::Continue(());
+        }
+        self.poll()
+    }
+
+    /// Runs the pending signal handlers now.
+    fn poll(&mut self) -> ControlFlow<()> {
+        if self.raised.is_none()
+            && let Err(e) = Python::attach(|py| py.check_signals())
+        {
+            self.raised = Some(e);
+        }
+        if self.raised.is_some() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    }
+
+    /// The exception the handler raised, with a note saying where the run stopped (Python 3.11
+    /// and later show it under the traceback).
+    fn into_error(self, py: Python<'_>, note: String) -> PyErr {
+        let e = self.raised.unwrap_or_else(|| SimulationError::new_err(note.clone()));
+        // `add_note` is missing before Python 3.11; the exception is the same without it.
+        let _ = e.value(py).call_method1("add_note", (format!("multibody: {note}"),));
+        e
+    }
 }
 
 /// A model, derived and ready to run: `multibody.load(path)` or `multibody.loads(text)`.
@@ -370,7 +419,13 @@ impl Model {
         let times = seam::output_times(t_start, t_end, dt_out).map_err(|e| PyValueError::new_err(format!("run settings: {e}")))?;
         let settings = settings(&self.evaluated, t_end - t_start, method, rtol, atol, h)?;
         let (sys, y0) = System::start(&self.evaluated, kind, params.clone(), &q, &qdot).map_err(run_error)?;
-        let run = py.detach(|| runtime::trajectory::simulate(&sys, &y0, &times, &settings, &mut |_| {})).map_err(run_error)?;
+        let mut interrupt = Interrupt::default();
+        let run = match py.detach(|| runtime::trajectory::simulate_interruptible(&sys, &y0, &times, &settings, &mut |_| interrupt.check())) {
+            Err(TrajectoryError::Run(e)) if e.reason == Reason::Interrupted => {
+                return Err(interrupt.into_error(py, format!("the run stopped at t = {} (its last accepted step)", e.t)));
+            }
+            run => run.map_err(run_error)?,
+        };
         let (rows, width) = (run.rows.len(), run.columns.len());
         let table = Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py);
         let events = run.events.into_iter().map(|e| (e.name, e.t, e.q)).collect();
@@ -526,8 +581,28 @@ fn ensemble<'py>(
     let times = vector(t_eval, "t_eval")?;
     let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
     let settings = settings(m, span.max(f64::MIN_POSITIVE), method, rtol, atol, h)?;
-    let runs = py.detach(|| runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, &|| {})).map_err(|e| match e {
+    // The members run on a worker thread while this one, the caller's, runs Python's signal
+    // handlers every `INTERRUPT_POLL` and sets `stop` once one raised (Ctrl-C).
+    let (stop, mut interrupt) = (AtomicBool::new(false), Interrupt::default());
+    let runs = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (finished, done) = std::sync::mpsc::channel::<()>();
+            let worker = scope.spawn(|| {
+                let runs = runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, &|| {}, &stop);
+                drop(finished);
+                runs
+            });
+            while let Err(RecvTimeoutError::Timeout) = done.recv_timeout(INTERRUPT_POLL) {
+                if interrupt.poll().is_break() {
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
+            worker.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        })
+    });
+    let runs = runs.map_err(|e| match e {
         runtime::ensemble::EnsembleError::Times | runtime::ensemble::EnsembleError::Shape { .. } => PyValueError::new_err(e.to_string()),
+        runtime::ensemble::EnsembleError::Interrupted => interrupt.into_error(py, "the ensemble stopped".into()),
         other => run_error(other),
     })?;
     let shape = (runs.members, runs.times, runs.states);

@@ -1,7 +1,9 @@
 """Runs from Python: scipy's solve_ivp on the wheel's rhs and jacobian against the independent
 reference trajectory of scene 2, the built-in integrators, and ensembles."""
 
+import _thread
 import csv
+import threading
 
 import numpy as np
 import pytest
@@ -139,3 +141,44 @@ def test_an_ensemble_refuses_shapes_that_disagree():
         multibody.ensemble(m, [0.0, 1.0])
     with pytest.raises(ValueError, match="output times"):
         multibody.ensemble(m, [1.0, 0.0], q0=q)
+
+
+def _interrupt_main_after(seconds):
+    """Ctrl-C, as the interpreter sees it, `seconds` from now (`_thread.interrupt_main` runs
+    the SIGINT handler on the main thread, where the run is)."""
+    timer = threading.Timer(seconds, _thread.interrupt_main)
+    timer.start()
+    return timer
+
+
+def _stopped_at(notes):
+    """The time in the note `simulate` adds to the KeyboardInterrupt it lets through."""
+    (note,) = [n for n in notes if n.startswith("multibody: the run stopped at t = ")]
+    return float(note.split("t = ")[1].split(" ")[0])
+
+
+def test_ctrl_c_stops_a_long_run():
+    # 1e5 s of the cart pendulum at rtol 1e-13 take about 25 s of integration here. The
+    # KeyboardInterrupt must come from inside the run: its note says where the run stopped (an
+    # interrupt handled only after the run returned would carry no note).
+    m = multibody.load("cart_pendulum")
+    timer = _interrupt_main_after(0.3)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        m.simulate(t_end=1e5, dt_out=1e5, rtol=1e-13, atol=1e-13, frame=False)
+    timer.join()
+    t = _stopped_at(caught.value.__notes__)
+    assert 0.0 < t < 1e5
+    # The model still runs afterwards.
+    assert len(m.simulate(t_end=1.0, dt_out=0.5, frame=False)["t"]) == 3
+
+
+def test_ctrl_c_stops_an_ensemble():
+    m = multibody.load("cart_pendulum")
+    q0 = np.tile(np.array(m.initial[0]), (16, 1))
+    q0[:, 0] += np.linspace(0.0, 0.1, 16)
+    timer = _interrupt_main_after(0.3)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        # About 20 s on two threads, uninterrupted.
+        multibody.ensemble(m, [0.0, 1e4], q0=q0, rtol=1e-13, atol=1e-13, threads=2)
+    timer.join()
+    assert "multibody: the ensemble stopped" in caught.value.__notes__

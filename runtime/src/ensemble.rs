@@ -5,23 +5,26 @@
 //! ```
 //! use runtime::ensemble::{Member, ensemble};
 //! use runtime::integrate::Settings;
+//! use std::sync::atomic::AtomicBool;
 //! let model = generated::cart_pendulum::model();
 //! let kind = seam::FormulationKind::Kane;
 //! let members: Vec<Member> = (0..4)
 //!     .map(|k| Member { params: model.default_params.clone(), q0: vec![0.1 * k as f64, 0.0, 0.0], qd0: vec![0.0; 3] })
 //!     .collect();
 //! let times = [0.0, 0.5, 1.0];
-//! let runs = ensemble(&model, kind, &members, &times, &Settings::tight(1.0), None, &|| {}).unwrap();
+//! let runs = ensemble(&model, kind, &members, &times, &Settings::tight(1.0), None, &|| {}, &AtomicBool::new(false)).unwrap();
 //! assert_eq!((runs.members, runs.times, runs.states), (4, 3, 6));
 //! // Member 0 starts at rest in its equilibrium and stays there.
 //! assert!(runs.member(0).iter().all(|x| x.abs() < 1e-12));
 //! ```
 
-use crate::events::run;
-use crate::integrate::{RunError, Settings};
+use crate::events::run_interruptible;
+use crate::integrate::{Reason, RunError, Settings};
 use crate::system::{SetupError, System};
 use rayon::prelude::*;
 use seam::{FormulationKind, Model};
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One run of an ensemble: its parameters (every one of the model's, in its order) and its
 /// initial coordinates and rates.
@@ -68,12 +71,18 @@ pub enum EnsembleError {
     Times,
     #[error("cannot start {threads} threads: {message}")]
     Threads { threads: usize, message: String },
+    /// The caller set the ensemble's `stop` flag (a Ctrl-C): the members running stopped at
+    /// their last accepted step, the others never started.
+    #[error("interrupted: the caller asked the ensemble to stop")]
+    Interrupted,
 }
 
 /// One member run alone: its states at `times` (NaN after a terminal event), and how many
 /// times it reached.
 ///
 /// The run starts at `times[0]` from the member's `q0`, `qd0`; the model's events are watched.
+/// It stops with [`EnsembleError::Interrupted`] once `stop` is set (read before every
+/// right-hand side).
 pub fn run_member(
     model: &Model,
     kind: FormulationKind,
@@ -81,7 +90,11 @@ pub fn run_member(
     index: usize,
     times: &[f64],
     settings: &Settings,
+    stop: &AtomicBool,
 ) -> Result<(Vec<f64>, usize), EnsembleError> {
+    if stop.load(Ordering::Relaxed) {
+        return Err(EnsembleError::Interrupted);
+    }
     let shape = |what, got: usize, expected: usize| if got == expected { Ok(()) } else { Err(EnsembleError::Shape { member: index, what, got, expected }) };
     shape("params", member.params.len(), model.parameter_names.len())?;
     shape("q0", member.q0.len(), model.coordinates.len())?;
@@ -89,7 +102,10 @@ pub fn run_member(
     let (sys, y0) =
         System::start(model, kind, member.params.clone(), &member.q0, &member.qd0).map_err(|source| EnsembleError::Setup { member: index, source })?;
     let settings = Settings { time_independent: !sys.form.depends_on_time, ..*settings };
-    let solution = run(&sys, &y0, times, &settings, &mut |_| {}).map_err(|source| EnsembleError::Run { member: index, source })?.solution;
+    let on_rhs = &mut |_| if stop.load(Ordering::Relaxed) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
+    let solution = run_interruptible(&sys, &y0, times, &settings, on_rhs)
+        .map_err(|source| if source.reason == Reason::Interrupted { EnsembleError::Interrupted } else { EnsembleError::Run { member: index, source } })?
+        .solution;
     let mut states: Vec<f64> = solution.states.iter().flatten().copied().collect();
     let reached = solution.states.len();
     states.resize(times.len() * y0.len(), f64::NAN);
@@ -98,7 +114,8 @@ pub fn run_member(
 
 /// Every member of `members` run with formulation `kind` over the output `times` (the first
 /// is the start) under `settings`, in parallel on `threads` threads (all cores when `None`);
-/// `on_done` is told of every member finished (for progress).
+/// `on_done` is told of every member finished (for progress). Setting `stop` (from another
+/// thread: a Ctrl-C watcher) ends the ensemble early with [`EnsembleError::Interrupted`].
 pub fn ensemble(
     model: &Model,
     kind: FormulationKind,
@@ -107,6 +124,7 @@ pub fn ensemble(
     settings: &Settings,
     threads: Option<usize>,
     on_done: &(dyn Fn() + Sync),
+    stop: &AtomicBool,
 ) -> Result<Trajectories, EnsembleError> {
     if times.is_empty() || !times.windows(2).all(|w| w[1] > w[0]) || !times.iter().all(|t| t.is_finite()) {
         return Err(EnsembleError::Times);
@@ -124,7 +142,7 @@ pub fn ensemble(
             .par_iter()
             .enumerate()
             .map(|(k, member)| {
-                let one = run_member(model, kind, member, k, times, settings);
+                let one = run_member(model, kind, member, k, times, settings, stop);
                 on_done();
                 one
             })
@@ -136,6 +154,9 @@ pub fn ensemble(
             rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| EnsembleError::Threads { threads: n, message: e.to_string() })?.install(all)
         }
     };
+    if stop.load(Ordering::Relaxed) {
+        return Err(EnsembleError::Interrupted);
+    }
     let mut data = Vec::with_capacity(members.len() * times.len() * states);
     let mut reached = Vec::with_capacity(members.len());
     for result in results {
@@ -149,6 +170,7 @@ pub fn ensemble(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::events::run;
 
     fn members(model: &Model, n: usize) -> Vec<Member> {
         (0..n)
@@ -176,9 +198,9 @@ mod tests {
             let count = || {
                 done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             };
-            let parallel = ensemble(&model, kind, &members, &times, &settings, Some(2), &count).unwrap();
+            let parallel = ensemble(&model, kind, &members, &times, &settings, Some(2), &count, &AtomicBool::new(false)).unwrap();
             assert_eq!(done.into_inner(), members.len());
-            let one_thread = ensemble(&model, kind, &members, &times, &settings, Some(1), &|| {}).unwrap();
+            let one_thread = ensemble(&model, kind, &members, &times, &settings, Some(1), &|| {}, &AtomicBool::new(false)).unwrap();
             assert_eq!(parallel, one_thread);
             for (k, member) in members.iter().enumerate() {
                 let (sys, y0) = System::start(&model, kind, member.params.clone(), &member.q0, &member.qd0).unwrap();
@@ -198,10 +220,42 @@ mod tests {
         let model = generated::three_body::model();
         let mut members = members(&model, 5);
         members[3].q0.pop();
-        let e = ensemble(&model, FormulationKind::Kane, &members, &[0.0, 0.1], &Settings::tight(0.1), None, &|| {}).unwrap_err();
+        let e = ensemble(&model, FormulationKind::Kane, &members, &[0.0, 0.1], &Settings::tight(0.1), None, &|| {}, &AtomicBool::new(false)).unwrap_err();
         assert!(matches!(e, EnsembleError::Shape { member: 3, what: "q0", .. }), "{e}");
-        let e = ensemble(&model, FormulationKind::Kane, &members[..2], &[0.0, 0.0], &Settings::tight(0.1), None, &|| {}).unwrap_err();
+        let e = ensemble(&model, FormulationKind::Kane, &members[..2], &[0.0, 0.0], &Settings::tight(0.1), None, &|| {}, &AtomicBool::new(false)).unwrap_err();
         assert!(matches!(e, EnsembleError::Times), "{e}");
+    }
+
+    /// Setting `stop` ends the ensemble with `Interrupted`: here after the first member, on
+    /// one thread, so the others never run; a member given a stop already set does not start;
+    /// and a run stops at the right-hand side its callback breaks.
+    #[test]
+    fn a_stopped_ensemble_is_interrupted() {
+        let model = generated::three_body::model();
+        let times: Vec<f64> = (0..=20).map(|i| 0.05 * i as f64).collect();
+        let members = members(&model, 6);
+        let stop = AtomicBool::new(false);
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let stop_after_first = || {
+            done.fetch_add(1, Ordering::Relaxed);
+            stop.store(true, Ordering::Relaxed);
+        };
+        let e = ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(1.0), Some(1), &stop_after_first, &stop).unwrap_err();
+        assert!(matches!(e, EnsembleError::Interrupted), "{e}");
+        // The same ensemble without the stop runs to the end.
+        assert!(ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(1.0), Some(1), &|| {}, &AtomicBool::new(false)).is_ok());
+        let (sys, y0) = System::start(&model, FormulationKind::Kane, members[0].params.clone(), &members[0].q0, &members[0].qd0).unwrap();
+        let running = run_member(&model, FormulationKind::Kane, &members[0], 0, &times, &Settings::tight(1.0), &AtomicBool::new(true));
+        assert!(matches!(running, Err(EnsembleError::Interrupted)));
+        let mut calls = 0;
+        let err = run_interruptible(&sys, &y0, &times, &Settings::tight(1.0), &mut |_| {
+            calls += 1;
+            if calls > 50 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        })
+        .unwrap_err();
+        assert_eq!(err.reason, Reason::Interrupted);
+        assert!(err.t > 0.0 && err.t < 1.0, "{err}");
+        assert_eq!(err.state.len(), y0.len());
     }
 
     /// A terminal event stops its member: the rows after it are NaN and `reached` says so,
@@ -213,7 +267,8 @@ mod tests {
         let model = generated::bouncing_ball::model();
         let member = |speed: f64| Member { params: model.default_params.clone(), q0: vec![0.0, 1.0], qd0: vec![speed, 0.0] };
         let times: Vec<f64> = (0..=8).map(|i| 0.5 * f64::from(i)).collect();
-        let runs = ensemble(&model, FormulationKind::Kane, &[member(2.2), member(1.0)], &times, &Settings::tight(4.0), None, &|| {}).unwrap();
+        let runs =
+            ensemble(&model, FormulationKind::Kane, &[member(2.2), member(1.0)], &times, &Settings::tight(4.0), None, &|| {}, &AtomicBool::new(false)).unwrap();
         assert_eq!(runs.reached, [5, 9]);
         let first = runs.member(0);
         assert!(first[..5 * runs.states].iter().all(|x| x.is_finite()));

@@ -6,10 +6,16 @@
 //! reset changes is kept as a [`Jump`]: the monitors take the impact's energy and momentum out of
 //! the balances, which then hold across it.
 
-use crate::integrate::{Events, JacobianFn, Projector, RunError, Settings, Solution, integrate_with_events};
+use crate::integrate::{Events, JacobianFn, Projector, Reason, RunError, Settings, Solution, integrate_with_events};
 use crate::system::{Drift, System};
 use seam::Failure;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
+use std::ops::ControlFlow;
+
+/// How many right-hand sides a front end lets pass between two checks for Ctrl-C (a check takes
+/// the Python interpreter's lock; a call of the largest committed model takes a few
+/// microseconds, so a check comes every few milliseconds).
+pub const INTERRUPT_CHECK_CALLS: u32 = 1024;
 
 /// What one reset changed: when, which event, the conserved momenta `G_I` after it, and the
 /// jumps of the energy function and of the ignorable momenta across it.
@@ -44,12 +50,49 @@ pub fn system_before(sys: &System, jumps: &[Jump], t: f64) -> System {
 /// Jacobian is used when the system has one, and the projection after every step when its drift
 /// control is [`Drift::Projection`].
 pub fn run(sys: &System, y0: &[f64], times: &[f64], settings: &Settings, on_rhs: &mut dyn FnMut(f64)) -> Result<EventRun, RunError> {
+    run_interruptible(sys, y0, times, settings, &mut |t| {
+        on_rhs(t);
+        ControlFlow::Continue(())
+    })
+}
+
+/// [`run`], stopped where `on_rhs(t)` breaks (asked before every right-hand side): the run then
+/// ends with [`Reason::Interrupted`] at its last accepted step. A front end checks for Ctrl-C
+/// there (the Python wheel does, every [`crate::events::INTERRUPT_CHECK_CALLS`] calls).
+///
+/// ```
+/// use runtime::{events::run_interruptible, integrate::{Reason, Settings}, system::System};
+/// use std::ops::ControlFlow;
+/// let model = generated::cart_pendulum::model();
+/// let (sys, y0) = System::start(&model, seam::FormulationKind::Kane, model.default_params.clone(), &[0.3, 0.0, 0.0], &[0.0; 3]).unwrap();
+/// let mut calls = 0;
+/// let stop_after_100 = &mut |_t: f64| {
+///     calls += 1;
+///     if calls > 100 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+/// };
+/// let err = run_interruptible(&sys, &y0, &[0.0, 100.0], &Settings::tight(100.0), stop_after_100).unwrap_err();
+/// assert_eq!(err.reason, Reason::Interrupted);
+/// assert!(err.t > 0.0 && err.t < 100.0);
+/// ```
+pub fn run_interruptible(
+    sys: &System,
+    y0: &[f64],
+    times: &[f64],
+    settings: &Settings,
+    on_rhs: &mut dyn FnMut(f64) -> ControlFlow<()>,
+) -> Result<EventRun, RunError> {
+    let interrupted = Cell::new(false);
     let current = RefCell::new(sys.clone());
     let jumps = RefCell::new(Vec::new());
     let model = &sys.model;
     let m = model.coordinates.len();
     let mut rhs = |t: f64, y: &[f64], dy: &mut [f64]| {
-        on_rhs(t);
+        if on_rhs(t).is_break() {
+            interrupted.set(true);
+            // Any failure stops the integrator at its last accepted step; the reason is
+            // replaced by `Interrupted` below, so this one is never seen.
+            return Err(Failure::Missing { function: "rhs" });
+        }
         current.borrow().rhs(t, y, dy)
     };
     let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| current.borrow().jacobian(t, y, dy, j);
@@ -85,6 +128,7 @@ pub fn run(sys: &System, y0: &[f64], times: &[f64], settings: &Settings, on_rhs:
     };
     let kinds = model.events.iter().map(|e| (e.direction, e.action)).collect();
     let mut events = Events::new(kinds, &mut values, &mut reset);
-    let solution = integrate_with_events(&mut rhs, jacobian, projector, &mut events, y0, times, settings)?;
+    let solution = integrate_with_events(&mut rhs, jacobian, projector, &mut events, y0, times, settings)
+        .map_err(|e| if interrupted.get() { RunError { reason: Reason::Interrupted, ..e } } else { e })?;
     Ok(EventRun { solution, jumps: jumps.into_inner() })
 }

@@ -15,11 +15,12 @@
 //! assert!(energy_error.iter().all(|e| e.abs() < 1e-9));
 //! ```
 
-use crate::events::{Jump, run, system_before};
+use crate::events::{Jump, run_interruptible, system_before};
 use crate::integrate::{RunError, Settings, Solution};
 use crate::monitor::{Invariants, monitor_with_jumps};
 use crate::system::System;
 use seam::{EventAction, Failure};
+use std::ops::ControlFlow;
 
 /// A monitored run and its table.
 pub struct Trajectory {
@@ -83,9 +84,24 @@ pub fn columns(sys: &System) -> Vec<String> {
 /// `sys` integrated from `y0` over the output `times` (the first is the start) with its model's
 /// events, monitored; `on_rhs(t)` is told of every right-hand side (for progress).
 pub fn simulate(sys: &System, y0: &[f64], times: &[f64], settings: &Settings, on_rhs: &mut dyn FnMut(f64)) -> Result<Trajectory, TrajectoryError> {
+    simulate_interruptible(sys, y0, times, settings, &mut |t| {
+        on_rhs(t);
+        ControlFlow::Continue(())
+    })
+}
+
+/// [`simulate`], stopped with [`crate::integrate::Reason::Interrupted`] where `on_rhs(t)`
+/// breaks ([`crate::events::run_interruptible`]).
+pub fn simulate_interruptible(
+    sys: &System,
+    y0: &[f64],
+    times: &[f64],
+    settings: &Settings,
+    on_rhs: &mut dyn FnMut(f64) -> ControlFlow<()>,
+) -> Result<Trajectory, TrajectoryError> {
     let model = &sys.model;
     let settings = Settings { time_independent: !sys.form.depends_on_time, ..*settings };
-    let done = run(sys, y0, times, &settings, on_rhs)?;
+    let done = run_interruptible(sys, y0, times, &settings, on_rhs)?;
     let (solution, jumps) = (done.solution, done.jumps);
     let inv = monitor_with_jumps(sys, &solution, &jumps).map_err(TrajectoryError::Monitor)?;
     let mut events = Vec::new();

@@ -262,6 +262,10 @@ pub enum Reason {
         "the events accumulate here, {count} of them so far, ever closer (a Zeno point, as a bouncing ball's impacts do): the steps between them shrink to nothing; end the run before it"
     )]
     EventsAccumulate { count: usize },
+    /// The caller asked the run to stop (a Ctrl-C, checked between right-hand sides:
+    /// [`crate::events::run_interruptible`]); the state is the last accepted step's.
+    #[error("interrupted: the caller asked the run to stop")]
+    Interrupted,
     /// Events are located on a method's dense output, which RK4 does not have.
     #[error("events need an adaptive method (DOPRI5, DOP853 or ROS23), which interpolates inside its steps; RK4 does not")]
     EventsNeedDenseOutput,
