@@ -133,7 +133,7 @@ impl RunArgs {
 
     /// The Jacobians a run with these settings wants: exact ones for the stiff method.
     pub fn jacobians(&self) -> load::Jacobians {
-        if self.method == Some(MethodArg::Ros23) { load::Jacobians::Exact { only: None } } else { load::Jacobians::Differenced }
+        if self.method == Some(MethodArg::Ros23) { load::Jacobians::Exact { only: None, by_parameters: false } } else { load::Jacobians::Differenced }
     }
 
     /// True when the run uses the paper's settings (`--paper`, or the model file asks).

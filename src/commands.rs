@@ -154,7 +154,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
-    let jacobians = if stiff { load::Jacobians::Exact { only: None } } else { load::Jacobians::Differenced };
+    let jacobians = if stiff { load::Jacobians::Exact { only: None, by_parameters: false } } else { load::Jacobians::Differenced };
     let model = crate::evaluated(&args.model, &args.run.values.param, jacobians, load::Route::of(args.run.values.compiled))?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
@@ -212,9 +212,13 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
 
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
-    // The exact Jacobians of the formulation linearized: A and B to round-off.
-    let model =
-        crate::evaluated(&args.model, &args.values.param, load::Jacobians::Exact { only: Some(args.formulation.0) }, load::Route::of(args.values.compiled))?;
+    // The exact Jacobians of the formulation linearized: A, and B with `--input`, to round-off.
+    let model = crate::evaluated(
+        &args.model,
+        &args.values.param,
+        load::Jacobians::Exact { only: Some(args.formulation.0), by_parameters: !args.input.is_empty() },
+        load::Route::of(args.values.compiled),
+    )?;
     let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {

@@ -162,6 +162,26 @@ fn sweep_and_linearize_run_on_a_model_file() {
     assert_eq!(csv.lines().count(), 1 + 5, "{csv}");
 }
 
+/// The bicycle linearized in-process by Kane's exact Jacobian (by the state only: the one by
+/// the parameters, which only `--input` needs, passes the node budget, and the run would fall
+/// back to differences), its weave and capsize speeds to the benchmark's published digits (the
+/// differenced equations give 10 of them, `docs/bicycle.md`).
+#[test]
+fn the_bicycle_linearizes_by_its_exact_jacobian() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = ["linearize", "bicycle", "--sweep", "x'", "--from", "4", "--to", "6.5", "--steps", "6", "--qdot", "phi=0", "--qdot", "delta=0", "--out", "."];
+    let out = multibody(dir.path(), &sweep);
+    let text = ok(&out);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("the exact Jacobians need more expression nodes"), "{}", String::from_utf8_lossy(&out.stderr));
+    let crossings: Vec<f64> = text.lines().filter_map(|l| l.split("crosses zero at x' = ").nth(1)).map(|x| x.trim().parse().unwrap()).collect();
+    // Meijaard et al. (2007), Table 2.
+    let published = [4.29238253634111, 6.02426201538837];
+    assert_eq!(crossings.len(), 2, "{text}");
+    for (c, p) in crossings.iter().zip(published) {
+        assert!((c - p).abs() < 1e-11 * p, "crossing at {c}, published {p}");
+    }
+}
+
 /// A stiff run whose exact Jacobians exceed `--max-nodes` goes on with differenced ones and
 /// says so: the same steps, more right-hand-side calls (a column of the Jacobian per state).
 #[test]

@@ -119,11 +119,32 @@ fn error(e: impl std::fmt::Display) -> JitError {
     JitError(e.to_string())
 }
 
+/// The most instructions a tape may have for cranelift's backtracking register allocator; longer
+/// ones get the single-pass allocator. The backtracking one writes the faster code (the 20-link
+/// pendulum's and the 8-link floating chain's right-hand sides run 1.1 to 2.7 times faster than
+/// with the single-pass one) but takes superlinear time on one long block: 25 ms for 3854
+/// instructions, 170 ms for 9858, 250 ms for 13736, 2.0 s for 24497, 2.9 s for 38640, and about
+/// three minutes for the bicycle's exact Jacobian (194571), which the single-pass one compiles in
+/// 0.5 s (27146 instructions: 45 ms against 1.7 s). Measured on this project's machine with
+/// `multibody linearize` and `simulate` on those models.
+pub const BACKTRACKING_LIMIT: usize = 16_000;
+
+/// Cranelift's `regalloc_algorithm` for a tape of `instructions` ([`BACKTRACKING_LIMIT`]).
+///
+/// ```
+/// assert_eq!(jit::register_allocator(1000), "backtracking");
+/// assert_eq!(jit::register_allocator(200_000), "single_pass");
+/// ```
+pub fn register_allocator(instructions: usize) -> &'static str {
+    if instructions <= BACKTRACKING_LIMIT { "backtracking" } else { "single_pass" }
+}
+
 /// Compiles `tape` (see the crate docs).
 pub fn compile(tape: &Tape) -> Result<Compiled, JitError> {
     let (inputs, constants, instrs, outputs) = tape.parts();
     let mut flags = settings::builder();
     flags.set("opt_level", "speed").map_err(error)?;
+    flags.set("regalloc_algorithm", register_allocator(instrs.len())).map_err(error)?;
     let isa = cranelift_native::builder().map_err(error)?.finish(settings::Flags::new(flags)).map_err(error)?;
     let mut builder = JITBuilder::with_isa(isa, cranelift_module::default_libcall_names());
     let functions: [(&str, *const u8); 7] = [
@@ -249,5 +270,31 @@ mod tests {
             }
         }
         assert_eq!((compiled.inputs(), compiled.outputs()), (3, 3));
+    }
+
+    /// A tape longer than `BACKTRACKING_LIMIT` (compiled with the single-pass allocator) gives
+    /// the interpreter's numbers to the bit too: a long chain of dependent operations that keeps
+    /// many values alive, so that registers spill.
+    #[test]
+    fn a_tape_past_the_backtracking_limit_gives_the_interpreter_s_numbers() {
+        let mut stmts: Vec<syn::Stmt> = vec![syn::parse_quote!(let v0 = state[0];), syn::parse_quote!(let v1 = state[1];)];
+        let count = BACKTRACKING_LIMIT / 2 + 100;
+        for k in 2..count {
+            let (a, b) = (k - 1, k / 2);
+            let text = if k % 7 == 0 { format!("let v{k} = f64::sin(v{a}) - v{b};") } else { format!("let v{k} = v{a} * 0.999 + v{b} * 0.001;") };
+            stmts.push(syn::parse_str(&text).unwrap());
+        }
+        let outputs: Vec<syn::Expr> = (count - 40..count).map(|k| syn::parse_str(&format!("v{k} + v{}", k / 3)).unwrap()).collect();
+        let tape = Tape::compile(&stmts, &outputs, &Slots::new(&[("state", 2)])).unwrap();
+        let (_, _, instrs, _) = tape.parts();
+        assert!(instrs.len() > BACKTRACKING_LIMIT, "{} instructions", instrs.len());
+        assert_eq!(register_allocator(instrs.len()), "single_pass");
+        let compiled = compile(&tape).expect("this machine's code generator is available");
+        let inputs = [0.3, -0.7];
+        let (mut a, mut b) = (vec![0.0; 40], vec![0.0; 40]);
+        tape.eval(&inputs, &mut a);
+        compiled.run(&inputs, &mut b);
+        assert!(a.iter().all(|x| x.is_finite()));
+        assert_eq!(a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), b.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
     }
 }

@@ -36,8 +36,11 @@ pub fn built_in() -> impl Iterator<Item = &'static str> {
 pub enum Jacobians {
     /// None: the runtime differences the right-hand side where it needs one.
     Differenced,
-    /// Exact, of one formulation (`Some`) or of every formulation the run uses.
-    Exact { only: Option<seam::FormulationKind> },
+    /// Exact, of one formulation (`Some`) or of every formulation the run uses: by the state
+    /// (the stiff method, `linearize`'s `A`) and, with `by_parameters`, by the runtime
+    /// parameters too (`linearize`'s input matrix `B`: nothing else reads it, and on the
+    /// bicycle it alone passes the node budget).
+    Exact { only: Option<seam::FormulationKind>, by_parameters: bool },
 }
 
 /// A model's text and the file name its errors print.
@@ -93,7 +96,8 @@ pub struct Loaded {
 /// `model` evaluated in-process (its tapes compiled to machine code by the `jit` crate) or, on
 /// the compiled `route`, as its module built by rustc (`on_compile` is told the library's path
 /// before a build, which happens once per model and version); `exact` asks for the exact
-/// Jacobians too (by the state and by the parameters), for the stiff method and `linearize`.
+/// Jacobians too (by the state, and by the parameters where asked), for the stiff method and
+/// `linearize`.
 /// Exact Jacobians that exceed the node budget (the bicycle's Kane form) fall back to
 /// differences, with a warning that says so.
 ///
@@ -105,9 +109,9 @@ pub struct Loaded {
 pub fn evaluate(model: &generator::model::Model, exact: Jacobians, route: Route, on_compile: &mut dyn FnMut(&Path)) -> Result<Loaded, LoadError> {
     let plain = generator::emit::Options::from_model(model);
     let mut options = plain.clone();
-    if let Jacobians::Exact { only } = exact {
+    if let Jacobians::Exact { only, by_parameters } = exact {
         options.jacobian = true;
-        options.parameter_jacobian = true;
+        options.parameter_jacobian = by_parameters;
         if let Some(kind) = only {
             options.formulations = vec![generator::emit::Formulation::of(kind)];
         }

@@ -14,7 +14,7 @@ const WARNING: &str = "the exact Jacobians need more expression nodes than the b
 #[test]
 fn exact_jacobians_over_the_budget_fall_back_to_differences() {
     let model = load::model("cart_pendulum").unwrap();
-    let exact = Jacobians::Exact { only: None };
+    let exact = Jacobians::Exact { only: None, by_parameters: true };
     set_max_nodes(BUDGET);
     let plain = load::evaluate(&model, Jacobians::Differenced, Route::Jit, &mut |_| {}).unwrap();
     assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
@@ -22,9 +22,12 @@ fn exact_jacobians_over_the_budget_fall_back_to_differences() {
     assert!(fallen_back.warnings.iter().any(|w| w.contains(WARNING)), "{:?}", fallen_back.warnings);
     assert_eq!(fallen_back.model.formulations.len(), 4);
     assert!(fallen_back.model.formulations.iter().all(|f| !f.has_jacobian && !f.has_parameter_jacobian));
-    // Under the default budget the same request gets every exact Jacobian, and no warning.
+    // Under the default budget the same request gets every exact Jacobian, and no warning;
+    // without `by_parameters`, those by the state only.
     set_max_nodes(DEFAULT_MAX_NODES);
     let full = load::evaluate(&model, exact, Route::Jit, &mut |_| {}).unwrap();
     assert!(full.warnings.is_empty(), "{:?}", full.warnings);
     assert!(full.model.formulations.iter().all(|f| f.has_jacobian && f.has_parameter_jacobian));
+    let by_state = load::evaluate(&model, Jacobians::Exact { only: None, by_parameters: false }, Route::Jit, &mut |_| {}).unwrap();
+    assert!(by_state.model.formulations.iter().all(|f| f.has_jacobian && !f.has_parameter_jacobian));
 }

@@ -129,7 +129,11 @@ impl Model {
             return Ok(m);
         }
         let model = self.source.model().map_err(model_error)?;
-        let loaded = py.detach(|| ::load::evaluate(&model, ::load::Jacobians::Exact { only: None }, ::load::Route::Jit, &mut |_| {})).map_err(model_error)?;
+        let loaded = py
+            .detach(|| {
+                ::load::evaluate(&model, ::load::Jacobians::Exact { only: None, by_parameters: !model.inputs.is_empty() }, ::load::Route::Jit, &mut |_| {})
+            })
+            .map_err(model_error)?;
         // What the second derivation warns of (exact Jacobians over the budget replaced by
         // differences, for one) is news: the first load's warnings were told already.
         let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
