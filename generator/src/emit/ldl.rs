@@ -25,6 +25,7 @@
 
 use super::ops::OpCount;
 use super::splice::Splices;
+use super::tape::{Instr, Tape, TapeWriter};
 use crate::formulation::Equations;
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::quote;
@@ -283,6 +284,86 @@ impl LdlPlan {
             b[oi] = y[i];
         }
         Ok(())
+    }
+
+    /// [`Self::solve`] as a tape, for a backend to compile: inputs the row-major matrix then the
+    /// right-hand side, outputs the solution (in the right-hand side's order) then the pivots
+    /// `D` in elimination order. The same operations in the same order as `solve`, so where
+    /// every pivot is above `PIVOT_TOLERANCE` times the largest diagonal entry (checked by the
+    /// caller on the pivots, [`Self::checked`]) the same numbers.
+    ///
+    /// ```
+    /// use generator::emit::ldl::LdlPlan;
+    /// let plan = LdlPlan::dense(2);
+    /// let tape = plan.tape();
+    /// let (a, mut b) = ([4.0, 2.0, 2.0, 3.0], [2.0, 1.0]);
+    /// let mut out = [0.0; 4];
+    /// tape.eval(&[a[0], a[1], a[2], a[3], b[0], b[1]], &mut out);
+    /// plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
+    /// assert_eq!(out[..2], b);
+    /// assert_eq!(plan.checked(&a, &out[2..]), Ok(()));
+    /// ```
+    pub fn tape(&self) -> Tape {
+        let n = self.size();
+        let (o, st, m) = (&self.order, &self.steps, self.entries.len());
+        Tape::write(|w| {
+            let (mut l, mut u) = (vec![0u32; m], vec![0u32; m]);
+            let (mut inv, mut pivots) = (Vec::with_capacity(n), Vec::with_capacity(n));
+            let one = w.constant(1.0);
+            let minus_product = |w: &mut TapeWriter, acc: u32, x: u32, y: u32| {
+                let p = w.instr(Instr::Mul(x, y));
+                w.instr(Instr::Sub(acc, p))
+            };
+            for (j, (diagonal, row, column)) in st.pivots.iter().enumerate() {
+                let mut dj = w.input(*diagonal);
+                for &e in &st.row_entries[row.clone()] {
+                    dj = minus_product(w, dj, l[e], u[e]);
+                }
+                pivots.push(dj);
+                inv.push(w.instr(Instr::Div(one, dj)));
+                for e in column.clone() {
+                    let (element, products) = &st.elements[e];
+                    let mut s = w.input(*element);
+                    for &(ik, jk) in &st.products[products.clone()] {
+                        s = minus_product(w, s, l[ik], u[jk]);
+                    }
+                    u[e] = s;
+                    l[e] = w.instr(Instr::Mul(s, inv[j]));
+                }
+            }
+            let mut y: Vec<u32> = o.iter().map(|&oi| w.input(n * n + oi)).collect();
+            for i in 0..n {
+                for &(e, k) in &st.forward[st.forward_rows[i].clone()] {
+                    y[i] = minus_product(w, y[i], l[e], y[k]);
+                }
+            }
+            for i in 0..n {
+                y[i] = w.instr(Instr::Mul(y[i], inv[i]));
+            }
+            for i in (0..n).rev() {
+                for &(e, k) in &st.back[st.back_columns[i].clone()] {
+                    y[i] = minus_product(w, y[i], l[e], y[k]);
+                }
+            }
+            let mut x = vec![0u32; n];
+            for (i, &oi) in o.iter().enumerate() {
+                x[oi] = y[i];
+            }
+            x.extend(pivots);
+            x
+        })
+    }
+
+    /// `Err(column)` of the first pivot of `pivots` (in elimination order, as [`Self::tape`]
+    /// gives them) that is not above `PIVOT_TOLERANCE` times the largest diagonal entry of the
+    /// row-major matrix `a`: [`Self::solve`]'s check.
+    pub fn checked(&self, a: &[f64], pivots: &[f64]) -> Result<(), usize> {
+        let n = self.size();
+        let scale = (0..n).fold(0.0f64, |s, i| s.max(a[i * n + i].abs()));
+        match pivots.iter().position(|&d| !(d > super::solvers::PIVOT_TOLERANCE * scale)) {
+            Some(j) => Err(self.order[j]),
+            None => Ok(()),
+        }
     }
 
     /// The solve as straight-line code: `fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
@@ -568,6 +649,43 @@ mod tests {
                     assert!((got - want).abs() < 1e-13, "n = {n}, trial {trial}: {got} against {want}");
                 }
             }
+        }
+    }
+
+    /// The plan's tape (what the JIT compiles) gives `solve`'s numbers to the bit, and its
+    /// pivots the same refusal, on random patterns and on singular and indefinite matrices.
+    #[test]
+    fn the_tape_of_a_plan_is_its_solve() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let by_tape = |plan: &LdlPlan, a: &[f64], b: &[f64]| {
+            let n = plan.size();
+            let mut out = vec![0.0; 2 * n];
+            plan.tape().eval(&[a, b].concat(), &mut out);
+            plan.checked(a, &out[n..]).map(|()| out[..n].to_vec())
+        };
+        for n in [1, 2, 4, 7, 12, 21] {
+            for trial in 0..6 {
+                let density = 0.15 * trial as f64 + 0.1;
+                let mask: Vec<bool> = (0..n * n).map(|_| rng.next() + 0.5 < density).collect();
+                let pattern = |i: usize, j: usize| mask[i.max(j) * n + i.min(j)];
+                let a = matrix(n, &pattern, &mut rng);
+                let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+                for plan in [LdlPlan::new(n, pattern), LdlPlan::dense(n)] {
+                    let mut solved = b.clone();
+                    plan.solve(&a, &mut solved, &mut Vec::new()).unwrap();
+                    let taped = by_tape(&plan, &a, &b).unwrap();
+                    assert_eq!(
+                        taped.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                        solved.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                        "n = {n}, trial {trial}"
+                    );
+                }
+            }
+        }
+        let plan = LdlPlan::new(3, |i, j| i == j || (i, j) == (2, 0));
+        for a in [[1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0]] {
+            let refused = plan.solve(&a, &mut [1.0, 1.0, 1.0], &mut Vec::new()).unwrap_err();
+            assert_eq!(by_tape(&plan, &a, &[1.0, 1.0, 1.0]), Err(refused));
         }
     }
 

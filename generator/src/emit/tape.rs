@@ -150,6 +150,15 @@ impl Tape {
         Ok(c.finish())
     }
 
+    /// The tape `write` writes: it returns the registers of the outputs.
+    pub fn write(write: impl FnOnce(&mut TapeWriter) -> Vec<u32>) -> Tape {
+        let slots = Slots::new(&[]);
+        let mut c = Compiler { slots: &slots, tape: Tape::default(), names: HashMap::new(), constants: HashMap::new() };
+        let outs = write(&mut TapeWriter(&mut c));
+        c.tape.outputs = outs;
+        c.finish()
+    }
+
     /// Number of outputs.
     pub fn outputs(&self) -> usize {
         self.outputs.len()
@@ -205,6 +214,40 @@ impl Tape {
         for (o, &reg) in out.iter_mut().zip(&self.outputs) {
             *o = r[reg as usize];
         }
+    }
+}
+
+/// Writes a tape instruction by instruction, for straight-line code that is not an emitted body
+/// (an `L D L^T` solve: [`super::ldl::LdlPlan::tape`]).
+///
+/// ```
+/// use generator::emit::tape::{Instr, Tape};
+/// // out = (x0 + x1) * 2
+/// let tape = Tape::write(|w| {
+///     let sum = w.instr(Instr::Add(w.input(0), w.input(1)));
+///     let two = w.constant(2.0);
+///     vec![w.instr(Instr::Mul(sum, two))]
+/// });
+/// let mut out = [0.0];
+/// tape.eval(&[1.5, 2.0], &mut out);
+/// assert_eq!(out, [7.0]);
+/// ```
+pub struct TapeWriter<'c, 'a>(&'c mut Compiler<'a>);
+
+impl TapeWriter<'_, '_> {
+    /// Input `k`'s register.
+    pub fn input(&self, k: usize) -> u32 {
+        k as u32
+    }
+
+    /// A constant's register (one per value).
+    pub fn constant(&mut self, v: f64) -> u32 {
+        self.0.constant(v)
+    }
+
+    /// The register `ins` writes; its operands are registers returned before.
+    pub fn instr(&mut self, ins: Instr) -> u32 {
+        self.0.push(ins)
     }
 }
 

@@ -4,7 +4,7 @@
 
 use super::kernel::{Backend, Interpreter, Kernel};
 use super::{FormShape, Program};
-use crate::emit::ldl::Solve;
+use crate::emit::ldl::{LdlPlan, Solve};
 use crate::emit::tape::Tape;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
 use std::borrow::Cow;
@@ -41,6 +41,8 @@ pub struct EvaluatedForm {
     singular_margin: Box<dyn Kernel>,
     /// `matrix`'s own tape where `rhs` assembles none (the articulated-body recursion).
     matrix: Option<Box<dyn Kernel>>,
+    /// The `L D L^T` solve of `rhs`'s matrix as a kernel ([`LdlPlan::tape`]), where it has one.
+    ldl: Option<Box<dyn Kernel>>,
     /// The exact Jacobians' tapes, when the module has them.
     jacobian: Option<Box<dyn Kernel>>,
     parameter_jacobian: Option<Box<dyn Kernel>>,
@@ -64,6 +66,8 @@ thread_local! {
     static OUTPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
     /// The matrix and forcing a right-hand side solves, reused from call to call.
     static SOLVE: std::cell::RefCell<(Vec<f64>, Vec<f64>, Vec<usize>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
+    /// The inputs and outputs of an `L D L^T` solve's kernel, reused from call to call.
+    static LDL: std::cell::RefCell<(Vec<f64>, Vec<f64>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
     /// A Jacobian's column of solved rates, reused from call to call.
     static COLUMN: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
@@ -119,6 +123,10 @@ impl Evaluated {
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
                     matrix: take(&format!("{name}::matrix"), tapes),
+                    ldl: match &shape.solve {
+                        Solve::Ldl(plan) => Some(backend.kernel(plan.tape())),
+                        _ => None,
+                    },
                     jacobian: take(&format!("{name}::jacobian"), tapes),
                     parameter_jacobian: take(&format!("{name}::parameter_jacobian"), tapes),
                     shape: shape.clone(),
@@ -215,6 +223,24 @@ impl ModelFunctions for Evaluated {
     fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         self.point(&self.event_resets, "event_resets", t, q, qdot, params, out, true)
     }
+}
+
+/// `plan`'s solve by its kernel ([`LdlPlan::tape`]): `force` overwritten by the solution, the
+/// numbers of [`LdlPlan::solve`] (the same operations), `Err(column)` where it refuses.
+fn solve_ldl(plan: &LdlPlan, kernel: &dyn Kernel, matrix: &[f64], force: &mut [f64]) -> Result<(), usize> {
+    LDL.with(|cell| {
+        let (inputs, outputs) = &mut *cell.borrow_mut();
+        inputs.clear();
+        inputs.extend_from_slice(matrix);
+        inputs.extend_from_slice(force);
+        outputs.clear();
+        outputs.resize(kernel.outputs(), 0.0);
+        kernel.run(inputs, outputs);
+        let (x, pivots) = outputs.split_at(force.len());
+        plan.checked(matrix, pivots)?;
+        force.copy_from_slice(x);
+        Ok(())
+    })
 }
 
 /// `solve_dense` of emitted modules: Gaussian elimination with partial pivoting on a row-major
@@ -332,7 +358,10 @@ impl EvaluatedForm {
                 }
                 // The module's own solve: `solve_spd` or its `solve_ldl`, both a plan's twin.
                 let solved = match &s.solve {
-                    Solve::Ldl(plan) => COLUMN.with(|scratch| plan.solve(matrix, force, &mut scratch.borrow_mut())),
+                    Solve::Ldl(plan) => match &self.ldl {
+                        Some(kernel) => solve_ldl(plan, &**kernel, matrix, force),
+                        None => COLUMN.with(|scratch| plan.solve(matrix, force, &mut scratch.borrow_mut())),
+                    },
                     Solve::Lu(_) => solve_dense(n, matrix, force, pivots),
                     // The body's forcing slots hold the rates already.
                     Solve::Articulated { .. } => Ok(()),
