@@ -515,7 +515,7 @@ impl Solve {
     /// The plan, where it is `L D L^T` skipping structural zeros (emitted as `solve_ldl`).
     pub fn sparse(&self) -> Option<&LdlPlan> {
         match self {
-            Solve::Ldl(plan) if !plan.is_dense() || plan.size() <= 16 => Some(plan),
+            Solve::Ldl(plan) if !plan.is_dense() || plan.size() <= super::solvers::MAX_UNROLLED_DENSE => Some(plan),
             _ => None,
         }
     }

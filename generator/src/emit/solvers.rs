@@ -82,6 +82,10 @@ pub(super) fn solve_dense() -> TokenStream {
 
 /// `solve_spd`: the generic `L D L^T` without pivoting, for a symmetric positive definite
 /// matrix with no structural zero to skip.
+/// The largest dense symmetric positive definite matrix whose solve is emitted unrolled
+/// (`solve_ldl`); larger ones call the looped `solve_spd`.
+pub const MAX_UNROLLED_DENSE: usize = 16;
+
 pub(super) fn solve_spd() -> TokenStream {
     quote! {
         #[doc = "Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them."]
