@@ -226,7 +226,9 @@ impl LdlPlan {
     }
 
     /// Solves `a x = b` in place for the row-major `n x n` matrix `a` (both triangles given),
-    /// as the emitted code does; `Err(column)` when the pivot of `column` (of the matrix) is not
+    /// as the emitted code does: the reference its twins are held to bit for bit (the tape the
+    /// evaluator compiles, [`Self::tape`], and its looped dense solve, `eval::model::solve_spd`),
+    /// which run in its place; `Err(column)` when the pivot of `column` (of the matrix) is not
     /// above `PIVOT_TOLERANCE` times the largest diagonal entry. `scratch` holds `L`, `L D`
     /// (each entry before its division by the pivot), the reciprocals of `D` and the permuted
     /// right-hand side.
