@@ -1,5 +1,6 @@
 //! Compiles the in-process evaluator's tapes to machine code with cranelift: one function per
-//! tape, `fn(inputs: *const f64, outputs: *mut f64)`, every instruction one IEEE operation in
+//! tape (a sequence of them for a long one, [`Split`]), `fn(inputs: *const f64, outputs: *mut
+//! f64, scratch: *mut f64)`, every instruction one IEEE operation in
 //! the tape's order (cranelift neither reassociates nor fuses multiply-adds), the elementary
 //! functions called as the interpreter calls them. So a compiled kernel gives the interpreter's
 //! numbers, which are the compiled module's, without the interpreter's dispatch.
@@ -55,7 +56,10 @@ impl Backend for Jit {
 /// A tape compiled to machine code; the module that owns the code lives as long as it does.
 pub struct Compiled {
     module: Option<JITModule>,
-    code: unsafe extern "C" fn(*const f64, *mut f64),
+    /// The tape's functions, in the order they run.
+    code: Vec<Function>,
+    /// How many values the functions pass on through the scratch buffer.
+    scratch: usize,
     inputs: usize,
     outputs: usize,
 }
@@ -84,8 +88,24 @@ impl Kernel for Compiled {
     }
     fn run(&self, inputs: &[f64], out: &mut [f64]) {
         assert!(inputs.len() >= self.inputs && out.len() >= self.outputs, "a kernel's buffers are too short");
-        // SAFETY: the code reads `self.inputs` entries and writes `self.outputs` (checked above).
-        unsafe { (self.code)(inputs.as_ptr(), out.as_mut_ptr()) }
+        let (inputs, out) = (inputs.as_ptr(), out.as_mut_ptr());
+        let run = |scratch: *mut f64| {
+            for f in &self.code {
+                // SAFETY: the code reads `self.inputs` entries, writes `self.outputs` (checked
+                // above) and reads and writes `self.scratch` entries of `scratch`.
+                unsafe { f(inputs, out, scratch) }
+            }
+        };
+        if self.scratch == 0 {
+            run(std::ptr::null_mut());
+        } else {
+            SCRATCH.with_borrow_mut(|s| {
+                if s.len() < self.scratch {
+                    s.resize(self.scratch, 0.0);
+                }
+                run(s.as_mut_ptr())
+            });
+        }
     }
 }
 
@@ -119,32 +139,126 @@ fn error(e: impl std::fmt::Display) -> JitError {
     JitError(e.to_string())
 }
 
-/// The most instructions a tape may have for cranelift's backtracking register allocator; longer
-/// ones get the single-pass allocator. The backtracking one writes the faster code (the 20-link
-/// pendulum's and the 8-link floating chain's right-hand sides run 1.1 to 2.7 times faster than
-/// with the single-pass one) but takes superlinear time on one long block: 25 ms for 3854
-/// instructions, 170 ms for 9858, 250 ms for 13736, 2.0 s for 24497, 2.9 s for 38640, and about
-/// three minutes for the bicycle's exact Jacobian (194571), which the single-pass one compiles in
-/// 0.5 s (27146 instructions: 45 ms against 1.7 s). Measured on this project's machine with
-/// `multibody linearize` and `simulate` on those models.
-pub const BACKTRACKING_LIMIT: usize = 16_000;
+/// The most instructions a tape may have to be compiled as one function, by cranelift's
+/// backtracking register allocator, which writes the fastest code but takes superlinear time on
+/// one long block: 25 ms for 3854 instructions, 170 ms for 9858, 250 ms for 13736, 2.0 s for
+/// 24497, about three minutes for the bicycle's exact Jacobian (194571). A longer tape is cut
+/// into functions of at most [`PIECE_INSTRUCTIONS`] ([`function_length`]).
+pub const FUNCTION_INSTRUCTIONS: usize = 16_000;
 
-/// Cranelift's `regalloc_algorithm` for a tape of `instructions` ([`BACKTRACKING_LIMIT`]).
+/// The most instructions of each function a tape longer than [`FUNCTION_INSTRUCTIONS`] is cut
+/// into; the values one function leaves to a later one pass through a scratch buffer. Measured
+/// on this project's machine (`multibody linearize bicycle` and the scaling benchmark's
+/// `--one floating 20 compile`, alternately): the bicycle's linearization takes 5.2 s with the
+/// single-pass allocator on its one long function (as before the cut), 5.6-5.8 s with pieces of
+/// 4000, 5.9 s of 8000, 6.7 s of 16000; the 20-link floating chain's Lagrange and Maggi
+/// right-hand sides (38640 instructions of assembly) run at 1.27 and 1.35 times the compiled
+/// module's with pieces of 4000, 1.42 and 1.41 with the single-pass allocator, 1.17 and 1.14 as
+/// one function (which takes seconds to compile).
+pub const PIECE_INSTRUCTIONS: usize = 4_000;
+
+/// The most instructions of each function a tape of `instructions` is compiled into.
 ///
 /// ```
-/// assert_eq!(jit::register_allocator(1000), "backtracking");
-/// assert_eq!(jit::register_allocator(200_000), "single_pass");
+/// assert_eq!(jit::function_length(9858), 9858);
+/// assert_eq!(jit::function_length(38640), jit::PIECE_INSTRUCTIONS);
 /// ```
-pub fn register_allocator(instructions: usize) -> &'static str {
-    if instructions <= BACKTRACKING_LIMIT { "backtracking" } else { "single_pass" }
+pub fn function_length(instructions: usize) -> usize {
+    if instructions <= FUNCTION_INSTRUCTIONS { instructions.max(1) } else { PIECE_INSTRUCTIONS }
+}
+
+/// How a tape's instructions are cut into functions ([`function_length`]), and which values cross from one function to a later one (each gets a place in the scratch
+/// buffer). Registers are numbered as the tape numbers them: the inputs, then the constants,
+/// then one per instruction.
+///
+/// ```
+/// use generator::emit::tape::Instr;
+/// // Two inputs, no constants, three instructions cut into functions of two: the third
+/// // instruction reads the first one's result (register 2) from the scratch buffer.
+/// let split = jit::Split::new(2, 0, &[Instr::Add(0, 1), Instr::Mul(2, 1), Instr::Sub(2, 3)], 2);
+/// assert_eq!(split.functions(), vec![0..2, 2..3]);
+/// assert_eq!(split.scratch_place(2), Some(0));
+/// assert_eq!(split.scratch_place(3), Some(1));
+/// assert_eq!(split.scratch_len(), 2);
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Split {
+    first_instruction_register: usize,
+    per_function: usize,
+    instructions: usize,
+    /// For each instruction's register, its place in the scratch buffer where a later function
+    /// reads it.
+    place: Vec<Option<u32>>,
+    scratch_len: usize,
+}
+
+impl Split {
+    /// Cuts `instrs` (after `inputs` input and `constants` constant registers) into functions of
+    /// at most `most` instructions each, of nearly equal length.
+    pub fn new(inputs: usize, constants: usize, instrs: &[Instr], most: usize) -> Split {
+        let count = instrs.len().div_ceil(most.max(1)).max(1);
+        let per_function = instrs.len().div_ceil(count).max(1);
+        let first = inputs + constants;
+        let mut place = vec![None; instrs.len()];
+        let mut scratch_len = 0;
+        for (k, ins) in instrs.iter().enumerate() {
+            for x in operands(ins) {
+                let x = x as usize;
+                if x >= first && (x - first) / per_function != k / per_function && place[x - first].is_none() {
+                    place[x - first] = Some(scratch_len as u32);
+                    scratch_len += 1;
+                }
+            }
+        }
+        Split { first_instruction_register: first, per_function, instructions: instrs.len(), place, scratch_len }
+    }
+
+    /// The instructions of each function, in the order they run.
+    pub fn functions(&self) -> Vec<std::ops::Range<usize>> {
+        (0..self.instructions.div_ceil(self.per_function).max(1)).map(|f| f * self.per_function..((f + 1) * self.per_function).min(self.instructions)).collect()
+    }
+
+    /// The function that computes `register` (`None` for an input or a constant).
+    fn function_of(&self, register: usize) -> Option<usize> {
+        register.checked_sub(self.first_instruction_register).map(|k| k / self.per_function)
+    }
+
+    /// Where `register` waits for a later function in the scratch buffer, if one reads it.
+    pub fn scratch_place(&self, register: usize) -> Option<usize> {
+        register.checked_sub(self.first_instruction_register).and_then(|k| self.place[k]).map(|p| p as usize)
+    }
+
+    /// How many values the scratch buffer holds.
+    pub fn scratch_len(&self) -> usize {
+        self.scratch_len
+    }
+}
+
+/// The registers an instruction reads.
+fn operands(ins: &Instr) -> impl Iterator<Item = u32> {
+    let (a, b) = match *ins {
+        Instr::Add(x, y) | Instr::Sub(x, y) | Instr::Mul(x, y) | Instr::Div(x, y) | Instr::Powf(x, y) => (x, Some(y)),
+        Instr::Neg(x) | Instr::Call(_, x) | Instr::Powi(x, _) => (x, None),
+    };
+    std::iter::once(a).chain(b)
+}
+
+/// One compiled function's signature: `fn(inputs, outputs, scratch)`.
+type Function = unsafe extern "C" fn(*const f64, *mut f64, *mut f64);
+
+thread_local! {
+    /// The scratch buffer of the tapes cut into several functions, one per thread (a kernel is
+    /// shared by the threads of an ensemble).
+    static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Compiles `tape` (see the crate docs).
 pub fn compile(tape: &Tape) -> Result<Compiled, JitError> {
     let (inputs, constants, instrs, outputs) = tape.parts();
+    let split = Split::new(inputs, constants.len(), instrs, function_length(instrs.len()));
     let mut flags = settings::builder();
     flags.set("opt_level", "speed").map_err(error)?;
-    flags.set("regalloc_algorithm", register_allocator(instrs.len())).map_err(error)?;
+    flags.set("regalloc_algorithm", "backtracking").map_err(error)?;
     let isa = cranelift_native::builder().map_err(error)?.finish(settings::Flags::new(flags)).map_err(error)?;
     let mut builder = JITBuilder::with_isa(isa, cranelift_module::default_libcall_names());
     let functions: [(&str, *const u8); 7] = [
@@ -162,84 +276,173 @@ pub fn compile(tape: &Tape) -> Result<Compiled, JitError> {
     let mut module = JITModule::new(builder);
     let pointer = module.target_config().pointer_type();
     let mut signature = module.make_signature();
-    signature.params.push(AbiParam::new(pointer));
-    signature.params.push(AbiParam::new(pointer));
+    signature.params.extend([AbiParam::new(pointer), AbiParam::new(pointer), AbiParam::new(pointer)]);
     let import = |module: &mut JITModule, name: &str, params: &[types::Type]| {
         let mut s = Signature::new(module.target_config().default_call_conv);
         s.params.extend(params.iter().map(|t| AbiParam::new(*t)));
         s.returns.push(AbiParam::new(types::F64));
         module.declare_function(name, Linkage::Import, &s).map_err(error)
     };
-    let unary: Vec<(Unary, cranelift_module::FuncId)> =
-        [(Unary::Sin, "mb_sin"), (Unary::Cos, "mb_cos"), (Unary::Tan, "mb_tan"), (Unary::Exp, "mb_exp"), (Unary::Ln, "mb_ln")]
+    let imports = Imports {
+        unary: [(Unary::Sin, "mb_sin"), (Unary::Cos, "mb_cos"), (Unary::Tan, "mb_tan"), (Unary::Exp, "mb_exp"), (Unary::Ln, "mb_ln")]
             .into_iter()
             .map(|(u, name)| import(&mut module, name, &[types::F64]).map(|id| (u, id)))
-            .collect::<Result<_, _>>()?;
-    let powi = import(&mut module, "mb_powi", &[types::F64, types::I32])?;
-    let powf = import(&mut module, "mb_powf", &[types::F64, types::F64])?;
-    let id = module.declare_function("kernel", Linkage::Local, &signature).map_err(error)?;
+            .collect::<Result<_, _>>()?,
+        powi: import(&mut module, "mb_powi", &[types::F64, types::I32])?,
+        powf: import(&mut module, "mb_powf", &[types::F64, types::F64])?,
+    };
+    let mut written: std::collections::HashMap<usize, Vec<usize>> = std::collections::HashMap::new();
+    for (k, &r) in outputs.iter().enumerate() {
+        written.entry(r as usize).or_default().push(k);
+    }
+    let mut ids = Vec::new();
     let mut ctx = module.make_context();
-    ctx.func.signature = signature;
     let mut fbc = FunctionBuilderContext::new();
-    let frontend = module.target_config();
-    {
-        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fbc);
+    for (f, range) in split.functions().into_iter().enumerate() {
+        let id = module.declare_function(&format!("kernel{f}"), Linkage::Local, &signature).map_err(error)?;
+        ctx.func.signature = signature.clone();
+        let body = Body { inputs, constants, instrs, outputs, split: &split, written: &written, function: f, range };
+        body.build(&mut module, &imports, &mut ctx.func, &mut fbc);
+        module.define_function(id, &mut ctx).map_err(error)?;
+        module.clear_context(&mut ctx);
+        ids.push(id);
+    }
+    module.finalize_definitions().map_err(error)?;
+    let code = ids
+        .into_iter()
+        .map(|id| {
+            let address = module.get_finalized_function(id);
+            // SAFETY: the function was built with exactly this signature.
+            unsafe { std::mem::transmute::<*const u8, Function>(address) }
+        })
+        .collect();
+    Ok(Compiled { module: Some(module), code, scratch: split.scratch_len(), inputs, outputs: outputs.len() })
+}
+
+/// The elementary functions the compiled code calls.
+struct Imports {
+    unary: Vec<(Unary, cranelift_module::FuncId)>,
+    powi: cranelift_module::FuncId,
+    powf: cranelift_module::FuncId,
+}
+
+/// One function of a tape: its instructions, in the tape's order, and the outputs it computes.
+struct Body<'a> {
+    inputs: usize,
+    constants: &'a [f64],
+    instrs: &'a [Instr],
+    outputs: &'a [u32],
+    split: &'a Split,
+    /// For each register an output is, the outputs' indices.
+    written: &'a std::collections::HashMap<usize, Vec<usize>>,
+    function: usize,
+    range: std::ops::Range<usize>,
+}
+
+impl Body<'_> {
+    fn build(&self, module: &mut JITModule, imports: &Imports, func: &mut cranelift_codegen::ir::Function, fbc: &mut FunctionBuilderContext) {
+        let frontend = module.target_config();
+        let mut b = FunctionBuilder::new(func, fbc);
         let block = b.create_block();
         b.append_block_params_for_function_params(block);
         b.switch_to_block(block);
         b.seal_block(block);
-        let (input, output) = (b.block_params(block)[0], b.block_params(block)[1]);
+        let (input, output, scratch) = (b.block_params(block)[0], b.block_params(block)[1], b.block_params(block)[2]);
         let flags = MemFlagsData::trusted();
-        let unary_refs: Vec<(Unary, cranelift_codegen::ir::FuncRef)> = unary.iter().map(|(u, id)| (*u, module.declare_func_in_func(*id, b.func))).collect();
-        let powi_ref = module.declare_func_in_func(powi, b.func);
-        let powf_ref = module.declare_func_in_func(powf, b.func);
-        let mut regs = Vec::with_capacity(inputs + constants.len() + instrs.len());
-        for k in 0..inputs {
-            regs.push(b.ins().load(types::F64, flags, input, (8 * k) as i32));
-        }
-        for c in constants {
-            regs.push(b.ins().f64const(*c));
-        }
-        for ins in instrs {
-            let r = |i: u32| regs[i as usize];
+        let unary: Vec<(Unary, cranelift_codegen::ir::FuncRef)> = imports.unary.iter().map(|(u, id)| (*u, module.declare_func_in_func(*id, b.func))).collect();
+        let powi = module.declare_func_in_func(imports.powi, b.func);
+        let powf = module.declare_func_in_func(imports.powf, b.func);
+        let first = self.inputs + self.constants.len();
+        // The values this function computes, and those it reads from elsewhere (loaded or
+        // materialized once, at the first use).
+        let mut own = Vec::with_capacity(self.range.len());
+        let mut outside = std::collections::HashMap::new();
+        let mut value = |b: &mut FunctionBuilder, own: &[cranelift_codegen::ir::Value], r: u32| {
+            let r = r as usize;
+            if r >= first + self.range.start {
+                return own[r - first - self.range.start];
+            }
+            *outside.entry(r).or_insert_with(|| {
+                if r < self.inputs {
+                    b.ins().load(types::F64, flags, input, (8 * r) as i32)
+                } else if r < first {
+                    b.ins().f64const(self.constants[r - self.inputs])
+                } else {
+                    let place = self.split.scratch_place(r).expect("a value read by a later function has a place");
+                    b.ins().load(types::F64, flags, scratch, (8 * place) as i32)
+                }
+            })
+        };
+        for ins in &self.instrs[self.range.clone()] {
             let v = match *ins {
-                Instr::Add(x, y) => b.ins().fadd(r(x), r(y)),
-                Instr::Sub(x, y) => b.ins().fsub(r(x), r(y)),
-                Instr::Mul(x, y) => b.ins().fmul(r(x), r(y)),
-                Instr::Div(x, y) => b.ins().fdiv(r(x), r(y)),
-                Instr::Neg(x) => b.ins().fneg(r(x)),
-                Instr::Call(Unary::Sqrt, x) => b.ins().sqrt(r(x)),
-                Instr::Call(Unary::Abs, x) => b.ins().fabs(r(x)),
+                Instr::Add(x, y) => {
+                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
+                    b.ins().fadd(x, y)
+                }
+                Instr::Sub(x, y) => {
+                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
+                    b.ins().fsub(x, y)
+                }
+                Instr::Mul(x, y) => {
+                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
+                    b.ins().fmul(x, y)
+                }
+                Instr::Div(x, y) => {
+                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
+                    b.ins().fdiv(x, y)
+                }
+                Instr::Neg(x) => {
+                    let x = value(&mut b, &own, x);
+                    b.ins().fneg(x)
+                }
+                Instr::Call(Unary::Sqrt, x) => {
+                    let x = value(&mut b, &own, x);
+                    b.ins().sqrt(x)
+                }
+                Instr::Call(Unary::Abs, x) => {
+                    let x = value(&mut b, &own, x);
+                    b.ins().fabs(x)
+                }
                 Instr::Call(u, x) => {
-                    let f = unary_refs.iter().find(|(k, _)| *k == u).expect("every other unary is imported").1;
-                    let call = b.ins().call(f, &[r(x)]);
+                    let x = value(&mut b, &own, x);
+                    let f = unary.iter().find(|(k, _)| *k == u).expect("every other unary is imported").1;
+                    let call = b.ins().call(f, &[x]);
                     b.inst_results(call)[0]
                 }
                 Instr::Powi(x, n) => {
+                    let x = value(&mut b, &own, x);
                     let n = b.ins().iconst(types::I32, i64::from(n));
-                    let call = b.ins().call(powi_ref, &[r(x), n]);
+                    let call = b.ins().call(powi, &[x, n]);
                     b.inst_results(call)[0]
                 }
                 Instr::Powf(x, y) => {
-                    let call = b.ins().call(powf_ref, &[r(x), r(y)]);
+                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
+                    let call = b.ins().call(powf, &[x, y]);
                     b.inst_results(call)[0]
                 }
             };
-            regs.push(v);
+            // Stored as soon as computed, so that it need not stay in a register.
+            let r = first + self.range.start + own.len();
+            if let Some(place) = self.split.scratch_place(r) {
+                b.ins().store(flags, v, scratch, (8 * place) as i32);
+            }
+            for &k in self.written.get(&r).map(Vec::as_slice).unwrap_or_default() {
+                b.ins().store(flags, v, output, (8 * k) as i32);
+            }
+            own.push(v);
         }
-        for (k, &reg) in outputs.iter().enumerate() {
-            b.ins().store(flags, regs[reg as usize], output, (8 * k) as i32);
+        // The outputs that are inputs or constants, written by the first function.
+        if self.function == 0 {
+            for (k, &r) in self.outputs.iter().enumerate() {
+                if self.split.function_of(r as usize).is_none() {
+                    let v = value(&mut b, &own, r);
+                    b.ins().store(flags, v, output, (8 * k) as i32);
+                }
+            }
         }
         b.ins().return_(&[]);
         b.finalize(frontend);
     }
-    module.define_function(id, &mut ctx).map_err(error)?;
-    module.clear_context(&mut ctx);
-    module.finalize_definitions().map_err(error)?;
-    let address = module.get_finalized_function(id);
-    // SAFETY: the function was built with exactly this signature.
-    let code = unsafe { std::mem::transmute::<*const u8, unsafe extern "C" fn(*const f64, *mut f64)>(address) };
-    Ok(Compiled { module: Some(module), code, inputs, outputs: outputs.len() })
 }
 
 #[cfg(test)]
@@ -272,29 +475,75 @@ mod tests {
         assert_eq!((compiled.inputs(), compiled.outputs()), (3, 3));
     }
 
-    /// A tape longer than `BACKTRACKING_LIMIT` (compiled with the single-pass allocator) gives
-    /// the interpreter's numbers to the bit too: a long chain of dependent operations that keeps
-    /// many values alive, so that registers spill.
+    /// A tape of many functions gives the interpreter's numbers to the bit too: a long chain of
+    /// dependent operations that keeps many values alive across the cuts (so that registers
+    /// spill and the scratch buffer carries values to functions far ahead), with outputs from
+    /// the first function, the last, an input and a constant.
     #[test]
-    fn a_tape_past_the_backtracking_limit_gives_the_interpreter_s_numbers() {
+    fn a_tape_cut_into_functions_gives_the_interpreter_s_numbers() {
         let mut stmts: Vec<syn::Stmt> = vec![syn::parse_quote!(let v0 = state[0];), syn::parse_quote!(let v1 = state[1];)];
-        let count = BACKTRACKING_LIMIT / 2 + 100;
+        let count = FUNCTION_INSTRUCTIONS + 100;
         for k in 2..count {
             let (a, b) = (k - 1, k / 2);
             let text = if k % 7 == 0 { format!("let v{k} = f64::sin(v{a}) - v{b};") } else { format!("let v{k} = v{a} * 0.999 + v{b} * 0.001;") };
             stmts.push(syn::parse_str(&text).unwrap());
         }
-        let outputs: Vec<syn::Expr> = (count - 40..count).map(|k| syn::parse_str(&format!("v{k} + v{}", k / 3)).unwrap()).collect();
+        let mut outputs: Vec<syn::Expr> = (count - 40..count).map(|k| syn::parse_str(&format!("v{k} + v{}", k / 3)).unwrap()).collect();
+        outputs.extend([syn::parse_quote!(v5 * v3), syn::parse_quote!(v1), syn::parse_quote!(2.5), syn::parse_quote!(v5 * v3)]);
         let tape = Tape::compile(&stmts, &outputs, &Slots::new(&[("state", 2)])).unwrap();
-        let (_, _, instrs, _) = tape.parts();
-        assert!(instrs.len() > BACKTRACKING_LIMIT, "{} instructions", instrs.len());
-        assert_eq!(register_allocator(instrs.len()), "single_pass");
+        let (inputs, constants, instrs, _) = tape.parts();
+        let split = Split::new(inputs, constants.len(), instrs, function_length(instrs.len()));
+        assert!(split.functions().len() >= 3, "{} instructions in {} functions", instrs.len(), split.functions().len());
         let compiled = compile(&tape).expect("this machine's code generator is available");
-        let inputs = [0.3, -0.7];
-        let (mut a, mut b) = (vec![0.0; 40], vec![0.0; 40]);
-        tape.eval(&inputs, &mut a);
-        compiled.run(&inputs, &mut b);
+        let state = [0.3, -0.7];
+        let (mut a, mut b) = (vec![0.0; outputs.len()], vec![f64::NAN; outputs.len()]);
+        tape.eval(&state, &mut a);
+        compiled.run(&state, &mut b);
         assert!(a.iter().all(|x| x.is_finite()));
         assert_eq!(a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), b.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+        assert_eq!(&b[outputs.len() - 3..outputs.len() - 1], &[-0.7, 2.5]);
+        // Run again from other threads, each with its own scratch buffer.
+        std::thread::scope(|s| {
+            for t in 0..4 {
+                let (compiled, tape) = (&compiled, &tape);
+                s.spawn(move || {
+                    let state = [0.1 * f64::from(t), 0.2];
+                    let (mut a, mut b) = (vec![0.0; 44], vec![0.0; 44]);
+                    tape.eval(&state, &mut a);
+                    compiled.run(&state, &mut b);
+                    assert_eq!(a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), b.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+                });
+            }
+        });
+    }
+
+    /// Every register read outside the function that computes it has its own place in the
+    /// scratch buffer, and no other register has one; the functions cover the tape in order.
+    #[test]
+    fn a_split_gives_a_place_to_exactly_the_values_that_cross() {
+        let instrs: Vec<Instr> = (0..23u32).map(|k| if k % 3 == 0 { Instr::Add(k + 2, k / 2) } else { Instr::Mul(k + 2, 1) }).collect();
+        let split = Split::new(2, 1, &instrs, 5);
+        let functions = split.functions();
+        assert_eq!(functions.len(), 5);
+        assert_eq!(functions.iter().map(|r| r.len()).sum::<usize>(), 23);
+        assert!(functions.windows(2).all(|w| w[0].end == w[1].start) && functions[0].start == 0);
+        let function_of = |k: usize| functions.iter().position(|r| r.contains(&k)).unwrap();
+        let mut crossing = std::collections::BTreeSet::new();
+        for (k, ins) in instrs.iter().enumerate() {
+            for x in operands(ins) {
+                if x >= 3 && function_of(x as usize - 3) != function_of(k) {
+                    crossing.insert(x as usize);
+                }
+            }
+        }
+        assert!(!crossing.is_empty());
+        let mut places = std::collections::BTreeSet::new();
+        for r in 0..26 {
+            match split.scratch_place(r) {
+                Some(p) => assert!(crossing.contains(&r) && places.insert(p), "register {r}"),
+                None => assert!(!crossing.contains(&r), "register {r}"),
+            }
+        }
+        assert_eq!(places.len(), split.scratch_len());
     }
 }
