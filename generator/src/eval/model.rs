@@ -83,10 +83,10 @@ fn run<R>(tape: &dyn Kernel, t: f64, params: &[f64], a: &[f64], b: &[f64], then:
             if inputs.len() < tape.inputs() {
                 inputs.resize(tape.inputs(), 0.0);
             }
-            outputs.clear();
+            // The kernel writes every output: the buffer is only sized, not cleared.
             outputs.resize(tape.outputs(), 0.0);
-            tape.run(&inputs, &mut outputs);
-            then(&outputs)
+            tape.run(&inputs, &mut outputs[..tape.outputs()]);
+            then(&outputs[..tape.outputs()])
         })
     })
 }
@@ -231,10 +231,10 @@ fn solve_ldl(plan: &LdlPlan, kernel: &dyn Kernel, matrix: &[f64], force: &mut [f
         inputs.clear();
         inputs.extend_from_slice(matrix);
         inputs.extend_from_slice(force);
-        outputs.clear();
+        // The kernel writes every output: the buffer is only sized, not cleared.
         outputs.resize(kernel.outputs(), 0.0);
-        kernel.run(inputs, outputs);
-        let (x, pivots) = outputs.split_at(force.len());
+        kernel.run(inputs, &mut outputs[..kernel.outputs()]);
+        let (x, pivots) = outputs[..kernel.outputs()].split_at(force.len());
         plan.checked(matrix, pivots)?;
         force.copy_from_slice(x);
         Ok(())
@@ -389,8 +389,12 @@ impl EvaluatedForm {
             let checks = take(s.conditions.len());
             SOLVE.with(|cell| {
                 let (matrix, force, pivots) = &mut *cell.borrow_mut();
-                matrix.clear();
-                matrix.extend_from_slice(matrix_out);
+                // The solves that overwrite the matrix get a copy of it.
+                let copy = || {
+                    matrix.clear();
+                    matrix.extend_from_slice(matrix_out);
+                    matrix
+                };
                 force.clear();
                 force.extend_from_slice(force_out);
                 if let (Some(r), Some((alpha, beta))) = (s.stabilization, stabilize) {
@@ -409,10 +413,10 @@ impl EvaluatedForm {
                     // As the module: its unrolled `solve_ldl` (`Solve::sparse`), else the looped
                     // `solve_spd`.
                     Solve::Ldl(plan) => match &self.ldl {
-                        Some(kernel) => solve_ldl(plan, &**kernel, matrix, force),
-                        None => COLUMN.with(|scratch| solve_spd(n, matrix, force, &mut scratch.borrow_mut())),
+                        Some(kernel) => solve_ldl(plan, &**kernel, matrix_out, force),
+                        None => COLUMN.with(|scratch| solve_spd(n, copy(), force, &mut scratch.borrow_mut())),
                     },
-                    Solve::Lu(_) => solve_dense(n, matrix, force, pivots),
+                    Solve::Lu(_) => solve_dense(n, copy(), force, pivots),
                     // The body's forcing slots hold the rates already.
                     Solve::Articulated { .. } => Ok(()),
                 };
