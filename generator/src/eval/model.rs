@@ -102,8 +102,16 @@ impl Evaluated {
         let d = program.description;
         let m = d.coordinates.len();
         let params = d.parameter_names.len();
-        let take = |name: &str, tapes: &mut std::collections::HashMap<String, Tape>| tapes.remove(name).map(|t| backend.kernel(t));
-        let tapes = &mut program.tapes;
+        // Every tape compiled at once, side by side on the machine's threads: the solves' plans
+        // by the names `FORMULATION::ldl`.
+        let mut named: Vec<(String, Tape)> = program.tapes.drain().collect();
+        named.extend(program.forms.iter().filter_map(|shape| shape.solve.sparse().map(|plan| (format!("{}::ldl", shape.kind.name()), plan.tape()))));
+        named.sort_by(|a, b| a.0.cmp(&b.0));
+        let (names, tapes): (Vec<String>, Vec<Tape>) = named.into_iter().unzip();
+        let threads = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+        let mut kernels: std::collections::HashMap<String, Box<dyn Kernel>> = names.into_iter().zip(super::kernel::kernels(tapes, backend, threads)).collect();
+        let take = |name: &str, kernels: &mut std::collections::HashMap<String, Box<dyn Kernel>>| kernels.remove(name);
+        let tapes = &mut kernels;
         let holonomic = d.holonomic_names.len();
         let constraint_names: Arc<[String]> = d.constraints.clone().into();
         let holonomic_names: Arc<[String]> = d.holonomic_names.clone().into();
@@ -124,7 +132,7 @@ impl Evaluated {
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
                     matrix: take(&format!("{name}::matrix"), tapes),
-                    ldl: shape.solve.sparse().map(|plan| backend.kernel(plan.tape())),
+                    ldl: take(&format!("{name}::ldl"), tapes),
                     jacobian: take(&format!("{name}::jacobian"), tapes),
                     parameter_jacobian: take(&format!("{name}::parameter_jacobian"), tapes),
                     shape: shape.clone(),
