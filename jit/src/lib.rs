@@ -1,9 +1,9 @@
 //! Compiles the in-process evaluator's tapes to machine code with cranelift: one function per
 //! tape (a sequence of them for a long one, [`Split`]), `fn(inputs: *const f64, outputs: *mut
-//! f64, scratch: *mut f64)`, every instruction one IEEE operation in
-//! the tape's order (cranelift neither reassociates nor fuses multiply-adds), the elementary
-//! functions called as the interpreter calls them. So a compiled kernel gives the interpreter's
-//! numbers, which are the compiled module's, without the interpreter's dispatch.
+//! f64, scratch: *mut f64)`, every instruction one IEEE operation in the tape's order (cranelift
+//! neither reassociates nor fuses multiply-adds), the elementary functions called as the
+//! interpreter calls them. So a compiled kernel gives the interpreter's numbers, which are the
+//! compiled module's, without the interpreter's dispatch.
 //!
 //! ```
 //! use generator::emit::tape::{Slots, Tape};
@@ -167,9 +167,10 @@ pub fn function_length(instructions: usize) -> usize {
     if instructions <= FUNCTION_INSTRUCTIONS { instructions.max(1) } else { PIECE_INSTRUCTIONS }
 }
 
-/// How a tape's instructions are cut into functions ([`function_length`]), and which values cross from one function to a later one (each gets a place in the scratch
-/// buffer). Registers are numbered as the tape numbers them: the inputs, then the constants,
-/// then one per instruction.
+/// How a tape's instructions are cut into functions ([`function_length`]), and which values
+/// cross from one function to a later one (each gets a place in the scratch buffer). Registers
+/// are numbered as the tape numbers them: the inputs, then the constants, then one per
+/// instruction.
 ///
 /// ```
 /// use generator::emit::tape::Instr;
