@@ -296,17 +296,25 @@ pub fn compile(tape: &Tape) -> Result<Compiled, JitError> {
     for (k, &r) in outputs.iter().enumerate() {
         written.entry(r as usize).or_default().push(k);
     }
-    let mut ids = Vec::new();
-    let mut ctx = module.make_context();
+    let mut functions = Vec::new();
     let mut fbc = FunctionBuilderContext::new();
     for (f, range) in split.functions().into_iter().enumerate() {
         let id = module.declare_function(&format!("kernel{f}"), Linkage::Local, &signature).map_err(error)?;
+        let mut ctx = module.make_context();
         ctx.func.signature = signature.clone();
         let body = Body { inputs, constants, instrs, outputs, split: &split, written: &written, function: f, range };
         body.build(&mut module, &imports, &mut ctx.func, &mut fbc);
-        module.define_function(id, &mut ctx).map_err(error)?;
-        module.clear_context(&mut ctx);
-        ids.push(id);
+        functions.push((id, ctx));
+    }
+    compile_side_by_side(module.isa(), &mut functions)?;
+    // Placed in memory in their order, as `define_function` would place them.
+    let mut ids = Vec::new();
+    for (id, ctx) in &functions {
+        let code = ctx.compiled_code().expect("every function was compiled");
+        let relocs: Vec<cranelift_module::ModuleReloc> =
+            code.buffer.relocs().iter().map(|r| cranelift_module::ModuleReloc::from_mach_reloc(r, &ctx.func, *id)).collect();
+        module.define_function_bytes(*id, u64::from(code.buffer.alignment), code.code_buffer(), &relocs).map_err(error)?;
+        ids.push(*id);
     }
     module.finalize_definitions().map_err(error)?;
     let code = ids
@@ -318,6 +326,34 @@ pub fn compile(tape: &Tape) -> Result<Compiled, JitError> {
         })
         .collect();
     Ok(Compiled { module: Some(module), code, scratch: split.scratch_len(), inputs, outputs: outputs.len() })
+}
+
+/// Compiles each function of a tape to machine code, side by side on the machine's threads
+/// (a long tape's pieces are independent until they are placed in memory, which stays in their
+/// order). Measured on this project's 2-core machine with `perf stat -r 3 multibody linearize
+/// bicycle ...` (the command of `docs/bicycle.md`: the exact Jacobian's 194571 instructions in
+/// 49 pieces), alternately: 5.94 and 5.98 s of wall time one piece after the other, 5.29 and
+/// 5.37 s side by side, the same CPU.
+fn compile_side_by_side(
+    isa: &dyn cranelift_codegen::isa::TargetIsa,
+    functions: &mut [(cranelift_module::FuncId, cranelift_codegen::Context)],
+) -> Result<(), JitError> {
+    let threads = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get).clamp(1, functions.len().max(1));
+    let per_thread = functions.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        let compile = |part: &mut [(cranelift_module::FuncId, cranelift_codegen::Context)]| {
+            part.iter_mut().try_for_each(|(_, ctx)| ctx.compile(isa, &mut Default::default()).map(|_| ()).map_err(|e| error(format!("{:?}", e.inner))))
+        };
+        let mut parts = functions.chunks_mut(per_thread);
+        let first = parts.next();
+        let handles: Vec<_> = parts.map(|part| s.spawn(move || compile(part))).collect();
+        let mut result = first.map_or(Ok(()), compile);
+        for h in handles {
+            let r = h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            result = result.and(r);
+        }
+        result
+    })
 }
 
 /// The elementary functions the compiled code calls.
