@@ -411,49 +411,29 @@ impl Body<'_> {
             })
         };
         for ins in &self.instrs[self.range.clone()] {
+            // The operands, in the order the instruction names them (a unary one's `y` is its `x`).
+            let mut operands = operands(ins).map(|r| value(&mut b, &own, r));
+            let x = operands.next().expect("every instruction reads a register");
+            let y = operands.next().unwrap_or(x);
             let v = match *ins {
-                Instr::Add(x, y) => {
-                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
-                    b.ins().fadd(x, y)
-                }
-                Instr::Sub(x, y) => {
-                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
-                    b.ins().fsub(x, y)
-                }
-                Instr::Mul(x, y) => {
-                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
-                    b.ins().fmul(x, y)
-                }
-                Instr::Div(x, y) => {
-                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
-                    b.ins().fdiv(x, y)
-                }
-                Instr::Neg(x) => {
-                    let x = value(&mut b, &own, x);
-                    b.ins().fneg(x)
-                }
-                Instr::Call(Unary::Sqrt, x) => {
-                    let x = value(&mut b, &own, x);
-                    b.ins().sqrt(x)
-                }
-                Instr::Call(Unary::Abs, x) => {
-                    let x = value(&mut b, &own, x);
-                    b.ins().fabs(x)
-                }
-                Instr::Call(u, x) => {
-                    let x = value(&mut b, &own, x);
+                Instr::Add(..) => b.ins().fadd(x, y),
+                Instr::Sub(..) => b.ins().fsub(x, y),
+                Instr::Mul(..) => b.ins().fmul(x, y),
+                Instr::Div(..) => b.ins().fdiv(x, y),
+                Instr::Neg(..) => b.ins().fneg(x),
+                Instr::Call(Unary::Sqrt, _) => b.ins().sqrt(x),
+                Instr::Call(Unary::Abs, _) => b.ins().fabs(x),
+                Instr::Call(u, _) => {
                     let f = unary.iter().find(|(k, _)| *k == u).expect("every other unary is imported").1;
                     let call = b.ins().call(f, &[x]);
                     b.inst_results(call)[0]
                 }
-                Instr::Powi(x, n) => {
-                    let x = value(&mut b, &own, x);
+                Instr::Powi(_, n) => {
                     let n = b.ins().iconst(types::I32, i64::from(n));
                     let call = b.ins().call(powi, &[x, n]);
                     b.inst_results(call)[0]
                 }
-                Instr::Powf(x, y) => {
-                    let (x, y) = (value(&mut b, &own, x), value(&mut b, &own, y));
+                Instr::Powf(..) => {
                     let call = b.ins().call(powf, &[x, y]);
                     b.inst_results(call)[0]
                 }
