@@ -302,25 +302,23 @@ pub fn compile(tape: &Tape) -> Result<Compiled, JitError> {
         let id = module.declare_function(&format!("kernel{f}"), Linkage::Local, &signature).map_err(error)?;
         let mut ctx = module.make_context();
         ctx.func.signature = signature.clone();
-        let body = Body { inputs, constants, instrs, outputs, split: &split, written: &written, function: f, range };
+        let body = Body { inputs, constants, instrs, outputs, split: &split, written: &written, range };
         body.build(&mut module, &imports, &mut ctx.func, &mut fbc);
         functions.push((id, ctx));
     }
     compile_side_by_side(module.isa(), &mut functions)?;
     // Placed in memory in their order, as `define_function` would place them.
-    let mut ids = Vec::new();
     for (id, ctx) in &functions {
         let code = ctx.compiled_code().expect("every function was compiled");
         let relocs: Vec<cranelift_module::ModuleReloc> =
             code.buffer.relocs().iter().map(|r| cranelift_module::ModuleReloc::from_mach_reloc(r, &ctx.func, *id)).collect();
         module.define_function_bytes(*id, u64::from(code.buffer.alignment), code.code_buffer(), &relocs).map_err(error)?;
-        ids.push(*id);
     }
     module.finalize_definitions().map_err(error)?;
-    let code = ids
-        .into_iter()
-        .map(|id| {
-            let address = module.get_finalized_function(id);
+    let code = functions
+        .iter()
+        .map(|(id, _)| {
+            let address = module.get_finalized_function(*id);
             // SAFETY: the function was built with exactly this signature.
             unsafe { std::mem::transmute::<*const u8, Function>(address) }
         })
@@ -372,7 +370,7 @@ struct Body<'a> {
     split: &'a Split,
     /// For each register an output is, the outputs' indices.
     written: &'a std::collections::HashMap<usize, Vec<usize>>,
-    function: usize,
+    /// This function's instructions (the first function's starts at 0).
     range: std::ops::Range<usize>,
 }
 
@@ -449,7 +447,7 @@ impl Body<'_> {
             own.push(v);
         }
         // The outputs that are inputs or constants, written by the first function.
-        if self.function == 0 {
+        if self.range.start == 0 {
             for (k, &r) in self.outputs.iter().enumerate() {
                 if self.split.function_of(r as usize).is_none() {
                     let v = value(&mut b, &own, r);
