@@ -22,7 +22,10 @@ processes, CPU time (user + system) of:
   `count_ops` over the replacements and the reduced expressions (as docs/scaling/sympy_kane.py
   counts SymPy's).
 
-The minimum over the repeats of each is recorded, with the ratios ours / SymEngine's. Both
+First SymEngine's M and F are checked against the generator's model at the two smallest sizes:
+q'' from M q'' = F at a random state (the scaling benchmark's `--point pendulum N`) against
+ours, recorded as `checked` (the largest difference over the largest |q''|); the run stops where
+they differ. The minimum over the repeats of each is recorded, with the ratios ours / SymEngine's. Both
 sides are timed without starting their process: SymEngine's inside its process, after Python
 has started and imported it; ours from outside, less the CPU of starting the generator (the
 least of `--repeats` runs of `generator --version`, timed in the same rounds and recorded as
@@ -48,6 +51,20 @@ def symengine_derivation(n):
     import symengine as se
 
     start = time.process_time()
+    mass, forcing, _ = mass_and_forcing(n)
+    size = n + 1
+    entries = [mass[r, c] for r in range(size) for c in range(r, size)] + [forcing[r, 0] for r in range(size)]
+    replacements, reduced = se.cse(entries)
+    seconds = time.process_time() - start
+    ops = sum(se.count_ops(e) for _, e in replacements) + sum(se.count_ops(e) for e in reduced)
+    return seconds, int(ops)
+
+
+def mass_and_forcing(n):
+    """SymEngine's M and F of the n-link pendulum on a cart (M q'' = F), and the symbols
+    (q, qd, m, lengths, g)."""
+    import symengine as se
+
     q = se.symbols(" ".join(f"q{i}" for i in range(n + 1)))
     qd = se.symbols(" ".join(f"qd{i}" for i in range(n + 1)))
     m = se.symbols(" ".join(f"m{i}" for i in range(n + 1)))
@@ -75,11 +92,55 @@ def symengine_derivation(n):
         forcing = forcing - m[i] * (jac.T * (djac * qd_vec))
         potential = m[i] * g * py
         forcing = forcing - se.Matrix([se.diff(potential, qj) for qj in q])
-    entries = [mass[r, c] for r in range(size) for c in range(r, size)] + [forcing[r, 0] for r in range(size)]
-    replacements, reduced = se.cse(entries)
-    seconds = time.process_time() - start
-    ops = sum(se.count_ops(e) for _, e in replacements) + sum(se.count_ops(e) for e in reduced)
-    return seconds, int(ops)
+    return mass, forcing, (q, qd, m, lengths, g)
+
+
+def check(n):
+    """SymEngine's M and F against the generator's model of the same size: q'' from
+    M q'' = F at the state and parameters of the scaling benchmark's point (`--point pendulum
+    N`: a random state, every parameter moved off its value) against the generator's q''
+    there. Returns the largest difference over the largest |q''|; exits where they differ by
+    more than CHECK_TOLERANCE (a ratio against another system would say nothing)."""
+    import symengine as se
+
+    point = json.loads(
+        subprocess.run(
+            ["cargo", "bench", "-q", "-p", "generator", "--bench", "scaling", "--", "--point", "pendulum", str(n)],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    )
+    mass, forcing, (q, qd, _, _, _) = mass_and_forcing(n)
+    values = {se.Symbol(name): value for name, value in point["params"].items()}
+    values.update({x: point["q"][str(x)] for x in q})
+    values.update({v: point["qdot"][f"q{i}"] for i, v in enumerate(qd)})
+    size = n + 1
+    a = [[float(mass[r, c].subs(values)) for c in range(size)] for r in range(size)]
+    b = [float(forcing[r, 0].subs(values)) for r in range(size)]
+    # Gaussian elimination with partial pivoting (M is symmetric positive definite).
+    for k in range(size):
+        p = max(range(k, size), key=lambda r: abs(a[r][k]))
+        a[k], a[p], b[k], b[p] = a[p], a[k], b[p], b[k]
+        for r in range(k + 1, size):
+            f = a[r][k] / a[k][k]
+            a[r] = [x - f * y for x, y in zip(a[r], a[k])]
+            b[r] -= f * b[k]
+    qdd = [0.0] * size
+    for k in reversed(range(size)):
+        qdd[k] = (b[k] - sum(a[k][j] * qdd[j] for j in range(k + 1, size))) / a[k][k]
+    ours = [point["qddot"][f"q{i}"] for i in range(size)]
+    error = max(abs(x - y) for x, y in zip(qdd, ours)) / max(abs(y) for y in ours)
+    print(f"n = {n}: SymEngine's q'' differs from ours by {error:.1e} of the largest |q''|", file=sys.stderr, flush=True)
+    if error > CHECK_TOLERANCE:
+        raise SystemExit(f"SymEngine's pendulum on a cart (n = {n}) is not the generator's: q'' {qdd} against ours {ours}")
+    return error
+
+
+# `check` fails beyond this difference of q'' (relative to the largest |q''|): both sides in
+# double precision, so a different model differs in the leading digits, round-off in the last.
+CHECK_TOLERANCE = 1e-9
 
 
 def children_cpu():
@@ -157,9 +218,11 @@ def main():
 
     if not GENERATOR.is_file():
         raise SystemExit(f"no {GENERATOR}: run `cargo build --release -p generator` first")
+    sizes = [int(s) for s in args.sizes.split(",")]
+    checked = {n: check(n) for n in sorted(set(sizes))[:2]}
     records = []
     with tempfile.TemporaryDirectory() as folder:
-        for n in [int(s) for s in args.sizes.split(",")]:
+        for n in sizes:
             model = Path(folder) / f"pendulum_on_cart_{n}.ron"
             text = subprocess.run(
                 ["cargo", "run", "--release", "-q", "-p", "generator", "--example", "write_model", "--", "pendulum", str(n)],
@@ -212,6 +275,7 @@ def main():
         "command": "target/peers/symengine/bin/python docs/scaling/symengine_pendulum.py --sizes " + args.sizes,
         "symengine": symengine.__version__,
         "repeats": args.repeats,
+        "checked": {str(n): e for n, e in checked.items()},
         "records": records,
     }
     out.write_text(json.dumps(document, indent=1) + "\n")

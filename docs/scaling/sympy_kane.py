@@ -4,6 +4,12 @@ side-by-side ratios in docs/scaling.md. Outside CI (it needs SymPy: `pip install
 
     python3 docs/scaling/sympy_kane.py --model pendulum --sizes 5,10,20 --json out.json
     python3 docs/scaling/sympy_kane.py --model three_body --json out.json
+    python3 docs/scaling/sympy_kane.py --model three_body --check POINT.json
+
+`--check` validates a model instead of timing it: SymPy's accelerations q'' at the state, time
+and parameters of POINT.json (the scaling benchmark writes it: `--scene NAME point`, `--point
+KIND N`) against the generator's there; exit 1 beyond CHECK_TOLERANCE. The benchmark runs it
+with `--sympy`, so the ratios it reports compare derivations of the same equations.
 
 For each size it prints and records: the time to build the model and run `kanes_equations`
 (derive), the time of `cse([M, F])`, and `count_ops` of that CSE (the operations to assemble
@@ -12,7 +18,8 @@ the mass matrix and forcing), the count the generator's "assembly" column compar
 The models are the generator's `n_link_pendulum_on_cart` and `floating_chain`
 (generator/src/model/examples.rs) and the scenes `models/cart_pendulum.ron`,
 `models/three_body.ron` and `models/satellite_boom.ron`: the same bodies, joints, forces,
-constraints and generalized speeds (the full set of each scene's quasi-velocities). A scene
+constraints and generalized speeds (the full set of each scene's quasi-velocities; products
+of inertia as the paper's Eq. 75 writes them, negated in the tensor). A scene
 has no size: `--sizes` is ignored and its record says n = 0.
 """
 
@@ -158,7 +165,7 @@ def three_body():
     c2 = jb.locatenew("C2", -d * L2.x)
     c2.v2pt_theory(jb, N, L2)
     bodies = [
-        me.RigidBody("middle", G, B, m0, (me.inertia(B, Ixx, Iyy, Izz, Ixy, Iyz, Ixz), G)),
+        me.RigidBody("middle", G, B, m0, (me.inertia(B, Ixx, Iyy, Izz, -Ixy, -Iyz, -Ixz), G)),
         me.RigidBody("body1", c1, L1, m1, (me.inertia(L1, J1, J2, J2), c1)),
         me.RigidBody("body2", c2, L2, m2, (me.inertia(L2, J1, J2, J2), c2)),
     ]
@@ -182,7 +189,7 @@ def satellite_boom():
     tip.set_vel(B, drho * B.x)
     tip.v1pt_theory(G, N, B)
     bodies = [
-        me.RigidBody("satellite", G, B, mg, (me.inertia(B, Ixx, Iyy, Izz, Ixy, Iyz, Ixz), G)),
+        me.RigidBody("satellite", G, B, mg, (me.inertia(B, Ixx, Iyy, Izz, -Ixy, -Iyz, -Ixz), G)),
         me.Particle("tip", tip, m),
     ]
     loads = [(tip, F * B.x), (G, -F * B.x)]
@@ -194,13 +201,16 @@ def satellite_boom():
 
 SCENES = {"cart_pendulum": cart_pendulum, "three_body": three_body, "satellite_boom": satellite_boom}
 
+# `--check` fails beyond this difference of q'' (relative to the largest |q''|): both sides
+# evaluate the same equations in double precision (ours) and 30 digits (SymPy's), so a
+# different model differs in the leading digits, round-off in the last few.
+CHECK_TOLERANCE = 1e-9
+
 
 def measure(model, n):
     start = time.process_time()
-    if model in SCENES:
-        kane, n = SCENES[model](), 0
-    else:
-        kane = pendulum_on_cart(n) if model == "pendulum" else floating_chain(n)
+    kane = build(model, n)
+    n = 0 if model in SCENES else n
     mass, forcing = kane.mass_matrix, kane.forcing
     derive = time.process_time() - start
     start = time.process_time()
@@ -210,12 +220,77 @@ def measure(model, n):
     return {"model": model, "n": n, "derive_seconds": derive, "cse_seconds": cse, "assembly_ops": int(ops)}
 
 
+def accelerations(kane, point):
+    """SymPy's accelerations q'' of a derived model at `point` (a state of the scene with its
+    parameters and time, every value by its name in the model file, as the scaling benchmark's
+    `--scene NAME point` writes it): the speeds solved from the kinematic equations at (q, q'),
+    u' from the full mass matrix and forcing, then q'' = d/dt q'(q, u). Returns {name: q''}."""
+    t = me.dynamicsymbols._t
+    name = lambda f: f.func.__name__
+    q, u = list(kane.q), list(kane.u)
+    params = {sm.Symbol(k): sm.Float(v, 30) for k, v in point["params"].items()}
+    at = {t: sm.Float(point["t"], 30), **params, **{x: sm.Float(point["q"][name(x)], 30) for x in q}}
+    qdot_of_u = kane.kindiffdict()
+    rates = [qdot_of_u[x.diff(t)] for x in q]
+    # The kinematic equations q' = f(q, u), linear in u: solved for u at the point.
+    unknowns = sm.symbols("s0:%d" % len(u))
+    plain = dict(zip(u, unknowns))
+    equations = [sm.N(r.xreplace(plain).subs(at), 30) - sm.Float(point["qdot"][name(x)], 30) for r, x in zip(rates, q)]
+    (speeds,) = sm.linsolve(equations, unknowns)
+    at.update(dict(zip(u, speeds)))
+    # [q'; u'] = M_full^-1 F_full at the point; the derivatives stand in for symbols first.
+    mass, forcing = kane.mass_matrix_full, kane.forcing_full
+    derivatives = {x.diff(t): sm.Symbol("d_" + name(x)) for x in q + u}
+    value = lambda m: m.xreplace(derivatives).subs(at).evalf(30)
+    solution = value(mass).LUsolve(value(forcing))
+    udot = dict(zip(u, solution[len(q):]))
+    # q'' = sum_j df/dq_j q'_j + sum_k df/du_k u'_k.
+    result = {}
+    for r, x in zip(rates, q):
+        total = sum(value(sm.Matrix([r.diff(y)]))[0] * sm.Float(point["qdot"][name(y)], 30) for y in q)
+        total += sum(value(sm.Matrix([r.diff(v)]))[0] * udot[v] for v in u)
+        result[name(x)] = float(total)
+    return result
+
+
+def build(model, n):
+    """SymPy's KanesMethod of `model` (a scene, or a scaled model at size n), derived."""
+    if model in SCENES:
+        return SCENES[model]()
+    return pendulum_on_cart(n) if model == "pendulum" else floating_chain(n)
+
+
+def check(model, n, point_file):
+    """Derives `model` (at size n) and compares its q'' with the generator's at the point in
+    `point_file`: prints the largest difference over the largest |q''| and returns it."""
+    with open(point_file) as f:
+        point = json.load(f)
+    ours = point["qddot"]
+    theirs = accelerations(build(model, n), point)
+    if set(ours) != set(theirs):
+        raise SystemExit(f"{model}: SymPy's coordinates {sorted(theirs)} are not the model's {sorted(ours)}")
+    scale = max(abs(v) for v in ours.values())
+    error = max(abs(theirs[k] - ours[k]) for k in ours) / scale
+    for k in sorted(ours):
+        print(f"{model}: {k}'' ours {ours[k]:+.15e} SymPy {theirs[k]:+.15e}")
+    print(f"{model}: largest difference {error:.2e} of the largest |q''|", flush=True)
+    return error
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--model", choices=["pendulum", "floating", *SCENES], required=True)
     p.add_argument("--sizes", default="2,4,8", help="comma-separated sizes n")
     p.add_argument("--json", help="write the records to this file")
+    p.add_argument("--check", metavar="POINT", help="compare q'' with the generator's at this point (JSON, for a scaled model at the first of --sizes) instead of timing")
     args = p.parse_args()
+    if args.check:
+        n = 0 if args.model in SCENES else int(args.sizes.split(",")[0])
+        error = check(args.model, n, args.check)
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump({"sympy": sm.__version__, "records": [{"model": args.model, "n": n, "relative_difference": error}]}, f, indent=1)
+        return 0 if error <= CHECK_TOLERANCE else 1
     records = []
     sizes = [0] if args.model in SCENES else [int(x) for x in args.sizes.split(",")]
     for n in sizes:

@@ -133,6 +133,33 @@ fn run_sympy(root: &Path, model: &str, extra: &[&str]) -> Option<Vec<SympyRecord
     records
 }
 
+/// SymPy's model of `model` (a scene, or a scaled model at size `n`) checked against ours:
+/// this program writes the point (`--scene NAME point`, `--point KIND N`), `sympy_kane.py
+/// --check` derives SymPy's accelerations there. The largest difference of `q''` over the
+/// largest `|q''|`, or None when SymPy could not run. Panics where the models differ: a ratio
+/// against a different system would say nothing.
+fn check_sympy(root: &Path, exe: &Path, model: &str, n: usize) -> Option<f64> {
+    let args: Vec<String> =
+        if SCENES.contains(&model) { vec!["--scene".into(), model.into(), "point".into()] } else { vec!["--point".into(), model.into(), n.to_string()] };
+    let child = Command::new(exe).args(&args).output().expect("the child runs");
+    assert!(child.status.success(), "the point of {model} failed: {}", String::from_utf8_lossy(&child.stderr));
+    let point = std::env::temp_dir().join(format!("sympy-point-{model}-{}.json", std::process::id()));
+    std::fs::write(&point, &child.stdout).expect("the point is written");
+    let json = std::env::temp_dir().join(format!("sympy-check-{model}-{}.json", std::process::id()));
+    let script = root.join("docs/scaling/sympy_kane.py");
+    let out = Command::new("python3").arg(&script).args(["--model", model, "--sizes", &n.to_string(), "--check"]).arg(&point).arg("--json").arg(&json).output();
+    let _ = std::fs::remove_file(&point);
+    let out = out.ok()?;
+    let error = std::fs::read_to_string(&json)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["records"][0]["relative_difference"].as_f64());
+    let _ = std::fs::remove_file(&json);
+    let error = error?;
+    assert!(out.status.success(), "SymPy's model of {model} (n = {n}) is not the generator's: {}", String::from_utf8_lossy(&out.stdout));
+    Some(error)
+}
+
 /// This program re-invoked as the child `--one`: one model at one size (`compile`: "compile" or
 /// "no"), its record.
 fn one(exe: &Path, kind: &str, n: usize, compile: &str, work: &Path) -> Record {
@@ -150,14 +177,19 @@ fn simplifier_cell((work, over, reached): (u64, usize, bool)) -> String {
 /// The models the benchmark scales, by their key.
 const KINDS: [&str; 3] = ["pendulum", "floating", "planar"];
 
-/// The child: one model at one size.
-fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
+/// The scaled model `kind` at size `n`.
+fn scaled_model(kind: &str, n: usize) -> generator::model::Model {
     let builder = match kind {
         "pendulum" => n_link_pendulum_on_cart(n),
         "floating" => floating_chain(n),
         _ => planar_chain_absolute(n),
     };
-    let model = builder.build().expect("the benchmark models are valid");
+    builder.build().expect("the benchmark models are valid")
+}
+
+/// The child: one model at one size.
+fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
+    let model = scaled_model(kind, n);
     let out = generate(&model, &Options::from_model(&model)).expect("the benchmark models generate");
     let cpu_s = cpu_seconds();
     let s = &out.summary;
@@ -241,6 +273,10 @@ fn main() {
         let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../models")).join(format!("{}.ron", args[1]));
         // Timed inside the process from before the model is read, as SymPy's side is timed from
         // before its model is built: neither counts starting the process or loading the library.
+        if args.get(2).map(String::as_str) == Some("point") {
+            println!("{}", model_point(&generator::model::load(&path).expect("the scene loads")));
+            return;
+        }
         let (start, cpu_start) = (Instant::now(), cpu_microseconds());
         let model = generator::model::load(&path).expect("the scene loads");
         match args.get(2).map(String::as_str) {
@@ -265,6 +301,11 @@ fn main() {
             }
         }
         println!("{} {}", start.elapsed().as_secs_f64() * 1e3, (cpu_microseconds() - cpu_start) / 1e3);
+        return;
+    }
+    if args.first().map(String::as_str) == Some("--point") {
+        // `--point KIND N`: as `--scene NAME point`, on a scaled model.
+        println!("{}", model_point(&scaled_model(&args[1], args[2].parse().expect("--point KIND N"))));
         return;
     }
     if args.first().map(String::as_str) == Some("--one") {
@@ -369,12 +410,33 @@ fn main() {
             }
         }
     }
+    // SymPy's models checked against ours before their times are compared: each scene, and
+    // each scaled model at its smallest size SymPy ran.
+    let mut sympy_checks: Vec<(String, f64)> = Vec::new();
+    if sympy {
+        let smallest = |kind: &str| peers.iter().find(|(k, _)| k == kind).and_then(|(_, r)| r.iter().map(|r| r.n).min());
+        let models = SCENES.iter().map(|s| (s.to_string(), 0)).chain(["pendulum", "floating"].into_iter().filter_map(|k| Some((k.to_string(), smallest(k)?))));
+        for (model, n) in models {
+            if let Some(error) = check_sympy(&root, &exe, &model, n) {
+                eprintln!("scaling: SymPy's {model} checked: q'' within {error:.1e}");
+                sympy_checks.push((if n == 0 { model } else { format!("{model} n = {n}") }, error));
+            }
+        }
+    }
     std::fs::create_dir_all(out.join("plots")).expect("the output directory");
     // Per scene: SymPy's derivation CPU seconds and ours in milliseconds.
     let against_sympy: Vec<(f64, SceneCpu)> =
         sympy_scenes.iter().filter_map(|(s, sympy_s)| scene_cpu.iter().find(|c| c.scene == *s).map(|c| (*sympy_s, *c))).collect();
-    let measured =
-        Measured { records: &records, peers: &peers, scenes: &scenes, scene_cpu: &scene_cpu, inspects: &inspects, against_sympy: &against_sympy, planar_goal };
+    let measured = Measured {
+        records: &records,
+        peers: &peers,
+        scenes: &scenes,
+        scene_cpu: &scene_cpu,
+        inspects: &inspects,
+        against_sympy: &against_sympy,
+        sympy_checks: &sympy_checks,
+        planar_goal,
+    };
     write_atomic(&out.join("scaling.md"), &report(&measured, [&pendulum, &floating, &planar], compile_up_to, sympy));
     plot(&out.join("plots/scaling.svg"), &records, &peers);
     std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
@@ -396,6 +458,57 @@ fn main() {
         std::fs::write(out.join("scaling/sympy.json"), serde_json::to_string_pretty(&json).unwrap() + "\n").expect("the SymPy records are written");
     }
     eprintln!("scaling: wrote {} and {}", out.join("scaling.md").display(), out.join("plots/scaling.svg").display());
+}
+
+/// Where SymPy's model of a scene or a scaled model is checked against ours (`sympy_kane.py
+/// --check`): a state of the model at a time away from 0, consistent with its constraints, and
+/// our accelerations `q''` there, as JSON with every value by its name in the model (the names
+/// SymPy's models use).
+/// The state is Kane's with its coordinates and quasi-velocities drawn from a fixed sequence in
+/// `[-1, 1)`, mapped to `(q, q')` by Kane's `velocities` (so a velocity constraint holds); `q''`
+/// is Lagrange's right-hand side at that `(q, q')`.
+fn model_point(model: &generator::model::Model) -> serde_json::Value {
+    let evaluated = generator::eval::evaluate(model).expect("the model evaluates");
+    let t = 1.3;
+    let kane = evaluated.formulation(seam::FormulationKind::Kane).expect("the model has Kane's form");
+    // SplitMix64: the same draws on every machine.
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut draw = || {
+        seed = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = seed;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    // Each parameter moved off the file's value by up to a quarter (a zero one, such as scene
+    // 1's motor torque, drawn in [0.1, 0.5)), so that no term hides behind a round value.
+    let params: Vec<f64> = evaluated.default_params.iter().map(|&p| if p == 0.0 { 0.3 + 0.2 * draw() } else { p * (1.0 + 0.25 * draw()) }).collect();
+    let params = &params;
+    let mut state: Vec<f64> = (0..kane.states()).map(|_| draw()).collect();
+    if let Some(w) = kane.layout.work_index() {
+        state[w] = 0.0;
+    }
+    let n = evaluated.coordinates.len();
+    let g_i = vec![0.0; evaluated.ignorable.len()];
+    let (mut q, mut qdot) = (vec![0.0; n], vec![0.0; n]);
+    kane.velocities(t, &state, params, &g_i, &mut q, &mut qdot).expect("Kane's velocities at the point");
+    let lagrange = evaluated.formulation(seam::FormulationKind::Lagrange).expect("the model has Lagrange's form");
+    assert!(lagrange.layout.holds_every_rate(n), "Lagrange's state is [q; q'; W?]");
+    let (mut x, mut g) = (vec![0.0; lagrange.states()], vec![0.0; evaluated.ignorable.len()]);
+    lagrange.initial_state(t, &q, &qdot, params, &mut x, &mut g).expect("Lagrange's state at the point");
+    let mut dx = vec![0.0; x.len()];
+    lagrange.rhs(t, &x, params, &g, &mut dx).expect("Lagrange's right-hand side at the point");
+    let named = |values: &[f64]| -> serde_json::Map<String, serde_json::Value> {
+        evaluated.coordinates.iter().zip(values).map(|(name, v)| (name.clone(), serde_json::json!(v))).collect()
+    };
+    serde_json::json!({
+        "model": model.name,
+        "t": t,
+        "params": evaluated.parameter_names.iter().zip(params).map(|(name, v)| (name.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
+        "q": named(&q),
+        "qdot": named(&qdot),
+        "qddot": named(&dx[n..2 * n]),
+    })
 }
 
 /// Writes through a temporary file in the same directory, renamed over the target.
@@ -441,13 +554,16 @@ struct Measured<'a> {
     inspects: &'a [(&'a str, f64, f64)],
     /// Per scene: SymPy's derivation CPU seconds and our generation's CPU milliseconds.
     against_sympy: &'a [(f64, SceneCpu)],
+    /// Per model SymPy derived: the largest difference of its `q''` from ours at a random state,
+    /// over the largest `|q''|` ([`check_sympy`]).
+    sympy_checks: &'a [(String, f64)],
     /// The planar chain of 20 rods: median CPU seconds and largest peak megabytes of
     /// [`PLANAR_GOAL_RUNS`] fresh runs.
     planar_goal: Option<(f64, f64)>,
 }
 
 fn goals(m: &Measured) -> String {
-    let Measured { records, peers, scenes, scene_cpu, inspects, against_sympy, planar_goal } = *m;
+    let Measured { records, peers, scenes, scene_cpu, inspects, against_sympy, planar_goal, .. } = *m;
     let find = |kind: &str, n: usize| records.iter().find(|r| r.model == kind && r.n == n);
     let total = |r: &Record| (r.derive_ms + r.emit_ms) / 1e3;
     let verdict = |ok: bool, reason: &str| if ok { "met".to_string() } else { format!("missed: {reason}") };
@@ -611,6 +727,15 @@ fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], c
         pendulum, floating, planar
     );
     md += &goals(measured);
+    if !measured.sympy_checks.is_empty() {
+        let checks: Vec<String> = measured.sympy_checks.iter().map(|(model, error)| format!("{model} {error:.1e}")).collect();
+        md += &format!(
+            "SymPy's models (`docs/scaling/sympy_kane.py`) derive the same equations as ours, checked in this run before their times are compared: \
+             the accelerations `q''` at a random state consistent with the constraints, every parameter moved off its value, differ from ours by at most \
+             (relative to the largest `|q''|`): {}.\n\n",
+            checks.join(", ")
+        );
+    }
     let title = |k: &str| match k {
         "pendulum" => "The n-link pendulum on a cart (s = 1)",
         "floating" => "The spatial chain on a floating base (s = 3)",
