@@ -7,7 +7,11 @@
 //! ```sh
 //! cargo bench -p generator --bench pinocchio                 # every model, 15 rounds
 //! cargo bench -p generator --bench pinocchio -- --rounds 5 --out /tmp/pin.json
+//! cargo bench -p generator --bench pinocchio -- --check      # only that the models agree
 //! ```
+//!
+//! Before a model is timed, its Pinocchio twin is checked to be the same system: ABA's
+//! accelerations at a random state against ours ([`check_against_aba`]), the last column.
 //!
 //! Outside CI: it installs the `pin` wheel (Pinocchio's headers and library) and Eigen's
 //! headers (`cmeel-eigen`) into a virtual environment under `target/peers/`, and builds
@@ -126,14 +130,97 @@ fn aba_ns(exe: &Path, (model, n): (&str, usize)) -> (f64, usize) {
     (field("aba ").parse().expect("ns"), field("dof ").parse().expect("dof"))
 }
 
+/// Pinocchio's model of `case` checked against ours: a state of our model at a time away from 0
+/// (Kane's quasi-velocities drawn from a fixed sequence in `[-1, 1)`, mapped to the rates by
+/// Kane's `velocities`), the joints' applied forces read from `work_rate` (the generalized force
+/// of a coordinate is the power at its unit rate), ABA's accelerations there (`aba MODEL N
+/// accel`) against ours. Returns the largest difference over the largest acceleration; panics
+/// beyond 1e-9, since a ratio against another system would say nothing. Pinocchio's models hold
+/// the model files' parameter values, so ours are used as they are.
+///
+/// A free-flyer base (ZYX angles, then the joints, then `X, Y, Z`; Kane's speeds the base's
+/// body-frame angular velocity, the joint rates, the translation rates) is compared on Kane's
+/// `u'`; the pendulum on a cart (absolute angles, revolute joints relative) on Lagrange's `q''`
+/// turned into the joints' relative accelerations.
+fn check_against_aba(aba: &Path, case: &Case) -> f64 {
+    let evaluated = generator::eval::evaluate(&case.model).expect("the model evaluates");
+    let (t, params) = (1.3, &evaluated.default_params);
+    let n = evaluated.coordinates.len();
+    let kane = evaluated.formulation(seam::FormulationKind::Kane).expect("Kane's form");
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut draw = || {
+        // SplitMix64: the same draws on every machine.
+        seed = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = seed;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let mut state: Vec<f64> = (0..kane.states()).map(|_| draw()).collect();
+    if let Some(w) = kane.layout.work_index() {
+        state[w] = 0.0;
+    }
+    let g_i = vec![0.0; evaluated.ignorable.len()];
+    let (mut q, mut qdot) = (vec![0.0; n], vec![0.0; n]);
+    kane.velocities(t, &state, params, &g_i, &mut q, &mut qdot).expect("Kane's velocities");
+    // The generalized force of each coordinate: the power at its unit rate.
+    let force = |k: usize| {
+        let mut unit = vec![0.0; n];
+        unit[k] = 1.0;
+        let mut power = [0.0];
+        evaluated.work_rate(t, &q, &unit, params, &mut power).expect("the work rate");
+        power[0]
+    };
+    let floating = evaluated.coordinates[..3] == ["psi", "theta", "phi"];
+    let (input, ours): (Vec<f64>, Vec<f64>) = if floating {
+        let joints = n - 6;
+        let mut dstate = vec![0.0; state.len()];
+        kane.rhs(t, &state, params, &g_i, &mut dstate).expect("Kane's right-hand side");
+        let u = &state[n..2 * n];
+        let du = &dstate[n..2 * n];
+        assert!((0..3).chain(n - 3..n).all(|k| force(k) == 0.0), "{}: forces on the base", case.label);
+        let input = [&q[n - 3..], &q[..3], &q[3..3 + joints], &u[n - 3..], &u[..3], &u[3..3 + joints]].concat();
+        let tau: Vec<f64> = (3..3 + joints).map(force).collect();
+        ([input, tau].concat(), [&du[n - 3..], &du[..3], &du[3..3 + joints]].concat())
+    } else {
+        // Pinocchio's joints turn relative to the previous link: q1, q2 - q1, ...
+        let relative = |x: &[f64]| -> Vec<f64> { (0..n).map(|k| if k < 2 { x[k] } else { x[k] - x[k - 1] }).collect() };
+        let lagrange = evaluated.formulation(seam::FormulationKind::Lagrange).expect("Lagrange's form");
+        let (mut x, mut g) = (vec![0.0; lagrange.states()], vec![0.0; evaluated.ignorable.len()]);
+        lagrange.initial_state(t, &q, &qdot, params, &mut x, &mut g).expect("Lagrange's state");
+        let mut dx = vec![0.0; x.len()];
+        lagrange.rhs(t, &x, params, &g, &mut dx).expect("Lagrange's right-hand side");
+        assert!((0..n).all(|k| force(k) == 0.0), "{}: no applied forces", case.label);
+        ([relative(&q), relative(&qdot), vec![0.0; n]].concat(), relative(&dx[n..2 * n]))
+    };
+    let mut child = Command::new(aba)
+        .args([case.aba.0, &case.aba.1.to_string(), "accel"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("aba runs");
+    let text: String = input.iter().map(|v| format!("{v:e}\n")).collect();
+    std::io::Write::write_all(&mut child.stdin.take().expect("stdin"), text.as_bytes()).expect("the state is written");
+    let out = child.wait_with_output().expect("aba runs");
+    assert!(out.status.success(), "aba {} accel failed", case.label);
+    let theirs: Vec<f64> = String::from_utf8_lossy(&out.stdout).split_whitespace().map(|v| v.parse().expect("a number")).collect();
+    assert_eq!(theirs.len(), ours.len(), "{}: ABA's accelerations", case.label);
+    let scale = ours.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let error = ours.iter().zip(&theirs).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
+    assert!(error <= 1e-9, "{}: Pinocchio's model is not ours: accelerations {theirs:?} against {ours:?}", case.label);
+    error
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut rounds = 15;
     let mut out = root.join("docs/benchmarks/pinocchio.json");
+    let mut check_only = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
+            "--check" => check_only = true,
             "--rounds" => rounds = it.next().and_then(|s| s.parse().ok()).expect("--rounds needs a number"),
             "--out" => out = PathBuf::from(it.next().expect("--out needs a file")),
             other => panic!("unknown option `{other}`"),
@@ -142,10 +229,18 @@ fn main() {
     let peers = root.join("target/peers");
     std::fs::create_dir_all(&peers).expect("target/peers");
     let aba = build_aba(&peers, &pinocchio_prefix(&peers));
+    if check_only {
+        for case in cases() {
+            println!("{}: ABA's accelerations are ours within {:.1e}", case.label, check_against_aba(&aba, &case));
+        }
+        return;
+    }
     let work = std::env::temp_dir().join(format!("multibody-pinocchio-{}", std::process::id()));
     let mut rows = Vec::new();
     for case in cases() {
         eprintln!("pinocchio: {} ...", case.label);
+        let checked = check_against_aba(&aba, &case);
+        eprintln!("pinocchio: {}: ABA's accelerations are ours within {checked:.1e}", case.label);
         let generated = generate(&case.model, &Options::from_model(&case.model)).expect("the benchmark models generate");
         let ops = |f: &str| generated.summary.ops(&format!("{f}::rhs")).map(|c| (c.ops.total(), c.solve.total())).expect("the formulation is emitted");
         let dir = work.join(case.aba.0).join(case.aba.1.to_string());
@@ -196,6 +291,7 @@ fn main() {
             format!("{clock:.2}"),
             format!("{:.2}", ours_cycles[3] / (ra + rs) as f64),
             format!("{:.2}", native_cycles[3] / (ra + rs) as f64),
+            format!("{checked:.0e}"),
         ]);
     }
     let _ = std::fs::remove_dir_all(&work);
@@ -216,6 +312,7 @@ fn main() {
         "clock GHz",
         "reduced cycles / op",
         "reduced cycles / op, FMA + native",
+        "accelerations against ours",
     ];
     let file = serde_json::json!({ "command": "cargo bench -p generator --bench pinocchio", "columns": columns, "rows": rows });
     let text = serde_json::to_string_pretty(&file).expect("json") + "\n";

@@ -3,11 +3,20 @@
 // free-flyer joint for a floating base, revolute and prismatic joints for the rest, the same
 // masses, inertias, offsets and gravity as the RON models and `generator::model::examples`.
 //
-//   aba MODEL [N]   MODEL: three_body | satellite_boom | pendulum_on_cart | floating_chain
+//   aba MODEL [N]         MODEL: three_body | satellite_boom | pendulum_on_cart | floating_chain
+//   aba MODEL N accel     reads a state from stdin, prints ABA's accelerations
 //
 // Prints `aba NS`: the best, over 7 rounds, of the mean time of 200 calls at one state (the
 // same rounds and calls as the timing program of our modules). Built by the benchmark with
 // `g++ -O3 -march=native` against the headers and library of the `pin` wheel.
+//
+// `accel` checks that the models are the generator's: the benchmark writes a state in the
+// generator's coordinates and gets the accelerations back in them. On a free-flyer base the
+// input is the position X, Y, Z, the ZYX angles psi, theta, phi (R = Rz Ry Rx), the joint
+// angles; then the world translation rates, the body-frame angular velocity, the joint rates;
+// then the joints' torques. The output is the world translation accelerations, the body-frame
+// angular acceleration, the joint accelerations. Otherwise (the pendulum) the input is
+// Pinocchio's q, v and tau and the output its ddq.
 
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/algorithm/aba.hpp>
@@ -21,8 +30,10 @@
 using namespace pinocchio;
 using Eigen::Vector3d;
 
+// The inertia about the centre of mass; products of inertia as the models write them (the
+// paper's Eq. 75), so the tensor holds them negated.
 static Inertia body(double mass, const Vector3d & com, double ixx, double iyy, double izz, double ixy = 0, double ixz = 0, double iyz = 0) {
-  Symmetric3 inertia(ixx, ixy, iyy, ixz, iyz, izz);
+  Symmetric3 inertia(ixx, -ixy, iyy, -ixz, -iyz, izz);
   return Inertia(mass, com, inertia);
 }
 
@@ -86,6 +97,47 @@ static Model floating_chain(int n) {
   return m;
 }
 
+// The `accel` mode (above): reads the state, runs ABA once, prints the accelerations.
+static int accelerations(const Model & model, Data & data) {
+  bool floating = model.joints[1].shortname() == "JointModelFreeFlyer";
+  int joints = floating ? model.nv - 6 : model.nv;
+  auto read = [](int count) {
+    Eigen::VectorXd x(count);
+    for (int i = 0; i < count; ++i)
+      if (std::scanf("%lf", &x[i]) != 1) std::exit(3);
+    return x;
+  };
+  Eigen::VectorXd q(model.nq), v(model.nv), tau = Eigen::VectorXd::Zero(model.nv);
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  if (floating) {
+    Eigen::VectorXd position = read(6);
+    rotation = (Eigen::AngleAxisd(position[3], Vector3d::UnitZ()) * Eigen::AngleAxisd(position[4], Vector3d::UnitY()) *
+                Eigen::AngleAxisd(position[5], Vector3d::UnitX())).toRotationMatrix();
+    Eigen::Quaterniond turn(rotation);
+    q.head<3>() = position.head<3>();
+    q.segment<4>(3) = turn.coeffs();
+    q.tail(joints) = read(joints);
+    Eigen::VectorXd rates = read(6);
+    v.head<3>() = rotation.transpose() * rates.head<3>();
+    v.segment<3>(3) = rates.tail<3>();
+    v.tail(joints) = read(joints);
+  } else {
+    q = read(model.nq);
+    v = read(model.nv);
+  }
+  tau.tail(joints) = read(joints);
+  aba(model, data, q, v, tau);
+  Eigen::VectorXd out = data.ddq;
+  if (floating) {
+    // The free flyer's ddq is the derivative of its body-frame velocity: the world
+    // translation acceleration is R (a + omega x v).
+    Vector3d linear = v.head<3>(), angular = v.segment<3>(3);
+    out.head<3>() = rotation * (data.ddq.head<3>() + angular.cross(linear));
+  }
+  for (int i = 0; i < model.nv; ++i) std::printf("%.17g\n", out[i]);
+  return 0;
+}
+
 int main(int argc, char ** argv) {
   if (argc < 2) {
     std::fprintf(stderr, "usage: aba MODEL [N]\n");
@@ -103,6 +155,7 @@ int main(int argc, char ** argv) {
     return 2;
   }
   Data data(model);
+  if (argc > 3 && std::string(argv[3]) == "accel") return accelerations(model, data);
   // A generic state: a random configuration and velocity from a fixed seed, no torques.
   std::srand(1);
   Eigen::VectorXd q = randomConfiguration(model, -Eigen::VectorXd::Ones(model.nq), Eigen::VectorXd::Ones(model.nq));
