@@ -39,6 +39,22 @@ pub enum Instr {
     Powf(u32, u32),
 }
 
+impl Instr {
+    /// The same instruction reading `f(r)` for each operand register `r`.
+    fn map_operands(self, f: impl Fn(u32) -> u32) -> Instr {
+        match self {
+            Instr::Add(a, b) => Instr::Add(f(a), f(b)),
+            Instr::Sub(a, b) => Instr::Sub(f(a), f(b)),
+            Instr::Mul(a, b) => Instr::Mul(f(a), f(b)),
+            Instr::Div(a, b) => Instr::Div(f(a), f(b)),
+            Instr::Neg(a) => Instr::Neg(f(a)),
+            Instr::Call(u, a) => Instr::Call(u, f(a)),
+            Instr::Powi(a, n) => Instr::Powi(f(a), n),
+            Instr::Powf(a, b) => Instr::Powf(f(a), f(b)),
+        }
+    }
+}
+
 /// The `f64` methods emitted code calls with one argument.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Unary {
@@ -156,6 +172,48 @@ impl Tape {
         let mut c = Compiler { slots: &slots, tape: Tape::default(), names: HashMap::new(), constants: HashMap::new() };
         let outs = write(&mut TapeWriter(&mut c));
         c.tape.outputs = outs;
+        c.finish()
+    }
+
+    /// This tape, then `next` reading its input `k` from this tape's output `wiring[k]`: one
+    /// tape with the same inputs, whose outputs are this one's and then `next`'s. The same
+    /// instructions in the same order, so the same numbers as running the two one after the
+    /// other; one call instead of two (a right-hand side and its `L D L^T` solve).
+    ///
+    /// ```
+    /// use generator::emit::tape::{Instr, Tape};
+    /// let sum = Tape::write(|w| vec![w.instr(Instr::Add(w.input(0), w.input(1))), w.input(1)]);
+    /// let half = Tape::write(|w| {
+    ///     let two = w.constant(2.0);
+    ///     vec![w.instr(Instr::Div(w.input(0), two))]
+    /// });
+    /// let both = sum.followed_by(&half, &[0]);
+    /// let mut out = [0.0; 3];
+    /// both.eval(&[3.0, 4.0], &mut out);
+    /// assert_eq!(out, [7.0, 4.0, 3.5]);
+    /// ```
+    ///
+    /// # Panics
+    ///
+    /// Where `wiring` does not give each of `next`'s inputs one of this tape's outputs.
+    pub fn followed_by(&self, next: &Tape, wiring: &[usize]) -> Tape {
+        assert!(wiring.len() >= next.inputs && wiring.iter().all(|&k| k < self.outputs.len()), "each input of the next tape is an output of this one");
+        let slots = Slots::new(&[]);
+        let mut c = Compiler { slots: &slots, tape: Tape::default(), names: HashMap::new(), constants: HashMap::new() };
+        // Each finished register of `tape` as a register of the compiler (tagged until
+        // `finish`), given what its inputs are.
+        let append = |c: &mut Compiler, tape: &Tape, input: &dyn Fn(usize) -> u32| -> Vec<u32> {
+            let mut regs: Vec<u32> = (0..tape.inputs).map(input).collect();
+            regs.extend(tape.constants.iter().map(|&v| c.constant(v)));
+            for ins in &tape.instrs {
+                let r = c.push(ins.map_operands(|r| regs[r as usize]));
+                regs.push(r);
+            }
+            tape.outputs.iter().map(|&o| regs[o as usize]).collect()
+        };
+        let first = append(&mut c, self, &|k| k as u32);
+        let second = append(&mut c, next, &|k| first[wiring[k]]);
+        c.tape.outputs = [first, second].concat();
         c.finish()
     }
 
@@ -408,20 +466,75 @@ impl Compiler<'_> {
             }
         };
         for ins in &mut tape.instrs {
-            *ins = match *ins {
-                Instr::Add(a, b) => Instr::Add(reg(a), reg(b)),
-                Instr::Sub(a, b) => Instr::Sub(reg(a), reg(b)),
-                Instr::Mul(a, b) => Instr::Mul(reg(a), reg(b)),
-                Instr::Div(a, b) => Instr::Div(reg(a), reg(b)),
-                Instr::Neg(a) => Instr::Neg(reg(a)),
-                Instr::Call(f, a) => Instr::Call(f, reg(a)),
-                Instr::Powi(a, n) => Instr::Powi(reg(a), n),
-                Instr::Powf(a, b) => Instr::Powf(reg(a), reg(b)),
-            };
+            *ins = ins.map_operands(reg);
         }
         for o in &mut tape.outputs {
             *o = reg(*o);
         }
         tape
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tape of `length` instructions over `inputs` inputs drawn by `pick`, with constants
+    /// (some shared with other tapes), and outputs that are instructions, inputs and constants.
+    fn tape(inputs: usize, length: usize, pick: &mut impl FnMut(usize) -> usize) -> Tape {
+        Tape::write(|w| {
+            let mut regs: Vec<u32> = (0..inputs).map(|k| w.input(k)).collect();
+            regs.push(w.constant(0.5));
+            regs.push(w.constant(3.0 + pick(4) as f64));
+            for k in 0..length {
+                let (a, b) = (regs[pick(regs.len())], regs[pick(regs.len())]);
+                let ins = match k % 5 {
+                    0 => Instr::Add(a, b),
+                    1 => Instr::Sub(a, b),
+                    2 => Instr::Mul(a, b),
+                    3 => Instr::Call(Unary::Sin, a),
+                    _ => Instr::Div(a, b),
+                };
+                regs.push(w.instr(ins));
+            }
+            let last = regs.len() - 1;
+            vec![regs[last], w.input(inputs - 1), regs[inputs], regs[last - 1], regs[last - 2]]
+        })
+    }
+
+    /// One tape, then the next on its outputs: the joined tape gives the same bits as the two
+    /// run one after the other, for any wiring, and keeps the first tape's inputs.
+    #[test]
+    fn a_joined_tape_computes_what_its_two_tapes_compute_in_turn() {
+        let mut seed = 7u64;
+        let mut pick = |n: usize| {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 33) as usize) % n
+        };
+        for round in 0..50 {
+            let first = tape(3 + round % 4, 20 + round, &mut pick);
+            let next = tape(2 + round % 3, 10 + round % 7, &mut pick);
+            let wiring: Vec<usize> = (0..5).map(|_| pick(first.outputs())).collect();
+            let joined = first.followed_by(&next, &wiring);
+            assert_eq!((joined.inputs, joined.outputs()), (first.inputs, first.outputs() + next.outputs()));
+            assert_eq!(joined.instructions(), first.instructions() + next.instructions());
+            let inputs: Vec<f64> = (0..first.inputs).map(|k| 0.3 + k as f64 * 0.7 - round as f64 * 0.01).collect();
+            let mut out = vec![0.0; first.outputs()];
+            first.eval(&inputs, &mut out);
+            let between: Vec<f64> = wiring.iter().map(|&k| out[k]).collect();
+            let mut then = vec![0.0; next.outputs()];
+            next.eval(&between, &mut then);
+            let mut both = vec![0.0; joined.outputs()];
+            joined.eval(&inputs, &mut both);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&both), bits(&[out, then].concat()), "round {round}");
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "each input of the next tape")]
+    fn a_joined_tape_needs_every_input_wired() {
+        let sum = Tape::write(|w| vec![w.instr(Instr::Add(w.input(0), w.input(1)))]);
+        sum.followed_by(&sum, &[0]);
     }
 }

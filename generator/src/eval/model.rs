@@ -41,8 +41,13 @@ pub struct EvaluatedForm {
     singular_margin: Box<dyn Kernel>,
     /// `matrix`'s own tape where `rhs` assembles none (the articulated-body recursion).
     matrix: Option<Box<dyn Kernel>>,
-    /// The `L D L^T` solve of `rhs`'s matrix as a kernel ([`LdlPlan::tape`]) where the module
-    /// unrolls it (`solve_ldl`, [`Solve::sparse`]); a dense large one is [`solve_spd`].
+    /// `rhs` ends with the `L D L^T` solve of its matrix ([`LdlPlan::tape`], joined by
+    /// [`Tape::followed_by`]: one call) where the module unrolls it (`solve_ldl`,
+    /// [`Solve::sparse`]): its last outputs are the solution and the pivots. A dense large solve
+    /// is [`solve_spd`].
+    solves_in_rhs: bool,
+    /// The same solve as a kernel of its own, for `rhs_baumgarte`, whose stabilization changes
+    /// the forcing between the assembly and the solve.
     ldl: Option<Box<dyn Kernel>>,
     /// The exact Jacobians' tapes, when the module has them.
     jacobian: Option<Box<dyn Kernel>>,
@@ -102,10 +107,27 @@ impl Evaluated {
         let d = program.description;
         let m = d.coordinates.len();
         let params = d.parameter_names.len();
-        // Every tape compiled at once, side by side on the machine's threads: the solves' plans
-        // by the names `FORMULATION::ldl`.
+        // A right-hand side whose module unrolls its solve runs it in the same call: the plan's
+        // tape reads the matrix and the forcing from the rhs tape's outputs, `[q'; matrix;
+        // forcing; ...]`. Where the state is stabilized (Baumgarte), the plan keeps a tape of its
+        // own too, named `FORMULATION::ldl`.
+        let mut solves_in_rhs = std::collections::HashSet::new();
+        let mut solves_alone = Vec::new();
+        for shape in &program.forms {
+            let name = shape.kind.name();
+            if let (Some(plan), Some(tape)) = (shape.solve.sparse(), program.tapes.get(&format!("{name}::rhs"))) {
+                let (nq, n) = (shape.kept.len(), shape.matrix_size);
+                let joined = tape.followed_by(&plan.tape(), &(nq..nq + n * n + n).collect::<Vec<_>>());
+                program.tapes.insert(format!("{name}::rhs"), joined);
+                solves_in_rhs.insert(shape.kind);
+                if shape.stabilization.is_some() {
+                    solves_alone.push((format!("{name}::ldl"), plan.tape()));
+                }
+            }
+        }
+        // Every tape compiled at once, side by side on the machine's threads.
         let mut named: Vec<(String, Tape)> = program.tapes.drain().collect();
-        named.extend(program.forms.iter().filter_map(|shape| shape.solve.sparse().map(|plan| (format!("{}::ldl", shape.kind.name()), plan.tape()))));
+        named.extend(solves_alone);
         named.sort_by(|a, b| a.0.cmp(&b.0));
         let (names, tapes): (Vec<String>, Vec<Tape>) = named.into_iter().unzip();
         let threads = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
@@ -132,6 +154,7 @@ impl Evaluated {
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
                     matrix: take(&format!("{name}::matrix"), tapes),
+                    solves_in_rhs: solves_in_rhs.contains(&shape.kind),
                     ldl: take(&format!("{name}::ldl"), tapes),
                     jacobian: take(&format!("{name}::jacobian"), tapes),
                     parameter_jacobian: take(&format!("{name}::parameter_jacobian"), tapes),
@@ -383,6 +406,8 @@ impl EvaluatedForm {
         let s = &self.shape;
         let (nq, n) = (s.kept.len(), s.matrix_size);
         run(&*self.rhs, t, params, g_i, state, |o| {
+            // The solution and the pivots of the solve the rhs tape ends with.
+            let (o, solved_in_rhs) = o.split_at(o.len() - if self.solves_in_rhs { 2 * n } else { 0 });
             let mut at = 0;
             let mut take = |k: usize| {
                 let out = &o[at..at + k];
@@ -405,6 +430,7 @@ impl EvaluatedForm {
                 };
                 force.clear();
                 force.extend_from_slice(force_out);
+                let stabilized = s.stabilization.is_some() && stabilize.is_some();
                 if let (Some(r), Some((alpha, beta))) = (s.stabilization, stabilize) {
                     let (residuals, positions) = (take(r), take(r));
                     for i in 0..r {
@@ -420,6 +446,10 @@ impl EvaluatedForm {
                 let solved = match &s.solve {
                     // As the module: its unrolled `solve_ldl` (`Solve::sparse`), else the looped
                     // `solve_spd`.
+                    Solve::Ldl(plan) if self.solves_in_rhs && !stabilized => {
+                        let (x, pivots) = solved_in_rhs.split_at(n);
+                        plan.checked(matrix_out, pivots).map(|()| force.copy_from_slice(x))
+                    }
                     Solve::Ldl(plan) => match &self.ldl {
                         Some(kernel) => solve_ldl(plan, &**kernel, matrix_out, force),
                         None => COLUMN.with(|scratch| solve_spd(n, copy(), force, &mut scratch.borrow_mut())),
