@@ -32,6 +32,8 @@
 
 #[path = "support/timing.rs"]
 mod timing;
+#[path = "support/point.rs"]
+mod point;
 
 use generator::emit::{Options, generate};
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
@@ -147,22 +149,8 @@ fn check_against_aba(aba: &Path, case: &Case) -> f64 {
     let (t, params) = (1.3, &evaluated.default_params);
     let n = evaluated.coordinates.len();
     let kane = evaluated.formulation(seam::FormulationKind::Kane).expect("Kane's form");
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut draw = || {
-        // SplitMix64: the same draws on every machine.
-        seed = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = seed;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
-    let mut state: Vec<f64> = (0..kane.states()).map(|_| draw()).collect();
-    if let Some(w) = kane.layout.work_index() {
-        state[w] = 0.0;
-    }
+    let (state, q, qdot) = point::kane_state(&evaluated, t, params, &mut point::Draws::new());
     let g_i = vec![0.0; evaluated.ignorable.len()];
-    let (mut q, mut qdot) = (vec![0.0; n], vec![0.0; n]);
-    kane.velocities(t, &state, params, &g_i, &mut q, &mut qdot).expect("Kane's velocities");
     // The generalized force of each coordinate: the power at its unit rate.
     let force = |k: usize| {
         let mut unit = vec![0.0; n];
@@ -185,13 +173,9 @@ fn check_against_aba(aba: &Path, case: &Case) -> f64 {
     } else {
         // Pinocchio's joints turn relative to the previous link: q1, q2 - q1, ...
         let relative = |x: &[f64]| -> Vec<f64> { (0..n).map(|k| if k < 2 { x[k] } else { x[k] - x[k - 1] }).collect() };
-        let lagrange = evaluated.formulation(seam::FormulationKind::Lagrange).expect("Lagrange's form");
-        let (mut x, mut g) = (vec![0.0; lagrange.states()], vec![0.0; evaluated.ignorable.len()]);
-        lagrange.initial_state(t, &q, &qdot, params, &mut x, &mut g).expect("Lagrange's state");
-        let mut dx = vec![0.0; x.len()];
-        lagrange.rhs(t, &x, params, &g, &mut dx).expect("Lagrange's right-hand side");
+        let qddot = point::lagrange_accelerations(&evaluated, t, params, &q, &qdot);
         assert!((0..n).all(|k| force(k) == 0.0), "{}: no applied forces", case.label);
-        ([relative(&q), relative(&qdot), vec![0.0; n]].concat(), relative(&dx[n..2 * n]))
+        ([relative(&q), relative(&qdot), vec![0.0; n]].concat(), relative(&qddot))
     };
     let mut child = Command::new(aba)
         .args([case.aba.0, &case.aba.1.to_string(), "accel"])

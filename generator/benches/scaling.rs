@@ -28,6 +28,8 @@ use std::time::Instant;
 
 #[path = "support/timing.rs"]
 mod timing;
+#[path = "support/point.rs"]
+mod point;
 use timing::FORMS;
 
 /// Fresh processes per scene; the best is reported.
@@ -470,34 +472,13 @@ fn main() {
 fn model_point(model: &generator::model::Model) -> serde_json::Value {
     let evaluated = generator::eval::evaluate(model).expect("the model evaluates");
     let t = 1.3;
-    let kane = evaluated.formulation(seam::FormulationKind::Kane).expect("the model has Kane's form");
-    // SplitMix64: the same draws on every machine.
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut draw = || {
-        seed = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = seed;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut draws = point::Draws::new();
     // Each parameter moved off the file's value by up to a quarter (a zero one, such as scene
     // 1's motor torque, drawn in [0.1, 0.5)), so that no term hides behind a round value.
-    let params: Vec<f64> = evaluated.default_params.iter().map(|&p| if p == 0.0 { 0.3 + 0.2 * draw() } else { p * (1.0 + 0.25 * draw()) }).collect();
-    let params = &params;
-    let mut state: Vec<f64> = (0..kane.states()).map(|_| draw()).collect();
-    if let Some(w) = kane.layout.work_index() {
-        state[w] = 0.0;
-    }
-    let n = evaluated.coordinates.len();
-    let g_i = vec![0.0; evaluated.ignorable.len()];
-    let (mut q, mut qdot) = (vec![0.0; n], vec![0.0; n]);
-    kane.velocities(t, &state, params, &g_i, &mut q, &mut qdot).expect("Kane's velocities at the point");
-    let lagrange = evaluated.formulation(seam::FormulationKind::Lagrange).expect("the model has Lagrange's form");
-    assert!(lagrange.layout.holds_every_rate(n), "Lagrange's state is [q; q'; W?]");
-    let (mut x, mut g) = (vec![0.0; lagrange.states()], vec![0.0; evaluated.ignorable.len()]);
-    lagrange.initial_state(t, &q, &qdot, params, &mut x, &mut g).expect("Lagrange's state at the point");
-    let mut dx = vec![0.0; x.len()];
-    lagrange.rhs(t, &x, params, &g, &mut dx).expect("Lagrange's right-hand side at the point");
+    let params: Vec<f64> =
+        evaluated.default_params.iter().map(|&p| if p == 0.0 { 0.3 + 0.2 * draws.next() } else { p * (1.0 + 0.25 * draws.next()) }).collect();
+    let (_, q, qdot) = point::kane_state(&evaluated, t, &params, &mut draws);
+    let qddot = point::lagrange_accelerations(&evaluated, t, &params, &q, &qdot);
     let named = |values: &[f64]| -> serde_json::Map<String, serde_json::Value> {
         evaluated.coordinates.iter().zip(values).map(|(name, v)| (name.clone(), serde_json::json!(v))).collect()
     };
@@ -507,7 +488,7 @@ fn model_point(model: &generator::model::Model) -> serde_json::Value {
         "params": evaluated.parameter_names.iter().zip(params).map(|(name, v)| (name.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
         "q": named(&q),
         "qdot": named(&qdot),
-        "qddot": named(&dx[n..2 * n]),
+        "qddot": named(&qddot),
     })
 }
 
