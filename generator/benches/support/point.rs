@@ -2,22 +2,19 @@
 //! benchmark's SymPy checks, the Pinocchio benchmark's ABA checks): the same draws on every
 //! machine.
 
+use generator::symbolic::zero::SplitMix;
 use seam::{FormulationKind, Model};
 
 /// Numbers in `[-1, 1)` from SplitMix64 with a fixed seed.
-pub struct Draws(u64);
+pub struct Draws(SplitMix);
 
 impl Draws {
     pub fn new() -> Draws {
-        Draws(0x9e37_79b9_7f4a_7c15)
+        Draws(SplitMix(0x9e37_79b9_7f4a_7c15))
     }
 
     pub fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        self.0.uniform(-1.0, 1.0)
     }
 }
 
