@@ -103,15 +103,7 @@ def check(n):
     more than CHECK_TOLERANCE (a ratio against another system would say nothing)."""
     import symengine as se
 
-    point = json.loads(
-        subprocess.run(
-            ["cargo", "bench", "-q", "-p", "generator", "--bench", "scaling", "--", "--point", "pendulum", str(n)],
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout
-    )
+    point = json.loads(cargo_output("bench", "-q", "-p", "generator", "--bench", "scaling", "--", "--point", "pendulum", str(n)))
     mass, forcing, (q, qd, _, _, _) = mass_and_forcing(n)
     values = {se.Symbol(name): value for name, value in point["params"].items()}
     values.update({x: point["q"][str(x)] for x in q})
@@ -141,6 +133,11 @@ def check(n):
 # `check` fails beyond this difference of q'' (relative to the largest |q''|): both sides in
 # double precision, so a different model differs in the leading digits, round-off in the last.
 CHECK_TOLERANCE = 1e-9
+
+
+def cargo_output(*args):
+    """What `cargo ARGS...` prints, run in the repository."""
+    return subprocess.run(["cargo", *args], cwd=ROOT, capture_output=True, text=True, check=True).stdout
 
 
 def children_cpu():
@@ -224,13 +221,7 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         for n in sizes:
             model = Path(folder) / f"pendulum_on_cart_{n}.ron"
-            text = subprocess.run(
-                ["cargo", "run", "--release", "-q", "-p", "generator", "--example", "write_model", "--", "pendulum", str(n)],
-                cwd=ROOT,
-                capture_output=True,
-                text=True,
-                check=True,
-            ).stdout
+            text = cargo_output("run", "--release", "-q", "-p", "generator", "--example", "write_model", "--", "pendulum", str(n))
             model.write_text(text)
             mine, same_work, other, starts = [], [], [], []
             for _ in range(args.repeats):
