@@ -41,12 +41,7 @@ pub struct EvaluatedForm {
     singular_margin: Box<dyn Kernel>,
     /// `matrix`'s own tape where `rhs` assembles none (the articulated-body recursion).
     matrix: Option<Box<dyn Kernel>>,
-    /// `rhs` ends with the `L D L^T` solve of its matrix ([`LdlPlan::tape`], joined by
-    /// [`Tape::followed_by`]: one call) where the module unrolls it (`solve_ldl`,
-    /// [`Solve::sparse`]): its last outputs are the solution and the pivots. A dense large solve
-    /// is [`solve_spd`].
-    solves_in_rhs: bool,
-    /// The same solve as a kernel of its own, for `rhs_baumgarte`, whose stabilization changes
+    /// The unrolled solve (`solve_ldl`, [`Solve::sparse`]) as a kernel of its own, for `rhs_baumgarte`, whose stabilization changes
     /// the forcing between the assembly and the solve.
     ldl: Option<Box<dyn Kernel>>,
     /// The exact Jacobians' tapes, when the module has them.
@@ -111,7 +106,6 @@ impl Evaluated {
         // tape reads the matrix and the forcing from the rhs tape's outputs, `[q'; matrix;
         // forcing; ...]`. Where the state is stabilized (Baumgarte), the plan keeps a tape of its
         // own too, named `FORMULATION::ldl`.
-        let mut solves_in_rhs = std::collections::HashSet::new();
         let mut solves_alone = Vec::new();
         for shape in &program.forms {
             let name = shape.kind.name();
@@ -119,7 +113,6 @@ impl Evaluated {
                 let (nq, n) = (shape.kept.len(), shape.matrix_size);
                 let joined = tape.followed_by(&plan.tape(), &(nq..nq + n * n + n).collect::<Vec<_>>());
                 program.tapes.insert(format!("{name}::rhs"), joined);
-                solves_in_rhs.insert(shape.kind);
                 if shape.stabilization.is_some() {
                     solves_alone.push((format!("{name}::ldl"), plan.tape()));
                 }
@@ -154,7 +147,6 @@ impl Evaluated {
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
                     matrix: take(&format!("{name}::matrix"), tapes),
-                    solves_in_rhs: solves_in_rhs.contains(&shape.kind),
                     ldl: take(&format!("{name}::ldl"), tapes),
                     jacobian: take(&format!("{name}::jacobian"), tapes),
                     parameter_jacobian: take(&format!("{name}::parameter_jacobian"), tapes),
@@ -389,6 +381,14 @@ fn lu_solve(n: usize, a: &[f64], pivots: &[usize], b: &mut [f64]) {
 }
 
 impl EvaluatedForm {
+    /// `rhs` ends with the `L D L^T` solve of its matrix ([`LdlPlan::tape`], joined by
+    /// [`Tape::followed_by`] in [`Evaluated::model_with`]: one call) where the module unrolls it
+    /// ([`Solve::sparse`]): its last outputs are the solution and the pivots. A dense large
+    /// solve is [`solve_spd`].
+    fn solves_in_rhs(&self) -> bool {
+        self.shape.solve.sparse().is_some()
+    }
+
     fn states(&self) -> usize {
         self.shape.kept.len() + self.shape.speeds + usize::from(self.shape.work)
     }
@@ -407,7 +407,7 @@ impl EvaluatedForm {
         let (nq, n) = (s.kept.len(), s.matrix_size);
         run(&*self.rhs, t, params, g_i, state, |o| {
             // The solution and the pivots of the solve the rhs tape ends with.
-            let (o, solved_in_rhs) = o.split_at(o.len() - if self.solves_in_rhs { 2 * n } else { 0 });
+            let (o, solved_in_rhs) = o.split_at(o.len() - if self.solves_in_rhs() { 2 * n } else { 0 });
             let mut at = 0;
             let mut take = |k: usize| {
                 let out = &o[at..at + k];
@@ -446,7 +446,7 @@ impl EvaluatedForm {
                 let solved = match &s.solve {
                     // As the module: its unrolled `solve_ldl` (`Solve::sparse`), else the looped
                     // `solve_spd`.
-                    Solve::Ldl(plan) if self.solves_in_rhs && !stabilized => {
+                    Solve::Ldl(plan) if self.solves_in_rhs() && !stabilized => {
                         let (x, pivots) = solved_in_rhs.split_at(n);
                         plan.checked(matrix_out, pivots).map(|()| force.copy_from_slice(x))
                     }
