@@ -105,6 +105,36 @@ pub fn index_of(names: &[String], name: &str, what: &'static str) -> Result<usiz
     names.iter().position(|n| n == name).ok_or_else(|| CliError::UnknownName { what, name: name.to_string(), known: names.join(", ") })
 }
 
+/// Names a command takes beyond `--param`, `--q` and `--qdot`: parameters as inputs, a swept
+/// parameter or rate.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Names<'a> {
+    pub inputs: &'a [String],
+    pub sweep: Option<&'a str>,
+}
+
+/// Every name given on the command line is the model's: coordinates for `--q` and `--qdot`,
+/// parameters for `--input`, a parameter or a coordinate's rate (`x'`) for `--sweep`. Checked
+/// on the parsed model, before anything is derived (a misspelling costs nothing).
+pub fn check_names(model: &generator::model::Model, values: &ValueArgs, more: &Names) -> Result<(), CliError> {
+    let coordinates: Vec<String> = model.coordinates.iter().map(|c| c.name().to_string()).collect();
+    let parameters: Vec<String> = model.parameters.iter().map(|(p, _)| p.name().to_string()).collect();
+    for (name, _) in values.q.iter().chain(&values.qdot) {
+        index_of(&coordinates, name, "coordinate")?;
+    }
+    for name in more.inputs {
+        index_of(&parameters, name, "parameter")?;
+    }
+    if let Some(name) = more.sweep {
+        let rate = name.strip_suffix('\'').filter(|c| coordinates.iter().any(|k| k == c));
+        if rate.is_none() && !parameters.iter().any(|p| p == name) {
+            let known = parameters.iter().cloned().chain(coordinates.iter().map(|c| format!("{c}'"))).collect::<Vec<_>>().join(", ");
+            return Err(CliError::UnknownName { what: "parameter or rate to sweep", name: name.to_string(), known });
+        }
+    }
+    Ok(())
+}
+
 impl RunArgs {
     /// The model's reference run with `--q`, `--qdot`, `--t-end` and `--dt-out` applied (the
     /// model was loaded with `--param`); a model without an `initial`

@@ -6,7 +6,7 @@ use crate::{CliError, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
 use runtime::compare::{Options, compare as compare_runs, table};
-use runtime::linearize::{Operating, Swept, crossings, growth, linearize as linearize_at};
+use runtime::linearize::{Motion, Operating, Swept, crossings, grows, growth, linearize as linearize_at};
 use runtime::sweep::{SweepOptions, csv as sweep_csv, sweep as sweep_runs};
 use runtime::system::Drift;
 use seam::FormulationKind;
@@ -17,7 +17,7 @@ use std::path::PathBuf;
 pub struct CompareArgs {
     /// A model file (`path/to/my_model.ron`) or the name of a built-in model (cart_pendulum,
     /// three_body, satellite_boom, ...).
-    pub model: String,
+    pub model: PathBuf,
     #[command(flatten)]
     pub run: RunArgs,
     /// The time of a run is the median of N runs (wall clock, one thread).
@@ -44,7 +44,7 @@ pub struct CompareArgs {
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct SweepArgs {
     /// A model file or the name of a built-in model.
-    pub model: String,
+    pub model: PathBuf,
     #[command(flatten)]
     pub run: RunArgs,
     /// The directory the results are written to.
@@ -67,7 +67,7 @@ pub struct SweepArgs {
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct LinearizeArgs {
     /// A model file or the name of a built-in model.
-    pub model: String,
+    pub model: PathBuf,
     /// The formulation whose state is linearized.
     #[arg(long, value_enum, default_value = "kane")]
     pub formulation: FormulationArg,
@@ -104,7 +104,7 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     let route = load::Route::of(args.run.values.compiled);
-    let model = crate::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), route)?;
+    let model = crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), route)?;
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -155,7 +155,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
     let jacobians = if stiff { load::Jacobians::Exact { only: None, by_parameters: false } } else { load::Jacobians::Differenced };
-    let model = crate::evaluated(&args.model, &args.run.values.param, jacobians, load::Route::of(args.run.values.compiled))?;
+    let model = crate::evaluated(&args.model, &args.run.values, &Default::default(), jacobians, load::Route::of(args.run.values.compiled))?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -210,12 +210,33 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
     Ok(Operating { q, qdot, params, held })
 }
 
+/// What the eigenvalues at the operating point mean: an equilibrium's say nothing more; at a
+/// steady motion only cyclic entries move; elsewhere `A` holds for an instant.
+fn describe_motion(lin: &runtime::linearize::Linear, states: &[String]) -> String {
+    let name = |i: usize| states.get(i).cloned().unwrap_or_else(|| format!("state {i}"));
+    match lin.motion() {
+        Motion::Equilibrium => "  an equilibrium: x' = 0 there\n".to_string(),
+        Motion::Steady { moving } => format!(
+            "  a steady motion: only cyclic entries move ({}), and nothing depends on them, so these are the eigenvalues of the motion\n",
+            moving.iter().map(|&i| format!("{}' = {:e}", name(i), lin.rates[i])).collect::<Vec<_>>().join(", ")
+        ),
+        Motion::Transient { entry, rate } => format!(
+            "  note: not an equilibrium nor a steady motion: {}' = {rate:e} there (|x'| = {:e}){}. A is the Jacobian of the flow at this instant: its eigenvalues are how fast neighbouring motions separate from this one now, not the stability of the motion (linearize at an equilibrium, or in a formulation whose state holds the motion steady: only cyclic entries moving)\n",
+            name(entry),
+            lin.rates.iter().map(|r| r * r).sum::<f64>().sqrt(),
+            if lin.drifting.contains(&entry) { format!(", and A changes with {} near the point", name(entry)) } else { String::new() }
+        ),
+    }
+}
+
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     // The exact Jacobians of the formulation linearized: A, and B with `--input`, to round-off.
+    let names = crate::args::Names { inputs: &args.input, sweep: args.sweep.as_deref() };
     let model = crate::evaluated(
         &args.model,
-        &args.values.param,
+        &args.values,
+        &names,
         load::Jacobians::Exact { only: Some(args.formulation.0), by_parameters: !args.input.is_empty() },
         load::Route::of(args.values.compiled),
     )?;
@@ -223,13 +244,19 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {
         let lin = linearize_at(&model, kind, &at)?;
+        let pairs: Vec<(f64, f64)> = lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect();
+        let states = model.formulation(kind).map(|f| f.state_names.clone()).unwrap_or_default();
         let mut text = format!(
-            "{} {kind}: A is {n} x {n} ({}), largest nonzero real part {:e}\n",
+            "{} {kind}: A is {n} x {n} ({}), {}\n",
             model.module,
             if lin.exact { "exact Jacobian" } else { "finite differences" },
-            growth(&lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect::<Vec<_>>()),
+            match lin.eigenvalues.len() {
+                0 => "no eigenvalues but the zeros of its cyclic entries".to_string(),
+                _ => format!("largest nonzero real part {:e}{}", growth(&pairs), if grows(&pairs) { "" } else { " (none above round-off)" }),
+            },
             n = lin.a.nrows()
         );
+        text += &describe_motion(&lin, &states);
         for l in &lin.eigenvalues {
             text += &format!("  {:+.12e} {:+.12e}i\n", l.re, l.im);
         }
@@ -250,6 +277,7 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     let k = args.steps as usize;
     let values: Vec<f64> = (0..k).map(|i| a + (b - a) * i as f64 / (k - 1) as f64).collect();
     let rows = runtime::linearize::sweep(&model, kind, &at, swept, &values)?;
+    let transient: Vec<f64> = rows.iter().filter(|r| r.transient).map(|r| r.value).collect();
     let cross = crossings(&model, kind, &at, swept, &rows)?;
     let base = args.out.join(format!("{}_eigenvalues", model.module));
     write_file(&base.with_extension("csv"), runtime::linearize::csv(name, &rows).as_bytes())?;
@@ -259,6 +287,14 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     let mut text = format!("{} {kind}: {} values of {name} from {a} to {b}; written {}.{{csv,json,svg}}\n", model.module, k, files::printable_path(&base));
     for c in &cross {
         text += &format!("  the largest nonzero real part crosses zero at {name} = {c:.12}\n");
+    }
+    if !transient.is_empty() {
+        text += &format!(
+            "  note: at {} of the {k} values ({name} = {:e} to {:e}) the point is neither an equilibrium nor a steady motion in {kind}'s state: their eigenvalues hold for an instant only, and their crossings say nothing of stability (`linearize` at one of them says which entry moves)\n",
+            transient.len(),
+            transient[0],
+            transient[transient.len() - 1]
+        );
     }
     let _ = std::io::stderr().flush();
     print(&text)

@@ -42,7 +42,7 @@ enum Command {
     /// the reduced method's W_NI, X_NI, M_NI, L_NI.
     Inspect {
         /// A model file or the name of a built-in model.
-        model: String,
+        model: std::path::PathBuf,
         /// Print LaTeX instead of text.
         #[arg(long)]
         latex: bool,
@@ -133,10 +133,20 @@ impl From<load::LoadError> for CliError {
     }
 }
 
-/// The model MODEL names with `--param` applied, evaluated by [`load::evaluated`] on `route`;
-/// its warnings and the compiled route's one-time build are told on stderr.
-pub fn evaluated(argument: &str, params: &[(String, f64)], exact: load::Jacobians, route: load::Route) -> Result<seam::Model, CliError> {
-    let loaded = load::evaluated(argument, params, exact, route, &mut |path| {
+/// The model MODEL names with `--param` applied, its names on the command line checked
+/// (`--q`, `--qdot`, and the `more` a command takes) before anything is derived, then
+/// evaluated by [`load::evaluate`] on `route`; its warnings and the compiled route's one-time
+/// build are told on stderr.
+pub fn evaluated(
+    argument: &std::path::Path,
+    values: &args::ValueArgs,
+    more: &args::Names,
+    exact: load::Jacobians,
+    route: load::Route,
+) -> Result<seam::Model, CliError> {
+    let model = load::model(argument)?.with_parameters(&values.param)?;
+    args::check_names(&model, values, more)?;
+    let loaded = load::evaluate(&model, exact, route, &mut |path| {
         eprintln!("compiling the model with rustc into {} (once per model and version)...", files::printable_path(path));
     })?;
     for line in &loaded.warnings {

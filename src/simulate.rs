@@ -15,7 +15,7 @@ use std::time::Instant;
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct SimulateArgs {
     /// A model file (`path/to/my_model.ron`) or the name of a built-in model.
-    pub model: String,
+    pub model: std::path::PathBuf,
     /// The formulation (default: the reduced Volterra method where the model has it).
     #[arg(long, value_enum)]
     pub formulation: Option<FormulationArg>,
@@ -60,7 +60,7 @@ fn series_controller(model: &seam::Model, given: &[(String, PathBuf)]) -> Result
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
-    let model = crate::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
+    let model = crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => model.default_kind(),

@@ -76,7 +76,11 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
         return Err(AnimateError::Shape { rows, got: motion.q.len() / rows.max(1), times: rows, expected: m });
     }
     let poser = Poser::new(model, params)?;
+    let moving = poser.bodies.iter().any(|b| b.moving);
     let mut poses = Vec::with_capacity(rows);
+    // Where a centre of mass moves with the coordinates (a mass sliding on a boom), every
+    // body's centre at every sample.
+    let mut centers = Vec::new();
     for (i, &t) in motion.times.iter().enumerate() {
         let q = &motion.q[i * m..(i + 1) * m];
         if !q.iter().all(|x| x.is_finite()) {
@@ -84,6 +88,9 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
         }
         let frames = poser.frames_at(t, q)?;
         poses.push(frames.iter().map(|p| p.origin.iter().chain(&p.rotation).map(|x| compact(*x)).collect::<Vec<_>>()).collect::<Vec<_>>());
+        if moving {
+            centers.push(poser.centers_at(t, q)?.iter().map(|c| c.map(compact)).collect::<Vec<_>>());
+        }
     }
     let bodies: Vec<serde_json::Value> = poser
         .bodies
@@ -113,6 +120,7 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
         "frames": poser.frame_names,
         "bodies": bodies,
         "poses": poses,
+        "centers": if moving { serde_json::json!(centers) } else { serde_json::Value::Null },
         "up": up,
     });
     // JSON inside a script element: `</` would end it, so it is written `<\/` (the same string).
@@ -168,6 +176,28 @@ mod tests {
         assert!(!html.contains("</script><script>alert(1)"));
         assert!(html.contains(r"<\/script><script>alert(1)<\/script>"));
         assert_eq!(html.matches("</script>").count(), TEMPLATE.matches("</script>").count());
+    }
+
+    /// A centre of mass that moves with a coordinate (scene 3's tip sliding along its boom,
+    /// `l/2 + rho`) is drawn where it is at every sample.
+    #[test]
+    fn a_sliding_mass_is_drawn_where_it_is() {
+        let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/satellite_boom.ron")).unwrap();
+        let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+        let l = params[model.parameters.iter().position(|(p, _)| p.name() == "l").unwrap()];
+        let mut q = vec![0.0; 14];
+        (q[3], q[10]) = (0.5, 1.25);
+        let html = page(&model, &params, &Motion { formulation: "kane", times: &[0.0, 1.0], q: &q }).unwrap();
+        let json = html.split(r#"id="data">"#).nth(1).unwrap().split("</script>").next().unwrap();
+        let data: serde_json::Value = serde_json::from_str(json).unwrap();
+        let tip = data["bodies"].as_array().unwrap().iter().position(|b| b["name"] == "tip").unwrap();
+        for (i, rho) in [0.5, 1.25].into_iter().enumerate() {
+            let x = data["centers"][i][tip][0].as_f64().unwrap();
+            assert!((x - (l / 2.0 + rho)).abs() < 1e-6, "sample {i}: {x}");
+        }
+        // A model whose centres stay put carries none.
+        let (model, params) = cart_pendulum();
+        assert!(!page(&model, &params, &Motion { formulation: "kane", times: &[0.0], q: &[0.0; 3] }).unwrap().contains("\"centers\":["));
     }
 
     /// The wrong shape, no samples or a NaN is refused, naming why.

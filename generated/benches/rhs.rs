@@ -5,7 +5,7 @@
 //! their attitudes in quaternions are timed beside their Euler-angle modules.
 //!
 //! `cargo bench -p generated --bench rhs` writes `docs/benchmarks/rhs.json` (the table of
-//! `docs/benchmarks.md`, checked by `tests/figures.rs`) and prints it.
+//! `docs/benchmarks.md`, checked by `tests/it/figures.rs`) and prints it.
 
 use std::hint::black_box;
 use std::time::Instant;

@@ -2,7 +2,7 @@
 //! `-D warnings` (against the seam crate, its one dependency, built first), best of 3.
 //!
 //! `cargo run --release -p generated --example rustc_times` writes `docs/benchmarks/rustc.json`
-//! (the table of `docs/benchmarks.md`, checked by `tests/figures.rs`) and prints it.
+//! (the table of `docs/benchmarks.md`, checked by `tests/it/figures.rs`) and prints it.
 
 use std::time::Instant;
 

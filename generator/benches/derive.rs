@@ -3,7 +3,7 @@
 //! of 15 runs each.
 //!
 //! `cargo bench -p generator --bench derive` writes `docs/benchmarks/derive.json` (the table of
-//! `docs/benchmarks.md`, checked by `tests/figures.rs`) and prints it.
+//! `docs/benchmarks.md`, checked by `tests/it/figures.rs`) and prints it.
 
 use generator::emit::{Options, generate};
 use std::time::Instant;

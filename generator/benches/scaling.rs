@@ -444,14 +444,14 @@ fn main() {
     std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
     std::fs::write(out.join("scaling/ours.json"), serde_json::to_string_pretty(&records).unwrap()).expect("the records are written");
     if !peers.is_empty() {
-        // SymPy's operation counts (deterministic), for tests/ops_against_sympy.rs.
+        // SymPy's operation counts (deterministic), for tests/it/ops_against_sympy.rs.
         let version = Command::new("python3")
             .args(["-c", "import sympy; print(sympy.__version__)"])
             .output()
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
             .unwrap_or_default();
         let mut json = serde_json::json!({
-            "about": "SymPy's KanesMethod on the scaling benchmark's models: count_ops(cse([M, F])), written by `cargo bench -p generator --bench scaling -- --sympy` (docs/scaling/sympy_kane.py); tests/ops_against_sympy.rs holds our Kane assembly to it",
+            "about": "SymPy's KanesMethod on the scaling benchmark's models: count_ops(cse([M, F])), written by `cargo bench -p generator --bench scaling -- --sympy` (docs/scaling/sympy_kane.py); tests/it/ops_against_sympy.rs holds our Kane assembly to it",
             "sympy": version,
         });
         for (kind, p) in &peers {

@@ -41,7 +41,7 @@ impl From<FormulationArg> for Formulation {
 
 #[derive(Args, Debug)]
 pub struct GenerateArgs {
-    /// The model file (RON).
+    /// The model: a RON file, or the name of a built-in model (`three_body`, ...).
     pub model: Option<PathBuf>,
     /// Write the module to this file (atomically: a temporary file renamed over it) instead of
     /// stdout.
@@ -135,7 +135,7 @@ pub fn print_stdout(text: &str) -> Result<(), Failure> {
 
 /// `inspect MODEL [--latex]`: what is derived, printed.
 pub fn inspect(model: &Path, latex: bool) -> Result<(), Failure> {
-    print_inspection(&crate::model::load(model)?, latex)
+    print_inspection(&crate::model::source(model)?.model()?, latex)
 }
 
 /// What is derived from a loaded model, printed (text, or LaTeX with `latex`).
@@ -153,7 +153,7 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     if let Some(out) = &args.output {
         refuse_overwriting_a_model(&file, out, args.force)?;
     }
-    let model = crate::model::load(&file)?;
+    let model = crate::model::source(&file)?.model()?;
     let mut options = Options::from_model(&model);
     if let Some(list) = &args.formulations {
         let mut f: Vec<Formulation> = list.iter().map(|x| (*x).into()).collect();

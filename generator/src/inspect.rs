@@ -199,7 +199,7 @@ fn section(w: &mut String, title: &str, items: &mut Vec<(String, Expr)>, latex: 
 
 fn latex_failure(f: &ignorable::Failure) -> String {
     match f {
-        ignorable::Failure::InLagrangian { place, derivative } => format!("L depends on it through {place}, derivative ${}$", derivative.to_latex()),
+        ignorable::Failure::InLagrangian { place, derivative, .. } => format!("L depends on it through {place}, derivative ${}$", derivative.to_latex()),
         ignorable::Failure::InConstraint { constraint, entry } => format!("column of a nonzero in `{constraint}`: ${}$", entry.to_latex()),
         ignorable::Failure::Forced { force } => format!("generalized force ${}$", force.to_latex()),
     }

@@ -32,8 +32,12 @@ pub struct BodyValues {
     /// Index into [`Poser::frame_names`].
     pub frame: usize,
     pub mass: f64,
-    /// Centre of mass, in the frame.
+    /// Centre of mass, in the frame (where it moves with the coordinates or time, a boom's
+    /// tip on a sliding joint, its place at the model's initial state; [`Poser::centers_at`]
+    /// gives it at any state).
     pub com: [f64; 3],
+    /// The centre of mass depends on the coordinates or on time.
+    pub moving: bool,
     /// Inertia about the centre of mass in frame components, row-major (`None`: a point mass).
     pub inertia: Option<[f64; 9]>,
 }
@@ -49,6 +53,8 @@ pub struct Poser {
     env: Env,
     /// Per frame, its 12 expressions: origin, then rotation row-major.
     expressions: Vec<Expr>,
+    /// Per body, its centre of mass's 3 expressions.
+    centers: Vec<Expr>,
 }
 
 impl Poser {
@@ -67,6 +73,13 @@ impl Poser {
             expressions.extend(frame.rotation.data.iter().copied());
         }
         let number = |e: Expr| e.eval(&env);
+        // A centre that moves is placed at the initial state (or zero) until asked at a state.
+        let mut start = env.clone();
+        start.set(model.t, 0.0);
+        let (q0, _) = model.initial.clone().unwrap_or((vec![0.0; model.coordinates.len()], Vec::new()));
+        for (symbol, value) in model.coordinates.iter().zip(&q0) {
+            start.set(*symbol, *value);
+        }
         let bodies = model
             .bodies
             .iter()
@@ -78,13 +91,9 @@ impl Poser {
                     }
                     None => None,
                 };
-                Ok(BodyValues {
-                    name: b.name.clone(),
-                    frame: b.frame,
-                    mass: number(b.mass)?,
-                    com: [number(b.com[0])?, number(b.com[1])?, number(b.com[2])?],
-                    inertia,
-                })
+                let moving = b.com.iter().any(|c| c.eval(&env).is_err());
+                let com = Expr::eval_all(&b.com, if moving { &start } else { &env })?;
+                Ok(BodyValues { name: b.name.clone(), frame: b.frame, mass: number(b.mass)?, com: [com[0], com[1], com[2]], moving, inertia })
             })
             .collect::<Result<_, EvalError>>()?;
         let gravity = model
@@ -96,7 +105,32 @@ impl Poser {
             })
             .map(|v| Ok::<_, EvalError>([number(v[0])?, number(v[1])?, number(v[2])?]))
             .transpose()?;
-        Ok(Poser { frame_names: model.frames.iter().map(|f| f.name.clone()).collect(), bodies, gravity, model: model.clone(), env, expressions })
+        let centers = model.bodies.iter().flat_map(|b| b.com).collect();
+        Ok(Poser { frame_names: model.frames.iter().map(|f| f.name.clone()).collect(), bodies, gravity, model: model.clone(), env, expressions, centers })
+    }
+
+    /// The bodies' centres of mass (each in its frame) at time `t` and coordinates `q`.
+    ///
+    /// ```
+    /// use generator::pose::Poser;
+    /// // Scene 3's tip mass slides along the boom: its centre is l/2 + rho along x.
+    /// let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/satellite_boom.ron")).unwrap();
+    /// let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+    /// let poser = Poser::new(&model, &params).unwrap();
+    /// let tip = poser.bodies.iter().position(|b| b.name == "tip").unwrap();
+    /// assert!(poser.bodies[tip].moving);
+    /// let q = [0.0, 0.0, 0.0, 0.25, 0.0, 0.0, 0.0];
+    /// let l = params[model.parameters.iter().position(|(p, _)| p.name() == "l").unwrap()];
+    /// assert_eq!(poser.centers_at(0.0, &q).unwrap()[tip], [l / 2.0 + 0.25, 0.0, 0.0]);
+    /// ```
+    pub fn centers_at(&self, t: f64, q: &[f64]) -> Result<Vec<[f64; 3]>, EvalError> {
+        let mut env = self.env.clone();
+        env.set(self.model.t, t);
+        for (symbol, value) in self.model.coordinates.iter().zip(q) {
+            env.set(*symbol, *value);
+        }
+        let values = Expr::eval_all(&self.centers, &env)?;
+        Ok(values.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect())
     }
 
     /// Every frame's pose at time `t` and coordinates `q`.

@@ -6,29 +6,7 @@
 
 use std::path::Path;
 
-/// The project's models, built into the tool: `(name, RON text)`.
-const BUILT_IN: [(&str, &str); 15] = [
-    ("bicycle", include_str!("../../models/bicycle.ron")),
-    ("bouncing_ball", include_str!("../../models/bouncing_ball.ron")),
-    ("cart_pendulum", include_str!("../../models/cart_pendulum.ron")),
-    ("cartesian_pendulum", include_str!("../../models/cartesian_pendulum.ron")),
-    ("inverted_pendulum", include_str!("../../models/inverted_pendulum.ron")),
-    ("pendulum_on_cart_5", include_str!("../../models/pendulum_on_cart_5.ron")),
-    ("rolling_disk", include_str!("../../models/rolling_disk.ron")),
-    ("satellite_boom", include_str!("../../models/satellite_boom.ron")),
-    ("satellite_boom_quaternion", include_str!("../../models/satellite_boom_quaternion.ron")),
-    ("spring_cart", include_str!("../../models/spring_cart.ron")),
-    ("stiff_pendulum", include_str!("../../models/stiff_pendulum.ron")),
-    ("three_body", include_str!("../../models/three_body.ron")),
-    ("three_body_quaternion", include_str!("../../models/three_body_quaternion.ron")),
-    ("tumbling_body", include_str!("../../models/tumbling_body.ron")),
-    ("winch", include_str!("../../models/winch.ron")),
-];
-
-/// The names of the built-in models.
-pub fn built_in() -> impl Iterator<Item = &'static str> {
-    BUILT_IN.iter().map(|(n, _)| *n)
-}
+pub use generator::model::{Source, built_in};
 
 /// Whether an evaluated model carries its exact Jacobians (derived and differentiated once more:
 /// worth it for the stiff method and `linearize` only).
@@ -43,45 +21,21 @@ pub enum Jacobians {
     Exact { only: Option<seam::FormulationKind>, by_parameters: bool },
 }
 
-/// A model's text and the file name its errors print.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Source {
-    /// The file as errors name it (`models/<name>.ron` for a built-in model).
-    pub file: String,
-    pub text: String,
-}
-
-impl Source {
-    /// The model, parsed and validated.
-    pub fn model(&self) -> Result<generator::model::Model, LoadError> {
-        Ok(generator::model::from_source(&self.file, &self.text)?)
-    }
-}
-
-/// The text of the model MODEL names: a path (anything with a `/`, an extension, or an existing
-/// file) is read from disk; a bare name is a built-in model.
+/// The text of the model MODEL names: a path, or the name of a built-in model
+/// ([`generator::model::source`]).
 ///
 /// ```
 /// let source = load::source("three_body").unwrap();
 /// assert_eq!(source.file, "models/three_body.ron");
 /// assert!(load::source("no_such_model").is_err());
 /// ```
-pub fn source(argument: &str) -> Result<Source, LoadError> {
-    let path = Path::new(argument);
-    let looks_like_a_path = path.extension().is_some() || argument.contains(['/', '\\']) || path.is_file();
-    if looks_like_a_path {
-        let (file, text) = generator::model::read_source(path)?;
-        return Ok(Source { file, text });
-    }
-    match BUILT_IN.iter().find(|(n, _)| *n == argument) {
-        Some((name, text)) => Ok(Source { file: format!("models/{name}.ron"), text: text.to_string() }),
-        None => Err(LoadError::UnknownModel { name: argument.to_string(), known: built_in().collect::<Vec<_>>().join(", ") }),
-    }
+pub fn source(argument: impl AsRef<std::ffi::OsStr>) -> Result<Source, LoadError> {
+    Ok(generator::model::source(Path::new(argument.as_ref()))?)
 }
 
 /// The model MODEL names ([`source`]), loaded and validated.
-pub fn model(argument: &str) -> Result<generator::model::Model, LoadError> {
-    source(argument)?.model()
+pub fn model(argument: impl AsRef<std::ffi::OsStr>) -> Result<generator::model::Model, LoadError> {
+    Ok(source(argument)?.model()?)
 }
 
 /// A model that runs, and what its user should be told about it.
@@ -160,7 +114,13 @@ pub fn evaluate(model: &generator::model::Model, exact: Jacobians, route: Route,
 
 /// The model MODEL names ([`model`]) with the parameters `params` set, validated as the
 /// file's own values are (a negative mass is refused), then [`evaluate`]d.
-pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians, route: Route, on_compile: &mut dyn FnMut(&Path)) -> Result<Loaded, LoadError> {
+pub fn evaluated(
+    argument: impl AsRef<std::ffi::OsStr>,
+    params: &[(String, f64)],
+    exact: Jacobians,
+    route: Route,
+    on_compile: &mut dyn FnMut(&Path),
+) -> Result<Loaded, LoadError> {
     evaluate(&model(argument)?.with_parameters(params)?, exact, route, on_compile)
 }
 
@@ -170,8 +130,6 @@ pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians, rou
 pub enum LoadError {
     #[error(transparent)]
     Model(#[from] generator::model::ModelError),
-    #[error("no model `{name}`: it is not a file, and no built-in model has that name (built in: {known})")]
-    UnknownModel { name: String, known: String },
     #[error(transparent)]
     Compiled(#[from] native::Error),
 }
@@ -197,18 +155,5 @@ impl Route {
             Route::Jit => "evaluated in-process",
             Route::Compiled => "built by rustc, --compiled",
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    /// The built-in list is the `models/` folder.
-    #[test]
-    fn every_model_file_is_built_in() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
-        let mut files: Vec<String> =
-            std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()?.file_name().to_str()?.strip_suffix(".ron").map(str::to_string)).collect();
-        files.sort();
-        assert_eq!(files, super::built_in().collect::<Vec<_>>());
     }
 }

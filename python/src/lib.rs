@@ -40,8 +40,8 @@ pyo3::create_exception!(
     "A run, a right-hand side or a linearization that failed (a singular matrix, a step size underflow...)."
 );
 
-fn model_error(e: ::load::LoadError) -> PyErr {
-    match e {
+fn model_error(e: impl Into<::load::LoadError>) -> PyErr {
+    match e.into() {
         ::load::LoadError::Model(e) => ModelError::new_err(e.render(false)),
         other => ModelError::new_err(other.to_string()),
     }
@@ -327,7 +327,7 @@ impl Model {
     #[pyo3(signature = (latex=false))]
     fn inspect(&self, py: Python<'_>, latex: bool) -> PyResult<String> {
         let model = self.source.model().map_err(model_error)?;
-        py.detach(|| generator::inspect::inspect(&model, latex)).map_err(|e| model_error(e.into()))
+        py.detach(|| generator::inspect::inspect(&model, latex)).map_err(model_error)
     }
 
     /// The state `x` of `formulation` at the coordinates `q` and rates `qdot` (the file's initial
@@ -449,11 +449,28 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<numpy::Complex64>>)> {
         let kind = self.kind(formulation)?;
-        let exact = self.exact(py)?;
         let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
         let at = runtime::linearize::Operating { q, qdot, params: self.param_values(params)?, held: vec![] };
-        let linear = runtime::linearize::linearize(exact, kind, &at).map_err(run_error)?;
-        let (b, _) = runtime::linearize::input_matrix(exact, kind, &at, &exact.inputs).map_err(run_error)?;
+        let exact = self.exact(py)?;
+        // A Ctrl-C during the derivation of the exact Jacobians answers here.
+        py.check_signals()?;
+        // The eigenvalue iteration is bounded (`runtime::linearize::eigenvalues`): it returns.
+        let (linear, b) = py
+            .detach(|| -> Result<_, runtime::linearize::LinearizeError> {
+                let linear = runtime::linearize::linearize(exact, kind, &at)?;
+                let (b, _) = runtime::linearize::input_matrix(exact, kind, &at, &exact.inputs)?;
+                Ok((linear, b))
+            })
+            .map_err(run_error)?;
+        if let runtime::linearize::Motion::Transient { entry, rate } = linear.motion() {
+            let state = &exact.formulation(kind).expect("the kind is the model's").state_names;
+            let message = format!(
+                "{}: not an equilibrium nor a steady motion: {}' = {rate:e} there, so A is the Jacobian of the flow at this instant and its eigenvalues are how fast neighbouring motions separate now, not the stability of the motion (linearize at an equilibrium, or in a formulation whose state holds the motion steady)",
+                self.evaluated.name, state[entry]
+            );
+            let message = std::ffi::CString::new(message).unwrap_or_default();
+            PyErr::warn(py, py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(), &message, 1)?;
+        }
         let k = linear.a.nrows();
         let a = Array2::from_shape_fn((k, k), |(r, c)| linear.a[(r, c)]).into_pyarray(py);
         let b = Array2::from_shape_fn((k, b.ncols()), |(r, c)| b[(r, c)]).into_pyarray(py);
@@ -482,7 +499,7 @@ impl Model {
             }
         }
         let model = self.source.model().map_err(model_error)?;
-        let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(|e| model_error(e.into()))?;
+        let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(model_error)?;
         files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
         Ok(())
     }

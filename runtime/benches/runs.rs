@@ -5,7 +5,7 @@
 //!
 //! `cargo bench -p runtime --bench runs` writes `docs/benchmarks/runs.json` and
 //! `docs/benchmarks/drift.json` (the tables of `docs/benchmarks.md`, checked by
-//! `tests/figures.rs`) and prints them.
+//! `tests/it/figures.rs`) and prints them.
 
 use runtime::compare::Reference;
 use runtime::integrate::{Projector, Settings, integrate, integrate_projected};

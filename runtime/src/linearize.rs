@@ -69,11 +69,59 @@ pub struct Linear {
     /// State entries nothing depends on (their column of `A` vanishes: positions, headings,
     /// wheel angles), each a zero eigenvalue, left out of `eigenvalues`.
     pub cyclic: Vec<usize>,
+    /// Cyclic entries that move and on which `A` depends near the point: the linear model
+    /// changes along the motion ([`Motion::Transient`]).
+    pub drifting: Vec<usize>,
     /// The eigenvalues of `A` without the cyclic entries, sorted by real part, then imaginary
     /// part, descending.
     pub eigenvalues: Vec<Complex<f64>>,
     /// True when `A` came from the emitted Jacobian, false for finite differences.
     pub exact: bool,
+}
+
+/// Rates below this fraction of the largest rate (or of 1) are round-off: an entry whose rate is
+/// this small does not move.
+pub const STILL: f64 = 1e-9;
+
+/// How the operating point moves, in the linearized state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Motion {
+    /// Nothing moves: `x' = 0`.
+    Equilibrium,
+    /// A steady motion: only cyclic entries move (a spin about a symmetry axis, a rolling
+    /// wheel's angle), which nothing depends on near the point either, so the linear model of
+    /// the rest is that of the motion.
+    Steady { moving: Vec<usize> },
+    /// An entry the others depend on moves: `A` is the Jacobian of the flow at this instant
+    /// only. Its eigenvalues are the rates at which neighbouring motions separate from this one
+    /// now, not the stability of the motion (the largest such rate is `rate`, of entry `entry`).
+    Transient { entry: usize, rate: f64 },
+}
+
+impl Linear {
+    /// Whether the point is an equilibrium, a steady motion, or neither ([`Motion`]): rates
+    /// below [`STILL`] of the largest (or of 1) count as none.
+    ///
+    /// ```
+    /// use runtime::linearize::{Motion, Operating, linearize};
+    /// let model = generated::cart_pendulum::model();
+    /// let (q0, qd0) = model.initial.clone().unwrap();
+    /// let at = Operating { q: q0, qdot: qd0, params: model.default_params.clone(), held: vec![] };
+    /// // Scene 1's initial state swings: its linear model holds for an instant only.
+    /// assert!(matches!(linearize(&model, seam::FormulationKind::Kane, &at).unwrap().motion(), Motion::Transient { .. }));
+    /// ```
+    pub fn motion(&self) -> Motion {
+        let largest = self.rates.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        let still = STILL * largest.max(1.0);
+        let moving = |i: &usize| self.rates[*i].abs() > still;
+        let kept: Vec<usize> = (0..self.rates.len()).filter(|i| !self.cyclic.contains(i)).collect();
+        let changing = kept.iter().chain(&self.drifting).filter(|i| moving(i));
+        if let Some(&entry) = changing.max_by(|a, b| self.rates[**a].abs().total_cmp(&self.rates[**b].abs())) {
+            return Motion::Transient { entry, rate: self.rates[entry] };
+        }
+        let moving: Vec<usize> = self.cyclic.iter().copied().filter(|i| moving(i)).collect();
+        if moving.is_empty() { Motion::Equilibrium } else { Motion::Steady { moving } }
+    }
 }
 
 /// Why a linearization failed.
@@ -85,6 +133,12 @@ pub enum LinearizeError {
     Rhs(Failure),
     #[error("the rates cannot be made consistent with the constraints: {0}")]
     Rates(String),
+    #[error(
+        "the eigenvalues of the {size} x {size} matrix A did not converge: the Schur decomposition took more than {sweeps} QR sweeps on each of {tries} shifted copies"
+    )]
+    Eigenvalues { size: usize, sweeps: usize, tries: usize },
+    #[error("A has a non-finite entry at row {row}, column {column}: no eigenvalues")]
+    NotFinite { row: usize, column: usize },
     #[error("`{name}` is neither a parameter nor a coordinate's rate `q'` of model `{model}` (parameters: {parameters}; coordinates: {coordinates})")]
     UnknownSweep { name: String, model: String, parameters: String, coordinates: String },
 }
@@ -111,11 +165,84 @@ pub fn linearize(model: &Model, formulation: FormulationKind, at: &Operating) ->
         }
     }
     let a = DMatrix::from_fn(k, k, |r, c| flat[r * n + c]);
-    let (kept, cyclic) = cyclic_entries(&a, if exact { 1e-12 } else { 1e-8 });
+    let tol = if exact { 1e-12 } else { 1e-8 };
+    let (kept, cyclic) = cyclic_entries(&a, tol);
+    let drifting = drifting_entries(&sys, &y0, &dy[..k], &a, &cyclic, tol)?;
     let reduced = DMatrix::from_fn(kept.len(), kept.len(), |r, c| a[(kept[r], kept[c])]);
-    let mut eigenvalues: Vec<Complex<f64>> = reduced.complex_eigenvalues().iter().copied().collect();
+    let mut eigenvalues = eigenvalues(&reduced)?;
     eigenvalues.sort_by(|x, y| y.re.total_cmp(&x.re).then(y.im.total_cmp(&x.im)));
-    Ok(Linear { state: y0[..k].to_vec(), rates: dy[..k].to_vec(), a, cyclic, eigenvalues, exact })
+    Ok(Linear { state: y0[..k].to_vec(), rates: dy[..k].to_vec(), a, cyclic, drifting, eigenvalues, exact })
+}
+
+/// The cyclic entries at `y0` that move there (their rate in `dy` above [`STILL`]) and whose
+/// column of `A` is not zero at a state near `y0`: they are cyclic at the point only (a body's
+/// rates in its own frame turn with a spin angle: `psi' = (sin phi u1 + cos phi u2) / cos
+/// theta` has no `phi` column while `u1 = u2 = 0`), so along the motion `A` changes.
+fn drifting_entries(sys: &System, y0: &[f64], dy: &[f64], a: &DMatrix<f64>, cyclic: &[usize], tol: f64) -> Result<Vec<usize>, LinearizeError> {
+    let largest = dy.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    let moving: Vec<usize> = cyclic.iter().copied().filter(|&i| dy[i].abs() > STILL * largest.max(1.0)).collect();
+    if moving.is_empty() {
+        return Ok(moving);
+    }
+    // A fixed, irregular move of every entry by a thousandth (of the entry, or of 1).
+    let near: Vec<f64> = y0.iter().enumerate().map(|(i, y)| y + 1e-3 * (1.0 + y.abs()) * (0.3 + 0.7 * ((i as f64 * 0.618_034) % 1.0))).collect();
+    let (_, flat, _) = state_jacobian(sys, 0.0, &near)?;
+    let (n, k) = (near.len(), a.nrows());
+    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(f64::MIN_POSITIVE);
+    Ok(moving.into_iter().filter(|&c| (0..k).any(|r| flat[r * n + c].abs() > tol.max(1e-9) * scale)).collect())
+}
+
+/// The QR sweeps the Schur decomposition may take before it is given up, per row of the
+/// matrix (LAPACK's `dlahqr` allows 30 per eigenvalue, at least 10 eigenvalues' worth).
+const SWEEPS_PER_ROW: usize = 30;
+
+/// The shifts `c` (times the largest entry) tried in turn: the eigenvalues of `A + c I` are
+/// those of `A` moved by `c`. nalgebra's Francis iteration has no exceptional shifts
+/// (nalgebra issues #611 and #1528) and stalls on matrices whose eigenvalues share a modulus,
+/// such as a spinning top's (`+-w` and `+-a +- w i`); moving them off a common modulus lets it
+/// converge, at a cost of round-off relative to the largest entry, the backward error any
+/// eigenvalue solver has anyway.
+const SHIFTS: [f64; 4] = [0.0, 0.3, -0.55, 0.8];
+
+/// The eigenvalues of a square matrix, by nalgebra's Schur decomposition with its iteration
+/// bounded ([`SWEEPS_PER_ROW`]) and retried on shifted matrices ([`SHIFTS`]) where it does not
+/// converge: a matrix whose iteration converges on none is reported
+/// ([`LinearizeError::Eigenvalues`]), never waited on.
+///
+/// ```
+/// use nalgebra::DMatrix;
+/// let a = DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 2.0]);
+/// let mut e = runtime::linearize::eigenvalues(&a).unwrap();
+/// e.sort_by(|x, y| x.im.total_cmp(&y.im));
+/// assert!((e[0].im + 1.0).abs() < 1e-14 && (e[1].re - 2.0).abs() < 1e-14 && (e[2].im - 1.0).abs() < 1e-14);
+/// assert!(runtime::linearize::eigenvalues(&DMatrix::zeros(0, 0)).unwrap().is_empty());
+/// ```
+pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, LinearizeError> {
+    let n = a.nrows();
+    assert_eq!(n, a.ncols(), "eigenvalues of a square matrix");
+    if let Some(k) = a.iter().position(|x| !x.is_finite()) {
+        return Err(LinearizeError::NotFinite { row: k % n.max(1), column: k / n.max(1) });
+    }
+    match n {
+        0 => return Ok(Vec::new()),
+        1 => return Ok(vec![Complex::new(a[(0, 0)], 0.0)]),
+        _ => {}
+    }
+    eigenvalues_within(a, SWEEPS_PER_ROW * n.max(10))
+}
+
+/// [`eigenvalues`] with at most `sweeps` QR sweeps per try.
+fn eigenvalues_within(a: &DMatrix<f64>, sweeps: usize) -> Result<Vec<Complex<f64>>, LinearizeError> {
+    let n = a.nrows();
+    let scale = a.amax();
+    for shift in SHIFTS {
+        let c = shift * scale;
+        let moved = a + DMatrix::identity(n, n) * c;
+        if let Some(schur) = nalgebra::Schur::try_new(moved, f64::EPSILON, sweeps) {
+            return Ok(schur.complex_eigenvalues().iter().map(|z| Complex::new(z.re - c, z.im)).collect());
+        }
+    }
+    Err(LinearizeError::Eigenvalues { size: n, sweeps, tries: SHIFTS.len() })
 }
 
 /// The input matrix `B = d f / d p` of the parameters `inputs` (indices into the parameters)
@@ -282,6 +409,9 @@ pub struct SweepRow {
     pub value: f64,
     /// `(re, im)` pairs, as [`Linear::eigenvalues`].
     pub eigenvalues: Vec<(f64, f64)>,
+    /// Neither an equilibrium nor a steady motion there ([`Motion::Transient`]): the
+    /// eigenvalues hold for an instant only.
+    pub transient: bool,
 }
 
 /// Linearizes at `at` with the swept value at each of `values`.
@@ -290,7 +420,8 @@ pub fn sweep(model: &Model, formulation: FormulationKind, at: &Operating, swept:
         .iter()
         .map(|&v| {
             let lin = linearize(model, formulation, &swept.apply(at, v))?;
-            Ok(SweepRow { value: v, eigenvalues: lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect() })
+            let transient = matches!(lin.motion(), Motion::Transient { .. });
+            Ok(SweepRow { value: v, eigenvalues: lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect(), transient })
         })
         .collect()
 }
@@ -300,6 +431,30 @@ pub fn sweep(model: &Model, formulation: FormulationKind, at: &Operating, swept:
 /// the speed of a steady motion), not to the stability of the motion.
 pub fn growth(eigenvalues: &[(f64, f64)]) -> f64 {
     growth_without(eigenvalues, trivial_zeros(eigenvalues))
+}
+
+/// Real parts below this fraction of the eigenvalue's modulus are round-off: a conservative
+/// system's eigenvalues lie on the imaginary axis, and the solver leaves them `+-1e-15` off it.
+pub const ROUND_OFF: f64 = 1e-9;
+
+/// Whether some eigenvalue that is not zero grows: its real part above [`ROUND_OFF`] of its
+/// modulus. (The sign of [`growth`] alone would count the round-off of a conservative system's
+/// imaginary eigenvalues.)
+///
+/// ```
+/// use runtime::linearize::grows;
+/// assert!(!grows(&[(1e-15, 2.0), (1e-15, -2.0), (-3e-16, 1.0)]));
+/// assert!(grows(&[(1e-3, 2.0), (1e-3, -2.0)]) && grows(&[(0.5, 0.0)]));
+/// ```
+pub fn grows(eigenvalues: &[(f64, f64)]) -> bool {
+    grows_without(eigenvalues, trivial_zeros(eigenvalues))
+}
+
+/// [`grows`] once the `zeros` eigenvalues of smallest magnitude are set aside.
+fn grows_without(eigenvalues: &[(f64, f64)], zeros: usize) -> bool {
+    let mut by_size: Vec<&(f64, f64)> = eigenvalues.iter().collect();
+    by_size.sort_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)));
+    by_size.iter().skip(zeros).any(|(re, im)| *re > ROUND_OFF * re.hypot(*im))
 }
 
 /// How many eigenvalues are zero (`|lambda|` below `1e-6` times the largest).
@@ -315,21 +470,31 @@ fn growth_without(eigenvalues: &[(f64, f64)], zeros: usize) -> f64 {
     by_size.iter().skip(zeros).map(|e| e.0).fold(f64::NEG_INFINITY, f64::max)
 }
 
-/// The values between neighbouring rows where [`growth`] changes sign, each refined by
-/// bisection (re-linearizing) to a relative width of `1e-13`. Near a crossing the crossing
-/// eigenvalue itself is small, so the zeros set aside are counted at the bracket's ends.
+/// The values between neighbouring rows where the motion turns stable or unstable ([`grows`]
+/// changes: round-off is no crossing), each refined by bisection (re-linearizing) to a
+/// relative width of `1e-13`. Near a crossing the crossing eigenvalue itself is small, so the
+/// zeros set aside are counted at the bracket's ends. Where both ends are off the imaginary
+/// axis (a damped mode turning unstable: its real part passes through zero) the bisection
+/// follows the real part's sign itself, so the crossing is found to round-off; where one end
+/// lies on it (a conservative system: its eigenvalues leave the axis in pairs) it follows
+/// [`grows`].
 pub fn crossings(model: &Model, formulation: FormulationKind, at: &Operating, swept: Swept, rows: &[SweepRow]) -> Result<Vec<f64>, LinearizeError> {
     let mut out = Vec::new();
     for w in rows.windows(2) {
-        let (s0, s1) = (growth(&w[0].eigenvalues) > 0.0, growth(&w[1].eigenvalues) > 0.0);
+        let (s0, s1) = (grows(&w[0].eigenvalues), grows(&w[1].eigenvalues));
         if s0 == s1 {
             continue;
         }
         let zeros = trivial_zeros(&w[0].eigenvalues).min(trivial_zeros(&w[1].eigenvalues));
-        let sign = |v: f64| -> Result<bool, LinearizeError> {
+        let off_axis = |e: &[(f64, f64)]| {
+            let g = growth_without(e, zeros);
+            g.abs() > ROUND_OFF * e.iter().fold(0.0f64, |m, (re, im)| m.max(re.hypot(*im)))
+        };
+        let by_sign = off_axis(&w[0].eigenvalues) && off_axis(&w[1].eigenvalues);
+        let side = |v: f64| -> Result<bool, LinearizeError> {
             let lin = linearize(model, formulation, &swept.apply(at, v))?;
             let e: Vec<(f64, f64)> = lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect();
-            Ok(growth_without(&e, zeros) > 0.0)
+            Ok(if by_sign { growth_without(&e, zeros) > 0.0 } else { grows_without(&e, zeros) })
         };
         let (mut lo, mut hi) = (w[0].value, w[1].value);
         while (hi - lo).abs() > 1e-13 * lo.abs().max(hi.abs()).max(1e-300) {
@@ -337,7 +502,7 @@ pub fn crossings(model: &Model, formulation: FormulationKind, at: &Operating, sw
             if mid <= lo || mid >= hi {
                 break;
             }
-            if sign(mid)? == s0 {
+            if side(mid)? == s0 {
                 lo = mid;
             } else {
                 hi = mid;
@@ -364,4 +529,80 @@ pub fn csv(name: &str, rows: &[SweepRow]) -> String {
         out.push('\n');
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The smallest singular value of `A - lambda I` over the largest entry of `A`: zero at an
+    /// eigenvalue.
+    fn residual(a: &DMatrix<f64>, lambda: Complex<f64>) -> f64 {
+        let n = a.nrows();
+        let shifted = DMatrix::from_fn(n, n, |r, c| Complex::new(a[(r, c)], 0.0) - if r == c { lambda } else { Complex::new(0.0, 0.0) });
+        shifted.singular_values().min() / a.amax()
+    }
+
+    /// The frozen Jacobian of a heavy symmetric top spinning upright in quaternions (Kane's
+    /// state `e0..e3, omega`): nalgebra's unshifted iteration does not converge on it in ten
+    /// times the sweeps allowed (its `complex_eigenvalues` loops for ever), the shifted one does.
+    #[test]
+    fn a_spinning_top_s_jacobian_has_its_eigenvalues() {
+        #[rustfmt::skip]
+        let a = DMatrix::from_row_slice(7, 7, &[
+            0.0, 0.0, 0.0, -10.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 10.0, 0.0, 0.5, 0.0, 0.0,
+            0.0, -10.0, 0.0, 0.0, 0.0, 0.5, 0.0,
+            -10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5,
+            0.0, 9.81, 0.0, 0.0, 0.0, 10.0, 0.0,
+            0.0, 0.0, 9.81, 0.0, -10.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+        ]);
+        assert!(nalgebra::Schur::try_new(a.clone(), f64::EPSILON, 10 * SWEEPS_PER_ROW * 10).is_none());
+        let e = eigenvalues(&a).unwrap();
+        assert_eq!(e.len(), 7);
+        for &l in &e {
+            assert!(residual(&a, l) < 1e-13, "{l} is not an eigenvalue: residual {}", residual(&a, l));
+        }
+        // +-10 and a zero, and two pairs +-2.2147 +- 10i (each with its conjugate).
+        let real: Vec<f64> = e.iter().filter(|l| l.im.abs() < 1e-9).map(|l| l.re).collect();
+        assert_eq!(real.len(), 3);
+        assert!(real.iter().any(|r| (r - 10.0).abs() < 1e-12) && real.iter().any(|r| (r + 10.0).abs() < 1e-12) && real.iter().any(|r| r.abs() < 1e-12));
+        let trace: f64 = e.iter().map(|l| l.re).sum();
+        assert!(trace.abs() < 1e-12 && e.iter().map(|l| l.im).sum::<f64>().abs() < 1e-12);
+    }
+
+    /// Random matrices of every size up to 12: every eigenvalue found is one, and they sum to
+    /// the trace.
+    #[test]
+    fn random_matrices_have_their_eigenvalues() {
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for n in 1..=12 {
+            for _ in 0..5 {
+                let a = DMatrix::from_fn(n, n, |_, _| next());
+                let e = eigenvalues(&a).unwrap();
+                assert_eq!(e.len(), n);
+                for &l in &e {
+                    assert!(residual(&a, l) < 1e-12, "n = {n}: {l}: residual {}", residual(&a, l));
+                }
+                assert!((e.iter().map(|l| l.re).sum::<f64>() - a.trace()).abs() < 1e-11 * n as f64);
+            }
+        }
+        assert!(eigenvalues(&DMatrix::zeros(0, 0)).unwrap().is_empty());
+        assert_eq!(eigenvalues(&DMatrix::from_element(1, 1, -3.0)).unwrap(), vec![Complex::new(-3.0, 0.0)]);
+    }
+
+    /// An iteration that does not converge is reported, with its bound.
+    #[test]
+    fn an_iteration_that_does_not_converge_is_reported() {
+        let a = DMatrix::from_fn(6, 6, |r, c| ((r * 7 + c * 3) % 5) as f64 - 2.0 + if r == c { 0.5 } else { 0.0 });
+        assert_eq!(eigenvalues_within(&a, 1), Err(LinearizeError::Eigenvalues { size: 6, sweeps: 1, tries: SHIFTS.len() }));
+        let mut b = a.clone();
+        b[(2, 3)] = f64::NAN;
+        assert_eq!(eigenvalues(&b), Err(LinearizeError::NotFinite { row: 2, column: 3 }));
+    }
 }

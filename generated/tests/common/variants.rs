@@ -1,6 +1,6 @@
 //! The committed modules: each with its model file and how its options differ from the file's
 //! own. One list, for the regeneration test and for the in-process evaluation test
-//! (`tests/evaluated.rs` at the root includes this file).
+//! (`tests/it/evaluated.rs` at the root includes this file).
 
 use generator::emit::{Formulation, Options, Parameters};
 

@@ -180,21 +180,23 @@ impl Summary {
                 out += &format!("  {:<32} {:>5} lets, assembly {} + solve {} ops\n", f.name, f.lets, f.ops, f.solve.total());
             }
         }
-        for line in self.warnings() {
+        for line in self.notes().into_iter().chain(self.warnings()) {
             out += &format!("  {line}\n");
         }
         out
     }
 
-    /// What the budgets cut and what could not be decided, one line each (empty when nothing
-    /// was): the equations stay exact, only larger, or they took the safe side named.
+    /// What the simplifier's limits kept as built (empty when nothing): exact, only larger, so
+    /// a note for the summary and `inspect`, not a warning at every load.
+    pub fn notes(&self) -> Vec<String> {
+        let simplifier = self.simplifier.summary().map(|cut| format!("simplifier: {cut}"));
+        simplifier.into_iter().chain(self.cuts.quiet_lines()).collect()
+    }
+
+    /// What the user should act on (empty when nothing): a decision the derivation took for
+    /// want of an answer that changes what the model does ([`crate::symbolic::report::Cuts::warnings`]).
     pub fn warnings(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        if let Some(cut) = self.simplifier.summary() {
-            out.push(format!("simplifier: {cut}"));
-        }
-        out.extend(self.cuts.lines());
-        out
+        self.cuts.warnings.clone()
     }
 }
 

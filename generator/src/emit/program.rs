@@ -53,6 +53,19 @@ pub struct FormShape {
     pub solve: super::ldl::Solve,
 }
 
+impl FormShape {
+    /// The formulation's own checked factors: `conditions` without the articulated-body
+    /// recursion's pivots, which only `rhs` computes (the Jacobian differentiates the dense
+    /// assembly and checks these alone).
+    pub fn formulation_conditions(&self) -> &[String] {
+        let pivots = match &self.solve {
+            super::ldl::Solve::Articulated { pivots } => *pivots,
+            _ => 0,
+        };
+        &self.conditions[..self.conditions.len() - pivots]
+    }
+}
+
 /// Every function of a module as tapes, with the shapes around them.
 #[derive(Clone, Debug, Default)]
 pub struct Program {

@@ -520,11 +520,12 @@ impl EvaluatedForm {
         run(tape, t, params, g_i, state, |o| {
             let at = |b: usize| &o[b..b + block];
             let value = at(0);
-            let checks = &o[block..block + s.conditions.len()];
-            let derivative = |k: usize| at(block + s.conditions.len() + k * block);
+            let conditions = s.formulation_conditions();
+            let checks = &o[block..block + conditions.len()];
+            let derivative = |k: usize| at(block + conditions.len() + k * block);
             // The parts of one block.
             let (m_at, f_at, w_at, c_at, p_at) = (nq, nq + n * n, nq + n * n + n, nq + n * n + n + rw * cw, nq + n * n + n + rw * cw + rw);
-            for (condition, &v) in s.conditions.iter().zip(checks) {
+            for (condition, &v) in conditions.iter().zip(checks) {
                 if !(v.abs() > SINGULAR_TOLERANCE) {
                     return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value: v });
                 }
@@ -765,7 +766,7 @@ mod tests {
 
     /// The looped `solve_spd` is the dense plan's solve to the bit, and refuses where it
     /// refuses: singular, indefinite, a negative first pivot. (Against the compiled module's
-    /// `solve_spd`: `generator/tests/evaluated_chains.rs`, the 20-link pendulum.)
+    /// `solve_spd`: `generator/tests/it/evaluated_chains.rs`, the 20-link pendulum.)
     #[test]
     fn the_looped_solve_is_the_dense_plan_s() {
         let mut rng = SplitMix(11);

@@ -21,7 +21,7 @@ use crate::symbolic::{Expr, Symbol};
 pub enum Failure {
     /// The Lagrangian depends on the coordinate, through `place` (`M[1][2]`, `N[0]`, `T0`,
     /// `V`), whose derivative is `derivative`.
-    InLagrangian { place: String, derivative: Expr },
+    InLagrangian { place: String, derivative: Expr, undecided: bool },
     /// Column of `a` is not zero in constraint `constraint`.
     InConstraint { constraint: String, entry: Expr },
     /// The generalized force `Q_j` is not zero.
@@ -31,7 +31,10 @@ pub enum Failure {
 impl std::fmt::Display for Failure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Failure::InLagrangian { place, derivative } => write!(f, "L = T - V depends on it through {place} (derivative {derivative})"),
+            Failure::InLagrangian { place, derivative, undecided: false } => write!(f, "L = T - V depends on it through {place} (derivative {derivative})"),
+            Failure::InLagrangian { place, derivative, undecided: true } => {
+                write!(f, "L = T - V may depend on it through {place} (the exact test could not decide whether {derivative} vanishes)")
+            }
             Failure::InConstraint { constraint, entry } => write!(f, "its column of a is not zero in constraint `{constraint}` (entry {entry})"),
             Failure::Forced { force } => write!(f, "its generalized force is not zero (Q = {force})"),
         }
@@ -60,21 +63,28 @@ impl CoordinateReport {
 /// cannot decide counts as one (the safe side: the coordinate is not taken as ignorable), and
 /// is reported.
 pub fn depends(e: Expr, q: Symbol) -> Option<Expr> {
+    dependence(e, q).map(|(d, _)| d)
+}
+
+/// [`depends`], and whether the dependence is only undecided.
+fn dependence(e: Expr, q: Symbol) -> Option<(Expr, bool)> {
     if !e.contains(q) {
         return None;
     }
     let d = e.diff(q);
     match zero_test(d) {
         ZeroVerdict::Zero { .. } => None,
-        ZeroVerdict::NonZero { .. } => Some(d),
+        ZeroVerdict::NonZero { .. } => Some((d, false)),
         ZeroVerdict::Undecided { reason } => {
-            let name = q.name();
-            crate::symbolic::report::record(|c| {
-                c.note(format!("whether the equations depend on `{name}` could not be decided exactly ({reason}): taken as depending on it"))
-            });
-            Some(d)
+            crate::symbolic::report::record(|c| c.note(undecided_note(q, &reason)));
+            Some((d, true))
         }
     }
+}
+
+/// What is said of a dependence on `q` the exact test could not decide.
+fn undecided_note(q: Symbol, reason: &str) -> String {
+    format!("whether the equations depend on `{}` could not be decided exactly ({reason}): taken as depending on it", q.name())
 }
 
 /// Where `L = T - V` can depend on a coordinate, with the place each is reported as: the mass
@@ -102,15 +112,15 @@ fn in_lagrangian(mech: &Quantities, parts: &[(String, Expr)], q: Symbol) -> Opti
         let d = e.diff(q);
         match zero_test(d) {
             ZeroVerdict::Zero { .. } => {}
-            ZeroVerdict::NonZero { .. } => return Some(Failure::InLagrangian { place: place.clone(), derivative: d }),
+            ZeroVerdict::NonZero { .. } => return Some(Failure::InLagrangian { place: place.clone(), derivative: d, undecided: false }),
             ZeroVerdict::Undecided { .. } => {
                 from = 0;
                 break;
             }
         }
     }
-    depends(mech.kinetic - mech.potential, q)?;
-    parts[from..].iter().find_map(|(place, e)| depends(*e, q).map(|d| Failure::InLagrangian { place: place.clone(), derivative: d }))
+    dependence(mech.kinetic - mech.potential, q)?;
+    parts[from..].iter().find_map(|(place, e)| dependence(*e, q).map(|(d, undecided)| Failure::InLagrangian { place: place.clone(), derivative: d, undecided }))
 }
 
 /// Checks Definition 1 for every coordinate.
@@ -160,7 +170,21 @@ pub fn analyze(model: &Model, mech: &Quantities) -> Vec<CoordinateReport> {
 /// coordinates that qualify.
 pub fn choose(model: &Model, reports: &[CoordinateReport]) -> Result<Vec<usize>, ModelError> {
     match &model.declared_ignorable {
-        None => Ok(reports.iter().filter(|r| r.is_ignorable()).map(|r| r.index).collect()),
+        None => {
+            // Where only an undecided question kept a coordinate out, the user should hear it:
+            // the reduced method then has fewer equations eliminated than it might.
+            for r in reports {
+                if let Some(Failure::InLagrangian { undecided: true, .. }) = &r.failure {
+                    let name = &r.name;
+                    crate::symbolic::report::record(|c| {
+                        c.warn(format!(
+                            "`{name}` is not taken as ignorable: whether the equations depend on it could not be decided exactly (declare it under `ignorable` if you know it is)"
+                        ))
+                    });
+                }
+            }
+            Ok(reports.iter().filter(|r| r.is_ignorable()).map(|r| r.index).collect())
+        }
         Some(list) => {
             for &j in list {
                 if let Some(f) = &reports[j].failure {

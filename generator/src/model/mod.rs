@@ -8,11 +8,13 @@
 //! ```
 
 pub mod builder;
+mod built_in;
 pub mod error;
 pub mod examples;
 pub mod schema;
 pub mod spans;
 
+pub use built_in::{Source, built_in, source};
 pub use error::{ErrorKind, ModelError};
 pub use schema::*;
 
@@ -275,7 +277,7 @@ pub fn read_source(path: &std::path::Path) -> Result<(String, String), ModelErro
             ErrorKind::Io,
             &file,
             format!("cannot read the file: {}", e.source_message()),
-            "check the path; models live in `models/`".into(),
+            format!("check the path, or name a built-in model: {}", built_in().collect::<Vec<_>>().join(", ")),
         ),
     })?;
     let source = text_of(&file, &bytes)?.to_string();

@@ -290,7 +290,7 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
         }
         if chosen.is_none() && undecided.is_some() {
             super::report::record(|c| {
-                c.note("a symbolic solve took a pivot the zero test could not decide: the equations divide by it, and a run stops where it vanishes".into())
+                c.warn("a symbolic solve took a pivot the zero test could not decide: the equations divide by it, and a run stops where it vanishes".into())
             });
             chosen = undecided;
         }

@@ -30,14 +30,17 @@ pub struct Cuts {
     /// kept as built: exact, only larger).
     pub solver_stops: usize,
     /// Decisions taken on the safe side for want of an answer, and routes that fell back to
-    /// another, in words.
+    /// another, in words: the equations are exact.
     pub notes: Vec<String>,
+    /// What the user should act on: a decision that changes what the model does (a run that
+    /// stops where an undecided pivot vanishes; an automatic choice that left a coordinate out).
+    pub warnings: Vec<String>,
 }
 
 impl Cuts {
     /// True when nothing was cut and every question was decided.
     pub fn is_empty(&self) -> bool {
-        self.undecided.is_empty() && self.solver_stops == 0 && self.notes.is_empty()
+        self.undecided.is_empty() && self.solver_stops == 0 && self.notes.is_empty() && self.warnings.is_empty()
     }
 
     /// Adds `other`'s entries (another thread's) to these.
@@ -49,6 +52,16 @@ impl Cuts {
         for note in other.notes {
             self.note(note);
         }
+        for warning in other.warnings {
+            self.warn(warning);
+        }
+    }
+
+    /// Adds a warning, once.
+    pub fn warn(&mut self, warning: String) {
+        if !self.warnings.contains(&warning) {
+            self.warnings.push(warning);
+        }
     }
 
     /// Adds a note in words, once.
@@ -58,8 +71,17 @@ impl Cuts {
         }
     }
 
-    /// One line per kind of cut, for a summary or a warning.
+    /// One line per kind of cut, for a summary: the quiet ones (exact equations) first, then
+    /// the [`Cuts::warnings`].
     pub fn lines(&self) -> Vec<String> {
+        let mut out = self.quiet_lines();
+        out.extend(self.warnings.iter().cloned());
+        out
+    }
+
+    /// The cuts that leave the equations exact (undecided terms kept, solver entries kept as
+    /// built, notes): for a summary and `inspect`, not a warning at every load.
+    pub fn quiet_lines(&self) -> Vec<String> {
         let mut out = Vec::new();
         for (reason, n) in &self.undecided {
             out.push(format!("{n} zero test(s) could not be decided exactly ({reason}): the terms were kept"));
@@ -92,13 +114,19 @@ mod tests {
 
     #[test]
     fn merging_adds_counts_and_keeps_notes_once() {
-        let mut a = Cuts { undecided: [("sqrt".to_string(), 2)].into(), solver_stops: 1, notes: vec!["n".into()] };
-        a.merge(Cuts { undecided: [("sqrt".to_string(), 3), ("ln".to_string(), 1)].into(), solver_stops: 2, notes: vec!["n".into(), "m".into()] });
+        let mut a = Cuts { undecided: [("sqrt".to_string(), 2)].into(), solver_stops: 1, notes: vec!["n".into()], warnings: vec!["w".into()] };
+        a.merge(Cuts {
+            undecided: [("sqrt".to_string(), 3), ("ln".to_string(), 1)].into(),
+            solver_stops: 2,
+            notes: vec!["n".into(), "m".into()],
+            warnings: vec!["w".into()],
+        });
         assert_eq!(a.undecided["sqrt"], 5);
         assert_eq!(a.undecided["ln"], 1);
         assert_eq!(a.solver_stops, 3);
         assert_eq!(a.notes, ["n", "m"]);
-        assert_eq!(a.lines().len(), 5);
+        assert_eq!(a.warnings, ["w"]);
+        assert_eq!((a.lines().len(), a.quiet_lines().len()), (6, 5));
         assert!(Cuts::default().is_empty() && !a.is_empty());
     }
 

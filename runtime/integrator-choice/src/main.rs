@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release --manifest-path runtime/integrator-choice/Cargo.toml` writes
 //! `docs/benchmarks/integrators.json` (the table of `docs/benchmarks.md`, checked by
-//! `tests/figures.rs`) and prints it.
+//! `tests/it/figures.rs`) and prints it.
 
 use ode_solvers::{Dopri5, SVector, System};
 use runtime::compare::Reference;

@@ -6,7 +6,7 @@
 use generator::formulation::{Request, derive};
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 
-mod common;
+use crate::common;
 use common::{check_formulations_agree, load};
 
 #[test]

@@ -6,7 +6,7 @@
 //! 3 in quaternions move as the Euler scenes do and run where they cannot; linearized spins give
 //! Euler's closed form; a symmetric body follows its closed form; `sweep` runs on them.
 
-mod common;
+use crate::common;
 use runtime::integrate::{Method, Settings};
 use runtime::system::{Drift, System};
 use seam::{FormulationKind, Model};

@@ -3,9 +3,7 @@
 //! module compiled here with rustc into a program that prints every formulation's right-hand
 //! side at fixed states, to 1e-13 relative against `generator::eval`.
 
-mod support {
-    pub mod rustc;
-}
+use crate::support;
 
 use generator::emit::{Options, generate};
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};

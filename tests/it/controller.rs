@@ -2,7 +2,7 @@
 //! `models/inverted_pendulum.ron` with an LQR gain designed on `linearize`'s A and B, which are
 //! first checked against the cart-pole's closed form; without the controller the pole falls.
 
-#[path = "../examples/inverted_pendulum.rs"]
+#[path = "../../examples/inverted_pendulum.rs"]
 mod example;
 
 use runtime::linearize::{Operating, input_matrix, linearize};
@@ -68,7 +68,7 @@ fn without_control_the_pole_falls() {
 /// refused with its place in the file; and a module with inputs keeps its parameters at run time.
 #[test]
 fn bad_inputs_get_located_errors() {
-    let good = include_str!("../models/inverted_pendulum.ron");
+    let good = include_str!("../../models/inverted_pendulum.ron");
     for (to, message, place) in [
         (r#"inputs: { "g": 0.0 },"#, "the name `g` is already taken", "inputs.g"),
         (r#"inputs: { "F": inf },"#, "input `F` has no finite nominal value", "inputs.F"),

@@ -9,7 +9,7 @@ use generator::symbolic::{Expr, Symbol};
 const SCENES: [&str; 3] = ["cart_pendulum", "three_body", "satellite_boom"];
 const OWN: [&str; 3] = ["cartesian_pendulum", "rolling_disk", "spring_cart"];
 
-mod common;
+use crate::common;
 use common::load;
 
 struct Names;

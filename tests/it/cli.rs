@@ -5,16 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// `multibody ARGS` in `dir`, with `PATH` holding only the system's folders (no cargo, no
-/// rustc).
-fn multibody(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_multibody")).args(args).current_dir(dir).env_clear().env("PATH", "/usr/bin:/bin").output().unwrap()
-}
-
-fn ok(out: &Output) -> String {
-    assert!(out.status.success(), "exit {:?}\n{}\n{}", out.status.code(), String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
+use crate::common::{multibody, ok};
 
 /// A folder outside the repository holding `my_model.ron`: the downstream example's gantry
 /// crane under another name, a model the project's tool has never seen.
@@ -328,7 +319,7 @@ fn concurrent_runs_keep_their_own_results(args: &[&str], env: &[(&str, &std::ffi
 #[test]
 fn undecided_questions_are_warned_about() {
     let dir = tempfile::tempdir().unwrap();
-    let model = include_str!("fixtures/kink.ron");
+    let model = include_str!("../fixtures/kink.ron");
     std::fs::write(dir.path().join("kink.ron"), model).unwrap();
     let out = multibody(dir.path(), &["compare", "kink.ron"]);
     ok(&out);

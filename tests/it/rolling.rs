@@ -4,7 +4,7 @@
 //! the same accelerations in every formulation; a disk placed by free coordinates gets the
 //! height constraint, and one whose frames keep it on the ground does not.
 
-mod common;
+use crate::common;
 use common::{all_accelerations, load};
 use generator::formulation::{Request, derive};
 use generator::model::{Constraint, Model, from_source};
@@ -12,7 +12,7 @@ use generator::symbolic::eval::Env;
 use generator::symbolic::zero::SplitMix;
 
 fn hand() -> Model {
-    from_source("rolling_disk_hand.ron", include_str!("fixtures/rolling_disk_hand.ron")).unwrap()
+    from_source("rolling_disk_hand.ron", include_str!("../fixtures/rolling_disk_hand.ron")).unwrap()
 }
 
 /// A random state with admissible rates: the disk rolls along its heading.

@@ -8,7 +8,7 @@
 use generator::emit::Options;
 use seam::{Failure, Model};
 
-#[path = "../generated/tests/common/variants.rs"]
+#[path = "../../generated/tests/common/variants.rs"]
 mod variants;
 use variants::variants;
 

@@ -4,9 +4,7 @@
 
 use generator::emit::{Formulation, Options, Parameters, generate};
 
-mod support {
-    pub mod rustc;
-}
+use crate::support;
 
 fn compile(name: &str, code: &str) {
     let dir = std::env::temp_dir().join(format!("emitted-compiles-{}-{name}", std::process::id()));

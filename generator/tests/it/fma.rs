@@ -3,9 +3,7 @@
 //! to round-off, on the paper's scenes 2 and 3 and the spatial chain of 8 links (whose Kane
 //! and reduced forms take the recursive assembly).
 
-mod support {
-    pub mod rustc;
-}
+use crate::support;
 
 use generator::emit::{Options, generate};
 

@@ -4,7 +4,7 @@
 //! the stop, the impacts' energy loss; the energy balance (with the impacts' jumps taken out)
 //! and the ignorable momentum `m x'` held to round-off across every impact.
 
-mod common;
+use crate::common;
 use runtime::integrate::{EventAction, Method, Settings};
 use seam::Model;
 
@@ -101,7 +101,7 @@ fn the_bouncing_ball_meets_the_closed_form_in_process() {
 /// function with an unknown name, two events of one name, a reset that sets nothing.
 #[test]
 fn bad_events_get_located_errors() {
-    let good = include_str!("../models/bouncing_ball.ron");
+    let good = include_str!("../../models/bouncing_ball.ron");
     let cases = [
         (r#"Reset(qdot: {"y": "-e*y'"})"#, r#"Reset(qdot: {"z": "-e*y'"})"#, "`z`, which is not a coordinate", "events[0].action.qdot.z"),
         (r#"when: "x - wall""#, r#"when: "x - door""#, "unknown name `door`", "events[2].when"),

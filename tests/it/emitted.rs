@@ -11,7 +11,7 @@ use generator::symbolic::zero::SplitMix;
 const MODELS: [&str; 8] =
     ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5", "stiff_pendulum"];
 
-mod common;
+use crate::common;
 use common::{accelerations_from as accelerations, load};
 
 fn emitted(module: &str) -> Model {

@@ -150,3 +150,35 @@ pub fn elliptic_k(m: f64) -> f64 {
     }
     std::f64::consts::PI / (2.0 * a)
 }
+
+/// `multibody ARGS` in `dir`, with `PATH` holding only the system's folders (no cargo, no
+/// rustc), killed if it runs for more than ten minutes (no command may hang).
+pub fn multibody(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_multibody"))
+        .args(args)
+        .current_dir(dir)
+        .env_clear()
+        .env("PATH", "/usr/bin:/bin")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let id = child.id();
+    let (done, finished) = std::sync::mpsc::channel::<()>();
+    let guard = std::thread::spawn(move || {
+        if let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = finished.recv_timeout(std::time::Duration::from_secs(600)) {
+            let _ = std::process::Command::new("kill").args(["-9", &id.to_string()]).status();
+        }
+    });
+    let out = child.wait_with_output().unwrap();
+    drop(done);
+    guard.join().unwrap();
+    assert!(out.status.code().is_some(), "`multibody {}` was killed: it hung or crashed", args.join(" "));
+    out
+}
+
+/// The standard output of a command that succeeded (its exit and both streams otherwise).
+pub fn ok(out: &std::process::Output) -> String {
+    assert!(out.status.success(), "exit {:?}\n{}\n{}", out.status.code(), String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}

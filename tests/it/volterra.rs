@@ -10,7 +10,7 @@ use generator::symbolic::zero::SplitMix;
 const MODELS: [&str; 8] =
     ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5", "stiff_pendulum"];
 
-mod common;
+use crate::common;
 use common::{accelerations_from, lin_solve, load};
 
 /// q'' implied by a Volterra form at the state in `env` (q, u, G, t set): returns (q', q'').

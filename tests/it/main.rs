@@ -1,0 +1,27 @@
+//! The workspace tests, one binary (each file of this folder a module): every crate linked
+//! once instead of once per file.
+
+mod common;
+
+mod bicycle;
+mod chains;
+mod cli;
+mod defects;
+mod controller;
+mod derivation;
+mod driven;
+mod emitted;
+mod evaluated;
+mod events;
+mod extremes;
+mod figures;
+mod jacobian;
+mod ops_against_sympy;
+mod outside;
+mod quaternion;
+mod readme;
+mod rolling;
+mod rust_version;
+mod stiff;
+mod trajectories;
+mod volterra;
