@@ -27,12 +27,13 @@ from typing import NamedTuple, Optional
 import numpy as np
 
 from . import _multibody
-from ._multibody import METHODS, ModelError, SimulationError, built_in
+from ._multibody import METHODS, InternalError, ModelError, SimulationError, built_in
 
 __all__ = [
     "Model",
     "ModelError",
     "SimulationError",
+    "InternalError",
     "Trajectory",
     "Linear",
     "load",

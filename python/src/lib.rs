@@ -35,6 +35,12 @@ pyo3::create_exception!(
 );
 pyo3::create_exception!(
     _multibody,
+    InternalError,
+    PyRuntimeError,
+    "A fault of multibody's own (a panic inside it), not of the model or the call: please report it with the model."
+);
+pyo3::create_exception!(
+    _multibody,
     SimulationError,
     PyRuntimeError,
     "A run, a right-hand side or a linearization that failed (a singular matrix, a step size underflow...)."
@@ -45,6 +51,16 @@ fn model_error(e: impl Into<::load::LoadError>) -> PyErr {
         ::load::LoadError::Model(e) => ModelError::new_err(e.render(false)),
         other => ModelError::new_err(other.to_string()),
     }
+}
+
+/// The result of `work`, a panic in it (a fault of multibody's, never the user's) turned into an
+/// [`InternalError`], which `except Exception` catches, instead of pyo3's `PanicException`,
+/// which it does not.
+fn guarded<T>(work: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|panic| {
+        let what = panic.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| panic.downcast_ref::<String>().cloned()).unwrap_or_default();
+        Err(InternalError::new_err(format!("a fault of multibody's, not of the model or the call (please report it with the model): {what}")))
+    })
 }
 
 fn run_error(e: impl std::fmt::Display) -> PyErr {
@@ -326,8 +342,10 @@ impl Model {
     /// method's matrices; as text, or LaTeX with `latex=True`.
     #[pyo3(signature = (latex=false))]
     fn inspect(&self, py: Python<'_>, latex: bool) -> PyResult<String> {
-        let model = self.source.model().map_err(model_error)?;
-        py.detach(|| generator::inspect::inspect(&model, latex)).map_err(model_error)
+        guarded(|| {
+            let model = self.source.model().map_err(model_error)?;
+            py.detach(|| generator::inspect::inspect(&model, latex)).map_err(model_error)
+        })
     }
 
     /// The state `x` of `formulation` at the coordinates `q` and rates `qdot` (the file's initial
@@ -342,11 +360,13 @@ impl Model {
         qdot: Option<&Bound<'py, PyAny>>,
         params: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
-        let kind = self.kind(formulation)?;
-        let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
-        let params = self.param_values(params)?;
-        let (sys, y0) = System::start(&self.evaluated, kind, params, &q, &qdot).map_err(run_error)?;
-        Ok((y0.into_pyarray(py), sys.g_i.into_pyarray(py)))
+        guarded(|| {
+            let kind = self.kind(formulation)?;
+            let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
+            let params = self.param_values(params)?;
+            let (sys, y0) = System::start(&self.evaluated, kind, params, &q, &qdot).map_err(run_error)?;
+            Ok((y0.into_pyarray(py), sys.g_i.into_pyarray(py)))
+        })
     }
 
     /// The right-hand side `x' = f(t, x)` of `formulation` (a 1-D array): what
@@ -361,11 +381,13 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
         momenta: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        // The formulation's own function: no system (and none of its copies) per call.
-        let call = self.at(&self.evaluated, formulation, x, params, momenta)?;
-        let mut dx = vec![0.0; call.x.len()];
-        call.form.rhs(t, &call.x, &call.params, &call.g_i, &mut dx).map_err(run_error)?;
-        Ok(dx.into_pyarray(py))
+        guarded(|| {
+            // The formulation's own function: no system (and none of its copies) per call.
+            let call = self.at(&self.evaluated, formulation, x, params, momenta)?;
+            let mut dx = vec![0.0; call.x.len()];
+            call.form.rhs(t, &call.x, &call.params, &call.g_i, &mut dx).map_err(run_error)?;
+            Ok(dx.into_pyarray(py))
+        })
     }
 
     /// The Jacobian `d f / d x` (a 2-D array, row i the derivatives of `x'[i]`): exact from the
@@ -381,11 +403,13 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
         momenta: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let call = self.at(self.exact(py)?, formulation, x, params, momenta)?;
-        let sys = System::new(call.model, call.form.kind, call.params, call.g_i).map_err(run_error)?;
-        let (_, jac, _) = runtime::linearize::state_jacobian(&sys, t, &call.x).map_err(run_error)?;
-        let n = call.x.len();
-        Ok(Array2::from_shape_vec((n, n), jac).expect("n x n").into_pyarray(py))
+        guarded(|| {
+            let call = self.at(self.exact(py)?, formulation, x, params, momenta)?;
+            let sys = System::new(call.model, call.form.kind, call.params, call.g_i).map_err(run_error)?;
+            let (_, jac, _) = runtime::linearize::state_jacobian(&sys, t, &call.x).map_err(run_error)?;
+            let n = call.x.len();
+            Ok(Array2::from_shape_vec((n, n), jac).expect("n x n").into_pyarray(py))
+        })
     }
 
     /// One formulation integrated from `q`, `qdot` (the file's initial values by default) with
@@ -409,31 +433,33 @@ impl Model {
         qdot: Option<&Bound<'py, PyAny>>,
         t_start: Option<f64>,
     ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>)> {
-        let kind = self.kind(formulation)?;
-        let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
-        let params = self.param_values(params)?;
-        let file_run = self.evaluated.run;
-        let (t_start, t_end, dt_out) = match (file_run, t_end, dt_out) {
-            (Some((a, b, c)), t_end, dt_out) => (t_start.unwrap_or(a), t_end.unwrap_or(b), dt_out.unwrap_or(c)),
-            (None, Some(b), Some(c)) => (t_start.unwrap_or(0.0), b, c),
-            (None, _, _) => {
-                return Err(PyValueError::new_err(format!("model `{}` has no `simulation` section: give t_end= and dt_out=", self.evaluated.module)));
-            }
-        };
-        let times = seam::output_times(t_start, t_end, dt_out).map_err(|e| PyValueError::new_err(format!("run settings: {e}")))?;
-        let settings = settings(&self.evaluated, t_end - t_start, method, rtol, atol, h)?;
-        let (sys, y0) = System::start(&self.evaluated, kind, params.clone(), &q, &qdot).map_err(run_error)?;
-        let mut interrupt = Interrupt::default();
-        let run = match py.detach(|| runtime::trajectory::simulate_interruptible(&sys, &y0, &times, &settings, &mut |_| interrupt.check())) {
-            Err(TrajectoryError::Run(e)) if e.reason == Reason::Interrupted => {
-                return Err(interrupt.into_error(py, format!("the run stopped at t = {} (its last accepted step)", e.t)));
-            }
-            run => run.map_err(run_error)?,
-        };
-        let (rows, width) = (run.rows.len(), run.columns.len());
-        let table = Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py);
-        let events = run.events.into_iter().map(|e| (e.name, e.t, e.q)).collect();
-        Ok((kind.name(), run.columns, table, events, params))
+        guarded(|| {
+            let kind = self.kind(formulation)?;
+            let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
+            let params = self.param_values(params)?;
+            let file_run = self.evaluated.run;
+            let (t_start, t_end, dt_out) = match (file_run, t_end, dt_out) {
+                (Some((a, b, c)), t_end, dt_out) => (t_start.unwrap_or(a), t_end.unwrap_or(b), dt_out.unwrap_or(c)),
+                (None, Some(b), Some(c)) => (t_start.unwrap_or(0.0), b, c),
+                (None, _, _) => {
+                    return Err(PyValueError::new_err(format!("model `{}` has no `simulation` section: give t_end= and dt_out=", self.evaluated.module)));
+                }
+            };
+            let times = seam::output_times(t_start, t_end, dt_out).map_err(|e| PyValueError::new_err(format!("run settings: {e}")))?;
+            let settings = settings(&self.evaluated, t_end - t_start, method, rtol, atol, h)?;
+            let (sys, y0) = System::start(&self.evaluated, kind, params.clone(), &q, &qdot).map_err(run_error)?;
+            let mut interrupt = Interrupt::default();
+            let run = match py.detach(|| runtime::trajectory::simulate_interruptible(&sys, &y0, &times, &settings, &mut |_| interrupt.check())) {
+                Err(TrajectoryError::Run(e)) if e.reason == Reason::Interrupted => {
+                    return Err(interrupt.into_error(py, format!("the run stopped at t = {} (its last accepted step)", e.t)));
+                }
+                run => run.map_err(run_error)?,
+            };
+            let (rows, width) = (run.rows.len(), run.columns.len());
+            let table = Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py);
+            let events = run.events.into_iter().map(|e| (e.name, e.t, e.q)).collect();
+            Ok((kind.name(), run.columns, table, events, params))
+        })
     }
 
     /// The linear model `x' = A x + B u` of `formulation` about `q`, `qdot` (the file's
@@ -448,34 +474,36 @@ impl Model {
         qdot: Option<&Bound<'py, PyAny>>,
         params: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<numpy::Complex64>>)> {
-        let kind = self.kind(formulation)?;
-        let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
-        let at = runtime::linearize::Operating { q, qdot, params: self.param_values(params)?, held: vec![] };
-        let exact = self.exact(py)?;
-        // A Ctrl-C during the derivation of the exact Jacobians answers here.
-        py.check_signals()?;
-        // The eigenvalue iteration is bounded (`runtime::linearize::eigenvalues`): it returns.
-        let (linear, b) = py
-            .detach(|| -> Result<_, runtime::linearize::LinearizeError> {
-                let linear = runtime::linearize::linearize(exact, kind, &at)?;
-                let (b, _) = runtime::linearize::input_matrix(exact, kind, &at, &exact.inputs)?;
-                Ok((linear, b))
-            })
-            .map_err(run_error)?;
-        if let runtime::linearize::Motion::Transient { entry, rate } = linear.motion() {
-            let state = &exact.formulation(kind).expect("the kind is the model's").state_names;
-            let message = format!(
-                "{}: not an equilibrium nor a steady motion: {}' = {rate:e} there, so A is the Jacobian of the flow at this instant and its eigenvalues are how fast neighbouring motions separate now, not the stability of the motion (linearize at an equilibrium, or in a formulation whose state holds the motion steady)",
-                self.evaluated.name, state[entry]
-            );
-            let message = std::ffi::CString::new(message).unwrap_or_default();
-            PyErr::warn(py, py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(), &message, 1)?;
-        }
-        let k = linear.a.nrows();
-        let a = Array2::from_shape_fn((k, k), |(r, c)| linear.a[(r, c)]).into_pyarray(py);
-        let b = Array2::from_shape_fn((k, b.ncols()), |(r, c)| b[(r, c)]).into_pyarray(py);
-        let eigenvalues: Vec<numpy::Complex64> = linear.eigenvalues.iter().map(|z| numpy::Complex64::new(z.re, z.im)).collect();
-        Ok((a, b, eigenvalues.into_pyarray(py)))
+        guarded(|| {
+            let kind = self.kind(formulation)?;
+            let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
+            let at = runtime::linearize::Operating { q, qdot, params: self.param_values(params)?, held: vec![] };
+            let exact = self.exact(py)?;
+            // A Ctrl-C during the derivation of the exact Jacobians answers here.
+            py.check_signals()?;
+            // The eigenvalue iteration is bounded (`runtime::linearize::eigenvalues`): it returns.
+            let (linear, b) = py
+                .detach(|| -> Result<_, runtime::linearize::LinearizeError> {
+                    let linear = runtime::linearize::linearize(exact, kind, &at)?;
+                    let (b, _) = runtime::linearize::input_matrix(exact, kind, &at, &exact.inputs)?;
+                    Ok((linear, b))
+                })
+                .map_err(run_error)?;
+            if let runtime::linearize::Motion::Transient { entry, rate } = linear.motion() {
+                let state = &exact.formulation(kind).expect("the kind is the model's").state_names;
+                let message = format!(
+                    "{}: not an equilibrium nor a steady motion: {}' = {rate:e} there, so A is the Jacobian of the flow at this instant and its eigenvalues are how fast neighbouring motions separate now, not the stability of the motion (linearize at an equilibrium, or in a formulation whose state holds the motion steady)",
+                    self.evaluated.name, state[entry]
+                );
+                let message = std::ffi::CString::new(message).unwrap_or_default();
+                PyErr::warn(py, py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(), &message, 1)?;
+            }
+            let k = linear.a.nrows();
+            let a = Array2::from_shape_fn((k, k), |(r, c)| linear.a[(r, c)]).into_pyarray(py);
+            let b = Array2::from_shape_fn((k, b.ncols()), |(r, c)| b[(r, c)]).into_pyarray(py);
+            let eigenvalues: Vec<numpy::Complex64> = linear.eigenvalues.iter().map(|z| numpy::Complex64::new(z.re, z.im)).collect();
+            Ok((a, b, eigenvalues.into_pyarray(py)))
+        })
     }
 
     /// Writes the model's Rust module (what `generator MODEL -o PATH` writes) to `path`,
@@ -483,25 +511,27 @@ impl Model {
     /// itself and any `.ron` file unless `force`.
     #[pyo3(signature = (path, force=false))]
     fn generate_rust(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<()> {
-        use generator::command::{Overwrite, overwrites_a_model};
-        let shown = files::printable_path(&path);
-        match overwrites_a_model(std::path::Path::new(&self.source.file), &path).filter(|_| !force) {
-            None => {}
-            Some(Overwrite::ModelItself) => {
-                return Err(PyValueError::new_err(format!(
-                    "`{shown}` is the model file itself: writing Rust there would destroy the model (give another path, or force=True if you mean it)"
-                )));
+        guarded(|| {
+            use generator::command::{Overwrite, overwrites_a_model};
+            let shown = files::printable_path(&path);
+            match overwrites_a_model(std::path::Path::new(&self.source.file), &path).filter(|_| !force) {
+                None => {}
+                Some(Overwrite::ModelItself) => {
+                    return Err(PyValueError::new_err(format!(
+                        "`{shown}` is the model file itself: writing Rust there would destroy the model (give another path, or force=True if you mean it)"
+                    )));
+                }
+                Some(Overwrite::RonFile) => {
+                    return Err(PyValueError::new_err(format!(
+                        "`{shown}` is a `.ron` file: this writes Rust, and would replace a model (write to a `.rs` path, or force=True if you mean it)"
+                    )));
+                }
             }
-            Some(Overwrite::RonFile) => {
-                return Err(PyValueError::new_err(format!(
-                    "`{shown}` is a `.ron` file: this writes Rust, and would replace a model (write to a `.rs` path, or force=True if you mean it)"
-                )));
-            }
-        }
-        let model = self.source.model().map_err(model_error)?;
-        let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(model_error)?;
-        files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
-        Ok(())
+            let model = self.source.model().map_err(model_error)?;
+            let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(model_error)?;
+            files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+            Ok(())
+        })
     }
 
     /// Writes the self-contained HTML page that plays a motion in 3-D (the `animate` crate):
@@ -515,14 +545,16 @@ impl Model {
         formulation: &str,
         params: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let model = self.source.model().map_err(model_error)?;
-        let params = self.param_values(params)?;
-        let times = times.as_array().to_vec();
-        let q: Vec<f64> = q.as_array().iter().copied().collect();
-        let motion = animate::Motion { formulation, times: &times, q: &q };
-        animate::write(&path, &model, &params, &motion).map_err(|e| match e {
-            animate::AnimateError::File(e) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
-            other => PyValueError::new_err(other.to_string()),
+        guarded(|| {
+            let model = self.source.model().map_err(model_error)?;
+            let params = self.param_values(params)?;
+            let times = times.as_array().to_vec();
+            let q: Vec<f64> = q.as_array().iter().copied().collect();
+            let motion = animate::Motion { formulation, times: &times, q: &q };
+            animate::write(&path, &model, &params, &motion).map_err(|e| match e {
+                animate::AnimateError::File(e) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+                other => PyValueError::new_err(other.to_string()),
+            })
         })
     }
 
@@ -588,69 +620,73 @@ fn ensemble<'py>(
     h: Option<f64>,
     threads: Option<usize>,
 ) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray1<u64>>)> {
-    let kind = model.kind(formulation)?;
-    let m = &model.evaluated;
-    let counts: Vec<usize> = [params, q0, qdot0].into_iter().filter_map(members_of).collect();
-    let n = counts.first().copied().ok_or_else(|| PyValueError::new_err("give params, q0 or qdot0 as a 2-D array (N, ...): one row per member"))?;
-    if counts.iter().any(|&c| c != n) {
-        return Err(PyValueError::new_err(format!("the 2-D arguments disagree on the number of members: {counts:?}")));
-    }
-    let (iq, iqd) = model.initial();
-    let (params, q0, qdot0) = (rows(params, n, &m.default_params, "params")?, rows(q0, n, &iq, "q0")?, rows(qdot0, n, &iqd, "qdot0")?);
-    let members: Vec<runtime::ensemble::Member> =
-        params.into_iter().zip(q0).zip(qdot0).map(|((params, q0), qd0)| runtime::ensemble::Member { params, q0, qd0 }).collect();
-    let times = vector(t_eval, "t_eval")?;
-    let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
-    let settings = settings(m, span.max(f64::MIN_POSITIVE), method, rtol, atol, h)?;
-    // The members run on a worker thread while this one, the caller's, runs Python's signal
-    // handlers every `INTERRUPT_POLL` and sets `stop` once one raised (Ctrl-C).
-    let (stop, mut interrupt) = (AtomicBool::new(false), Interrupt::default());
-    let runs = py.detach(|| {
-        std::thread::scope(|scope| {
-            let (finished, done) = std::sync::mpsc::channel::<()>();
-            let worker = scope.spawn(|| {
-                let runs = runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, &|| {}, &stop);
-                drop(finished);
-                runs
-            });
-            while let Err(RecvTimeoutError::Timeout) = done.recv_timeout(INTERRUPT_POLL) {
-                if interrupt.poll().is_break() {
-                    stop.store(true, Ordering::Relaxed);
+    guarded(|| {
+        let kind = model.kind(formulation)?;
+        let m = &model.evaluated;
+        let counts: Vec<usize> = [params, q0, qdot0].into_iter().filter_map(members_of).collect();
+        let n = counts.first().copied().ok_or_else(|| PyValueError::new_err("give params, q0 or qdot0 as a 2-D array (N, ...): one row per member"))?;
+        if counts.iter().any(|&c| c != n) {
+            return Err(PyValueError::new_err(format!("the 2-D arguments disagree on the number of members: {counts:?}")));
+        }
+        let (iq, iqd) = model.initial();
+        let (params, q0, qdot0) = (rows(params, n, &m.default_params, "params")?, rows(q0, n, &iq, "q0")?, rows(qdot0, n, &iqd, "qdot0")?);
+        let members: Vec<runtime::ensemble::Member> =
+            params.into_iter().zip(q0).zip(qdot0).map(|((params, q0), qd0)| runtime::ensemble::Member { params, q0, qd0 }).collect();
+        let times = vector(t_eval, "t_eval")?;
+        let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
+        let settings = settings(m, span.max(f64::MIN_POSITIVE), method, rtol, atol, h)?;
+        // The members run on a worker thread while this one, the caller's, runs Python's signal
+        // handlers every `INTERRUPT_POLL` and sets `stop` once one raised (Ctrl-C).
+        let (stop, mut interrupt) = (AtomicBool::new(false), Interrupt::default());
+        let runs = py.detach(|| {
+            std::thread::scope(|scope| {
+                let (finished, done) = std::sync::mpsc::channel::<()>();
+                let worker = scope.spawn(|| {
+                    let runs = runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, &|| {}, &stop);
+                    drop(finished);
+                    runs
+                });
+                while let Err(RecvTimeoutError::Timeout) = done.recv_timeout(INTERRUPT_POLL) {
+                    if interrupt.poll().is_break() {
+                        stop.store(true, Ordering::Relaxed);
+                    }
                 }
-            }
-            worker.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-        })
-    });
-    let runs = runs.map_err(|e| match e {
-        runtime::ensemble::EnsembleError::Times | runtime::ensemble::EnsembleError::Shape { .. } => PyValueError::new_err(e.to_string()),
-        runtime::ensemble::EnsembleError::Interrupted => interrupt.into_error(py, "the ensemble stopped".into()),
-        other => run_error(other),
-    })?;
-    let shape = (runs.members, runs.times, runs.states);
-    let reached: Vec<u64> = runs.reached.iter().map(|&r| r as u64).collect();
-    Ok((Array3::from_shape_vec(shape, runs.data).expect("members x times x states").into_pyarray(py), reached.into_pyarray(py)))
+                worker.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            })
+        });
+        let runs = runs.map_err(|e| match e {
+            runtime::ensemble::EnsembleError::Times | runtime::ensemble::EnsembleError::Shape { .. } => PyValueError::new_err(e.to_string()),
+            runtime::ensemble::EnsembleError::Interrupted => interrupt.into_error(py, "the ensemble stopped".into()),
+            other => run_error(other),
+        })?;
+        let shape = (runs.members, runs.times, runs.states);
+        let reached: Vec<u64> = runs.reached.iter().map(|&r| r as u64).collect();
+        Ok((Array3::from_shape_vec(shape, runs.data).expect("members x times x states").into_pyarray(py), reached.into_pyarray(py)))
+    })
 }
 
 /// The model in the RON file at `path`, or the built-in model of that name.
 #[pyfunction]
 #[pyo3(name = "load")]
 fn load_model(path: &Bound<'_, PyAny>) -> PyResult<Model> {
-    let argument: std::path::PathBuf = path.extract()?;
-    let argument = argument.to_str().ok_or_else(|| PyValueError::new_err("the path is not valid UTF-8"))?.to_string();
-    Model::open(::load::source(&argument).map_err(model_error)?)
+    guarded(|| {
+        let argument: std::path::PathBuf = path.extract()?;
+        let argument = argument.to_str().ok_or_else(|| PyValueError::new_err("the path is not valid UTF-8"))?.to_string();
+        Model::open(::load::source(&argument).map_err(model_error)?)
+    })
 }
 
 /// The model in the RON text `text` (`name` is what its errors call the file).
 #[pyfunction]
 #[pyo3(signature = (text, name="<string>"))]
 fn loads(text: &str, name: &str) -> PyResult<Model> {
-    Model::open(::load::Source { file: name.to_string(), text: text.to_string() })
+    guarded(|| Model::open(::load::Source { file: name.to_string(), text: text.to_string() }))
 }
 
 /// The inverse of `Model.__reduce__`.
 #[pyfunction]
 fn _from_source(file: String, text: String) -> PyResult<Model> {
-    Model::open(::load::Source { file, text })
+    guarded(|| Model::open(::load::Source { file, text }))
 }
 
 /// The RON text of one of the generator's model families: `pendulum_on_cart` (SymPy's
@@ -686,6 +722,7 @@ fn _multibody(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     m.add("ModelError", m.py().get_type::<ModelError>())?;
     m.add("SimulationError", m.py().get_type::<SimulationError>())?;
+    m.add("InternalError", m.py().get_type::<InternalError>())?;
     m.add("METHODS", Method::NAMES.to_vec())?;
     Ok(())
 }

@@ -204,3 +204,32 @@ def test_linearize_the_inverted_pendulum():
     # Upright and at rest: one eigenvalue with a positive real part (it falls).
     assert np.max(lin.eigenvalues.real) > 0.1
     assert lin.B.shape[0] == lin.A.shape[0]
+
+
+def test_an_error_past_column_65535_is_a_model_error():
+    # A model written on one line by a script: the error renderer panicked past column 65535,
+    # which reached Python as a PanicException that `except Exception` does not catch.
+    text = " ".join(line.split("//")[0] for line in multibody.load("cart_pendulum").text.splitlines())
+    text = text.replace("Model(", "Model(" + " " * 70_000, 1).replace('"-l/2", "0"]', '"-lx/2", "0"]', 1)
+    try:
+        multibody.loads(text, name="wide.ron")
+    except Exception as e:  # noqa: BLE001 - the point: an ordinary exception
+        assert isinstance(e, multibody.ModelError)
+        assert "wide.ron:1:" in str(e) and "unknown name `lx`" in str(e) and "…" in str(e)
+    else:
+        raise AssertionError("the model is refused")
+
+
+def test_linearize_a_spinning_top_returns_and_warns(root):
+    # A heavy top spun upright in quaternions: the eigenvalue iteration never returned (and
+    # ignored Ctrl-C); the point is no equilibrium, and the warning says what A then means.
+    m = multibody.load(root / "tests" / "fixtures" / "heavy_top.ron")
+    with pytest.warns(UserWarning, match="not an equilibrium nor a steady motion"):
+        lin = m.linearize("kane", q={"e0": 1.0, "e1": 0.0}, qdot={"e2": 0.0, "e3": 20.0})
+    assert len(lin.eigenvalues) > 0
+    assert abs(np.sum(lin.eigenvalues).real - np.trace(lin.A)) < 1e-9 * np.abs(lin.A).max()
+    # numpy finds the same eigenvalues.
+    mine = np.sort_complex(lin.eigenvalues)
+    cyclic = lin.A.shape[0] - len(mine)
+    theirs = np.sort_complex(np.linalg.eigvals(lin.A))
+    assert cyclic >= 0 and np.allclose(np.sort_complex(np.concatenate([mine, np.zeros(cyclic)])), theirs, atol=1e-9)

@@ -315,7 +315,9 @@ fn concurrent_runs_keep_their_own_results(args: &[&str], env: &[(&str, &std::ffi
     assert_ne!(a[0]["energy_error_norm"], b[0]["energy_error_norm"]);
 }
 
-/// What the derivation could not decide reaches stderr as a warning, and the run goes on.
+/// What the derivation could not decide and that changes the model's equations (here: the
+/// automatic choice of ignorable coordinates left `x` out) reaches stderr as a warning, and
+/// the run goes on.
 #[test]
 fn undecided_questions_are_warned_about() {
     let dir = tempfile::tempdir().unwrap();
@@ -324,7 +326,7 @@ fn undecided_questions_are_warned_about() {
     let out = multibody(dir.path(), &["compare", "kink.ron"]);
     ok(&out);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("warning: whether the equations depend on `x` could not be decided exactly"), "{stderr}");
+    assert!(stderr.contains("warning: `x` is not taken as ignorable: whether the equations depend on it could not be decided exactly"), "{stderr}");
 }
 
 /// The rustc beside the cargo that runs these tests (the compiled route's only need).

@@ -151,11 +151,10 @@ impl ModelError {
     /// ```
     pub fn render(&self, color: bool) -> String {
         let (Some(text), Some(span)) = (&self.source_text, &self.span) else { return self.to_string() };
-        let excerpt = Excerpt {
-            error: self,
-            source: miette::NamedSource::new(&self.file, text.to_string()),
-            span: (span.start.min(text.len()), span.len().min(text.len().saturating_sub(span.start))).into(),
-        };
+        let start = floor_char_boundary(text, span.start.min(text.len()));
+        let end = floor_char_boundary(text, span.end.clamp(start, text.len()));
+        let (window, span) = Window::around(&self.file, text, start..end);
+        let excerpt = Excerpt { error: self, source: window, span: (span.start, span.len()).into() };
         let theme = if color { miette::GraphicalTheme::unicode() } else { miette::GraphicalTheme::unicode_nocolor() };
         let handler = miette::GraphicalReportHandler::new_themed(theme).with_wrap_lines(false).with_context_lines(1);
         let mut out = String::new();
@@ -166,11 +165,109 @@ impl ModelError {
     }
 }
 
+/// The widest line an excerpt shows whole, in characters: a longer one (a model written on one
+/// line by a script) is shown as this many characters around the error's column. (The
+/// renderer pads to the column, and a padding past 65535 is a panic in Rust's formatting.)
+const WIDEST_LINE: usize = 160;
+
+/// The largest char boundary of `text` at or before `at`.
+fn floor_char_boundary(text: &str, at: usize) -> usize {
+    (0..=at.min(text.len())).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0)
+}
+
+/// The part of a file an excerpt shows: the error's line and one line either side, each cut to
+/// [`WIDEST_LINE`] characters around the error's column (marked `…` where cut), numbered as
+/// in the file.
+#[derive(Debug)]
+struct Window {
+    name: String,
+    text: String,
+    /// The file's 0-based line number of the window's first line.
+    first_line: usize,
+    /// The bytes of the error's line before the band shown, less those of the `…` that stands
+    /// for them: added to the column the renderer names (it counts bytes).
+    column_shift: usize,
+}
+
+impl Window {
+    /// The window of `text` around `span`, and the span's place in it.
+    fn around(name: &str, text: &str, span: Range<usize>) -> (Window, Range<usize>) {
+        let line_start = |at: usize| text[..at].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = |at: usize| text[at..].find('\n').map_or(text.len(), |i| at + i);
+        let (err_start, err_end) = (line_start(span.start), line_end(span.start));
+        let first = if err_start == 0 { 0 } else { line_start(err_start - 1) };
+        let last = if err_end == text.len() { err_end } else { line_end(err_end + 1) };
+        let lines: Vec<(usize, &str)> = {
+            let mut at = first;
+            text[first..last]
+                .split('\n')
+                .map(|l| {
+                    let offset = at;
+                    at += l.len() + 1;
+                    (offset, l)
+                })
+                .collect()
+        };
+        let whole = Window { name: name.to_string(), text: text.to_string(), first_line: 0, column_shift: 0 };
+        if lines.iter().all(|(_, l)| l.chars().count() <= WIDEST_LINE) {
+            return (whole, span);
+        }
+        // The characters shown of every line: a band of columns around the error's.
+        let column = text[err_start..span.start].chars().count();
+        let from = column.saturating_sub(WIDEST_LINE / 2);
+        let to = from + WIDEST_LINE;
+        let mut out = String::new();
+        let mut placed = 0..0;
+        let mut column_shift = 0;
+        for (k, (offset, line)) in lines.iter().enumerate() {
+            if k > 0 {
+                out.push('\n');
+            }
+            let chars: Vec<(usize, char)> = line.char_indices().collect();
+            let cut_before = from > 0 && chars.len() > from;
+            if cut_before {
+                out.push('…');
+            }
+            let band_start = chars.get(from).map_or(line.len(), |(i, _)| *i);
+            let band_end = chars.get(to).map_or(line.len(), |(i, _)| *i);
+            let shown_from = out.len();
+            out.push_str(&line[band_start.min(band_end)..band_end]);
+            if band_end < line.len() {
+                out.push('…');
+            }
+            if *offset == err_start {
+                column_shift = if cut_before { band_start - '…'.len_utf8() } else { 0 };
+                // The span, clipped to the band shown.
+                let local = |at: usize| (at - offset).clamp(band_start, band_end) - band_start + shown_from;
+                placed = local(span.start)..local(span.end.min(offset + line.len()));
+            }
+        }
+        let first_line = text[..first].matches('\n').count();
+        (Window { name: name.to_string(), text: out, first_line, column_shift }, placed)
+    }
+}
+
+impl miette::SourceCode for Window {
+    fn read_span<'a>(&'a self, span: &miette::SourceSpan, before: usize, after: usize) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        let inner = self.text.as_str().read_span(span, before, after)?;
+        Ok(Box::new(miette::MietteSpanContents::new_named(
+            self.name.clone(),
+            inner.data(),
+            *inner.span(),
+            inner.line() + self.first_line,
+            // The renderer reads the primary label alone (no context lines) for the column it
+            // names; the context it draws starts each line at column 0 of the band.
+            inner.column() + if before == 0 && after == 0 { self.column_shift } else { 0 },
+            inner.line_count(),
+        )))
+    }
+}
+
 /// A [`ModelError`] as a miette diagnostic: its header, the labelled span, the fix.
 #[derive(Debug)]
 struct Excerpt<'a> {
     error: &'a ModelError,
-    source: miette::NamedSource<String>,
+    source: Window,
     span: miette::SourceSpan,
 }
 

@@ -592,3 +592,55 @@ fn a_coordinate_that_moves_no_body_is_refused_by_name() {
     assert_eq!(e.location.unwrap().0, 14, "{e}");
     assert!(generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).is_err());
 }
+
+/// A model written on one line (minified, or by a script), its error past column 65535: the
+/// excerpt shows the part of the line around the error, never a panic (the renderer pads to
+/// the column, and Rust's formatting panics on a width past 65535). Every class of error of
+/// this file, and every model of `models/` with a misspelled field.
+#[test]
+fn errors_on_a_wide_line_render_an_excerpt_around_the_column() {
+    let edits: [(fn() -> String, &str, &str); 14] = [
+        (scene1, "coordinates: [\"theta1\", \"theta2\", \"x\"],", "coordinates: [\"theta1\" \"theta2\", \"x\"],"),
+        (scene1, "description:", "descripton:"),
+        (scene1, "com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-lx/2\", \"0\"]"),
+        (scene1, "\"m1*l^2/12\", \"0\"", "\"m1*l^^2/12\", \"0\""),
+        (scene1, "translation: [\"x\", \"0\", \"0\"]", "translation: [\"x\", \"0\"]"),
+        (scene1, "Body(name: \"bar2\", frame: \"bar2\"", "Body(name: \"bar2\", frame: \"bar3\""),
+        (scene1, "Frame(name: \"cart\", parent: \"world\"", "Frame(name: \"cart\", parent: \"bar2\""),
+        (scene1, "\"m2\": 1.0,", "\"m2\": -1.0,"),
+        (scene2, "\"Ixy\": 0.05", "\"Ixy\": 5.0"),
+        (scene1, "full: [\"theta1' - theta2'\", \"x'\"]", "full: [\"theta1' - theta2'\"]"),
+        (scene1, "ignorable: Declared([\"x\"])", "ignorable: Declared([\"theta1\", \"x\"])"),
+        (scene1, "l*theta2'\"", "l*theta2'^2\""),
+        (scene1, "com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-l/2*theta1'\", \"0\"]"),
+        (scene1, ", \"x\": \"0.3\"", ""),
+    ];
+    let one_line = |text: &str| {
+        let without_comments: String = text.lines().map(|l| l.split("//").next().unwrap()).collect::<Vec<_>>().join(" ");
+        without_comments.replacen("Model(", &format!("Model({}", " ".repeat(70_000)), 1)
+    };
+    let mut cases: Vec<String> = edits.iter().map(|(scene, from, to)| one_line(&scene()).replacen(from, to, 1)).collect();
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../models");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let text = std::fs::read_to_string(entry.unwrap().path()).unwrap();
+        cases.push(one_line(&text).replacen("description:", "descripton:", 1));
+    }
+    for (k, text) in cases.iter().enumerate() {
+        assert!(!text.contains('\n'));
+        let e = match from_source("models/broken.ron", text) {
+            Ok(model) => {
+                let mech = mechanics::derive(&model);
+                ignorable::choose(&model, &ignorable::analyze(&model, &mech)).expect_err("refused")
+            }
+            Err(e) => e,
+        };
+        let (line, column) = e.location.unwrap_or_else(|| panic!("case {k}: located: {e}"));
+        assert!(line == 1 && column > 65_535, "case {k}: at {line}:{column}: {e}");
+        let report = e.render(false);
+        assert!(report.contains(&format!("models/broken.ron:1:{column}")), "case {k}: {report}");
+        assert!(report.contains(&format!("╭─[models/broken.ron:1:{column}]")), "case {k}: {report}");
+        // The excerpt: line 1, cut on both sides, narrower than the line, with its label.
+        assert!(report.contains(" 1 │ …") && report.contains("╰──"), "case {k}: {report}");
+        assert!(report.lines().all(|l| l.chars().count() < 400), "case {k}: {report}");
+    }
+}
