@@ -125,6 +125,10 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         route.describe()
     );
     let json_to_stdout = args.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    if let Some(path) = args.json.as_deref().filter(|_| !json_to_stdout) {
+        // Before the runs: the records may not go over a file the run reads.
+        files::check_output(path)?;
+    }
     if json_to_stdout {
         // stdout carries the JSON alone, so that it can be piped; the table goes to stderr.
         eprint!("{header}{}", table(&runs));

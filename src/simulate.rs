@@ -71,6 +71,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     if let Some(controller) = series_controller(&model, &args.input)? {
         sys = sys.with_controller(controller);
     }
+    // Every output is checked before the run: none may be a file the run reads (the model,
+    // an input series), whatever its name says.
+    let base = args.out.join(format!("{}_{}", model.module, kind.name()));
+    for path in [base.with_extension("csv"), base.with_extension("json")].iter().chain(&args.animate) {
+        files::check_output(path)?;
+    }
     let times = reference.times().map_err(CliError::Grid)?;
     let span = reference.t_end - reference.t_start;
     let bar = crate::report::progress_bar(1000);
@@ -94,7 +100,6 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     if let Some(t) = solution.stats.stiff_at {
         eprintln!("{}", crate::report::stiff_warning(kind.name(), t));
     }
-    let base = args.out.join(format!("{}_{}", model.module, kind.name()));
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(header)?;
     for row in rows {

@@ -12,14 +12,24 @@
 //!   that depend on it stay fresh); it reads at most as many bytes as it would write.
 //! - [`read_bounded`] reads at most `limit` bytes and says so when a file holds more
 //!   (`/dev/zero` as a model file ends with [`FileError::TooLarge`], not with the memory).
+//! - Nothing this process read is ever written over: every regular file [`read_bounded`]
+//!   opens is remembered by device and inode, and a write whose target is one of them (by any
+//!   path: a symlink, a hard link, `./m.ron` for `m.ron`) is refused with
+//!   [`FileError::IsAnInput`], whatever flags the caller was given. [`check_output`] asks the
+//!   same question before any work is done.
+//! - A symlink in a shared sticky folder (`/tmp`) that belongs to another user is not followed,
+//!   as the kernel's `protected_symlinks` rule would not follow it ([`FileError::ForeignLink`]):
+//!   another user cannot point a run's output at a file of this one's.
 //!
 //! ```
 //! let dir = tempfile::tempdir().unwrap();
 //! let path = dir.path().join("module.rs");
 //! files::write_atomic(&path, b"pub fn f() {}\n").unwrap();
-//! assert_eq!(files::read_bounded(&path, 1024).unwrap(), b"pub fn f() {}\n");
 //! assert_eq!(files::write_if_changed(&path, b"pub fn f() {}\n").unwrap(), files::Written::Unchanged);
+//! assert_eq!(files::read_bounded(&path, 1024).unwrap(), b"pub fn f() {}\n");
 //! assert!(matches!(files::read_bounded(&path, 4), Err(files::FileError::TooLarge { limit: 4, .. })));
+//! // Read now, it is an input of this process: never written over.
+//! assert!(matches!(files::write_atomic(&path, b"{}"), Err(files::FileError::IsAnInput { .. })));
 //! ```
 
 use std::fs::{File, OpenOptions};
@@ -60,6 +70,22 @@ pub enum FileError {
     /// A read found more than `limit` bytes.
     #[error("`{}` holds more than {limit} bytes, the most this reads (is it the right file?)", printable_path(path))]
     TooLarge { path: PathBuf, limit: u64 },
+    /// The target is a file this process read (its model, an input series): it is never
+    /// written over, whatever the flags.
+    #[error(
+        "cannot write `{}`: it is `{}`, which this run reads; nothing was written (give the output another path)",
+        printable_path(path),
+        printable_path(input)
+    )]
+    IsAnInput { path: PathBuf, input: PathBuf },
+    /// A symlink another user owns, in a folder every user may write to but only owners may
+    /// delete from (sticky, like `/tmp`): not followed.
+    #[error(
+        "cannot write `{}`: `{}` is a symbolic link of another user (uid {owner}) in a shared sticky folder, and is not followed (as the kernel's protected_symlinks would not); nothing was written",
+        printable_path(path),
+        printable_path(link)
+    )]
+    ForeignLink { path: PathBuf, link: PathBuf, owner: u32 },
 }
 
 impl FileError {
@@ -69,13 +95,21 @@ impl FileError {
             FileError::Io { source, .. } => source.to_string(),
             FileError::NotRegular { kind, .. } => format!("it is {kind}, not a regular file"),
             FileError::TooLarge { limit, .. } => format!("it holds more than {limit} bytes"),
+            FileError::IsAnInput { input, .. } => format!("it is `{}`, which this run reads", printable_path(input)),
+            FileError::ForeignLink { link, owner, .. } => {
+                format!("`{}` is a symbolic link of another user (uid {owner}) in a shared sticky folder", printable_path(link))
+            }
         }
     }
 
     /// The path the error is about.
     pub fn path(&self) -> &Path {
         match self {
-            FileError::Io { path, .. } | FileError::NotRegular { path, .. } | FileError::TooLarge { path, .. } => path,
+            FileError::Io { path, .. }
+            | FileError::NotRegular { path, .. }
+            | FileError::TooLarge { path, .. }
+            | FileError::IsAnInput { path, .. }
+            | FileError::ForeignLink { path, .. } => path,
         }
     }
 }
@@ -106,8 +140,136 @@ fn io<'a>(path: &'a Path, action: &'static str) -> impl FnOnce(std::io::Error) -
     move |source| FileError::Io { path: path.to_path_buf(), action, source }
 }
 
-/// Classifies `path` without opening it.
+/// The files this process read ([`read_bounded`]), by device and inode, with the path each was
+/// read by.
+static INPUTS: std::sync::Mutex<Vec<(u64, u64, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+
+/// A file's identity: its device and inode (on other systems, its canonical path's hash).
+fn identity(meta: &std::fs::Metadata, path: &Path) -> (u64, u64) {
+    #[cfg(unix)]
+    {
+        let _ = path;
+        use std::os::unix::fs::MetadataExt;
+        (meta.dev(), meta.ino())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()).hash(&mut h);
+        (0, h.finish())
+    }
+}
+
+/// Remembers the regular file `meta` describes as one this process reads.
+fn remember_input(meta: &std::fs::Metadata, path: &Path) {
+    if !meta.is_file() {
+        return;
+    }
+    let id = identity(meta, path);
+    let mut inputs = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
+    if !inputs.iter().any(|(d, i, _)| (*d, *i) == id) {
+        inputs.push((id.0, id.1, path.to_path_buf()));
+    }
+}
+
+/// The input (its path as read) that `meta` is, if any. An input whose path no longer leads to
+/// the file read (deleted, or replaced) is forgotten: its inode may now be another file's.
+fn input_at(meta: &std::fs::Metadata, path: &Path) -> Option<PathBuf> {
+    if !meta.is_file() {
+        return None;
+    }
+    let id = identity(meta, path);
+    let mut inputs = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
+    inputs.retain(|(d, i, p)| std::fs::metadata(p).is_ok_and(|m| identity(&m, p) == (*d, *i)));
+    inputs.iter().find(|(d, i, _)| (*d, *i) == id).map(|(_, _, p)| p.clone())
+}
+
+/// Remembers `path`, read by other means than [`read_bounded`], as an input of this process:
+/// no write replaces it afterwards.
+pub fn note_input(path: &Path) {
+    if let Ok(meta) = std::fs::metadata(path) {
+        remember_input(&meta, path);
+    }
+}
+
+/// Whether a write to `path` would be refused ([`FileError::IsAnInput`], a path that is not a
+/// regular file, a foreign link): asked before a run's work, so that a wrong output path costs
+/// nothing. Nothing is created.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let model = dir.path().join("m.ron");
+/// std::fs::write(&model, "Model()").unwrap();
+/// files::read_bounded(&model, 1024).unwrap();
+/// let e = files::check_output(&dir.path().join("./m.ron")).unwrap_err();
+/// assert!(matches!(e, files::FileError::IsAnInput { .. }), "{e}");
+/// assert!(files::write_atomic(&model, b"{}").is_err());
+/// assert_eq!(std::fs::read(&model).unwrap(), b"Model()");
+/// files::check_output(&dir.path().join("out.json")).unwrap();
+/// ```
+pub fn check_output(path: &Path) -> Result<(), FileError> {
+    target(path).map(|_| ())
+}
+
+/// The kernel's `protected_symlinks` rule for the symlink `link` (its own metadata `meta`): in
+/// a sticky folder every user may write to, it is followed only if this user or the folder's
+/// owner owns it.
+#[cfg(unix)]
+fn trusted_link(shown: &Path, link: &Path, meta: &std::fs::Metadata) -> Result<(), FileError> {
+    use std::os::unix::fs::MetadataExt;
+    let folder = match link.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let Ok(dir) = std::fs::metadata(folder) else { return Ok(()) };
+    let shared_sticky = dir.mode() & 0o1002 == 0o1002;
+    // SAFETY: `geteuid` has no preconditions and cannot fail.
+    let me = unsafe { libc::geteuid() };
+    if shared_sticky && meta.uid() != me && meta.uid() != dir.uid() {
+        return Err(FileError::ForeignLink { path: shown.to_path_buf(), link: link.to_path_buf(), owner: meta.uid() });
+    }
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn trusted_link(_: &Path, _: &Path, _: &std::fs::Metadata) -> Result<(), FileError> {
+    Ok(())
+}
+
+/// Every symlink on the way to `path` (each prefix of it) passes [`trusted_link`].
+fn trusted_links(path: &Path) -> Result<(), FileError> {
+    let mut prefix = PathBuf::new();
+    for part in path.components() {
+        prefix.push(part);
+        if let Ok(meta) = std::fs::symlink_metadata(&prefix)
+            && meta.file_type().is_symlink()
+        {
+            trusted_link(path, &prefix, &meta)?;
+        }
+    }
+    Ok(())
+}
+
+/// Classifies `path` without opening it: what a write would do there, and refuses what it must
+/// not touch (an input of this run, a foreign link, what is not a file).
 fn target(path: &Path) -> Result<Target, FileError> {
+    trusted_links(path)?;
+    let found = classify(path)?;
+    let meta = match &found {
+        Target::Regular(_, meta) => Some(meta.clone()),
+        Target::Stream(resolved) => std::fs::metadata(resolved).ok(),
+        Target::Missing(_) => None,
+    };
+    if let Some(input) = meta.and_then(|m| input_at(&m, path)) {
+        return Err(FileError::IsAnInput { path: path.to_path_buf(), input });
+    }
+    Ok(found)
+}
+
+/// What is at `path`, following symlinks.
+fn classify(path: &Path) -> Result<Target, FileError> {
     let link = match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Target::Missing(path.to_path_buf())),
         other => other.map_err(io(path, "inspect"))?,
@@ -234,6 +396,9 @@ pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
     let f = File::open(path).map_err(io(path, "read"))?;
     if f.metadata().is_ok_and(|m| m.is_dir()) {
         return Err(FileError::Io { path: path.to_path_buf(), action: "read", source: std::io::Error::other("it is a directory") });
+    }
+    if let Ok(meta) = f.metadata() {
+        remember_input(&meta, path);
     }
     let mut out = Vec::new();
     f.take(limit.saturating_add(1)).read_to_end(&mut out).map_err(io(path, "read"))?;

@@ -154,6 +154,10 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
         refuse_overwriting_a_model(&file, out, args.force)?;
     }
     let model = crate::model::source(&file)?.model()?;
+    if let Some(out) = &args.output {
+        // The model read, the output may not be it (by any path), whatever `--force` says.
+        files::check_output(out).map_err(|e| Failure::Message(format!("error: {e}")))?;
+    }
     let mut options = Options::from_model(&model);
     if let Some(list) = &args.formulations {
         let mut f: Vec<Formulation> = list.iter().map(|x| (*x).into()).collect();
@@ -239,12 +243,13 @@ pub fn overwrites_a_model(input: &Path, output: &Path) -> Option<Overwrite> {
     output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")).then_some(Overwrite::RonFile)
 }
 
-/// Refuses to write Rust over the model itself, or over any `.ron` file, unless `force`.
+/// Refuses to write Rust over the model itself (whatever `force` says), or over any `.ron`
+/// file unless `force`.
 fn refuse_overwriting_a_model(input: &Path, output: &Path, force: bool) -> Result<(), String> {
-    match overwrites_a_model(input, output).filter(|_| !force) {
+    match overwrites_a_model(input, output).filter(|o| !force || *o == Overwrite::ModelItself) {
         None => Ok(()),
         Some(Overwrite::ModelItself) => Err(format!(
-            "error: the output `{}` is the model file itself: writing Rust there would destroy the model\n  help: give another path with -o (or --force if you mean it)",
+            "error: the output `{}` is the model file itself: writing Rust there would destroy the model\n  help: give another path with -o",
             files::printable_path(output)
         )),
         Some(Overwrite::RonFile) => Err(format!(

@@ -508,17 +508,17 @@ impl Model {
 
     /// Writes the model's Rust module (what `generator MODEL -o PATH` writes) to `path`,
     /// atomically; a file already holding the same bytes is left alone. Refuses the model file
-    /// itself and any `.ron` file unless `force`.
+    /// itself (by any path: any file this process read), and any `.ron` file unless `force`.
     #[pyo3(signature = (path, force=false))]
     fn generate_rust(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<()> {
         guarded(|| {
             use generator::command::{Overwrite, overwrites_a_model};
             let shown = files::printable_path(&path);
-            match overwrites_a_model(std::path::Path::new(&self.source.file), &path).filter(|_| !force) {
+            match overwrites_a_model(std::path::Path::new(&self.source.file), &path).filter(|o| !force || *o == Overwrite::ModelItself) {
                 None => {}
                 Some(Overwrite::ModelItself) => {
                     return Err(PyValueError::new_err(format!(
-                        "`{shown}` is the model file itself: writing Rust there would destroy the model (give another path, or force=True if you mean it)"
+                        "`{shown}` is the model file itself: writing Rust there would destroy the model (give another path)"
                     )));
                 }
                 Some(Overwrite::RonFile) => {

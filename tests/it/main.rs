@@ -16,6 +16,7 @@ mod events;
 mod extremes;
 mod figures;
 mod jacobian;
+mod never;
 mod ops_against_sympy;
 mod outside;
 mod quaternion;

@@ -76,7 +76,7 @@ fn dependence(e: Expr, q: Symbol) -> Option<(Expr, bool)> {
         ZeroVerdict::Zero { .. } => None,
         ZeroVerdict::NonZero { .. } => Some((d, false)),
         ZeroVerdict::Undecided { reason } => {
-            crate::symbolic::report::record(|c| c.note(undecided_note(q, &reason)));
+            crate::symbolic::report::record(|c| c.note(undecided_note(q, reason)));
             Some((d, true))
         }
     }

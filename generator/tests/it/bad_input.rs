@@ -263,6 +263,15 @@ fn output_never_destroys_a_model_or_a_file() {
     }
     assert_eq!(std::fs::read_to_string(&model).unwrap(), scene1());
     assert!(!dir.join("other.ron").exists());
+    // The model itself stays refused with --force, by any path to it.
+    let link = dir.join("link.rs");
+    std::os::unix::fs::symlink(&model, &link).unwrap();
+    for target in [model.clone(), dir.join("./m.ron"), link] {
+        let out = run_generator(&[model.as_os_str(), "-o".as_ref(), target.as_os_str(), "--force".as_ref()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && (err.contains("model file itself") || err.contains("which this run reads")), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&model).unwrap(), scene1());
     let forced = dir.join("forced.ron");
     let out = run_generator(&[model.as_os_str(), "-o".as_ref(), forced.as_os_str(), "--force".as_ref()]);
     assert!(out.status.success() && std::fs::read_to_string(&forced).unwrap().contains("pub fn rhs("));
