@@ -36,6 +36,12 @@ pub enum Error {
     NoRustc { program: String, source: std::io::Error },
     #[error("rustc failed to build the model's library ({status}); this is a fault of multibody, please report it with this output:\n{output}")]
     Rustc { status: String, output: String },
+    #[error("rustc was killed (signal {signal}) while it built the model's library: out of memory, or stopped by hand? Run again to build it")]
+    RustcKilled { signal: i32 },
+    #[error(
+        "the disk of the cache folder is full: the model's library could not be built there (free some space, or set MULTIBODY_CACHE_DIR to a folder on another disk):\n{output}"
+    )]
+    DiskFull { output: String },
     #[error("the cache folder {} cannot be used: {problem} (or set {} to another folder)", folder.display(), cache::CACHE_VARIABLE)]
     Cache { folder: PathBuf, problem: String },
     #[error("no cache folder is known on this system: set {}", cache::CACHE_VARIABLE)]
@@ -145,20 +151,29 @@ pub fn rustc_program() -> PathBuf {
 /// [`build`] with the rustc at `rustc`.
 pub fn build_with(module: &str, folder: &Path, rustc: &Path, on_build: &mut dyn FnMut(&Path)) -> Result<Library, Error> {
     let key = key(module);
-    cache::prepare(folder)?;
-    let path = cache::library_path(folder, &key);
+    let cache = cache::Cache::open(folder)?;
+    let shown = cache.shown_library(&key);
     let mut built = false;
-    if !path.is_file() {
-        let _lock = cache::lock(folder, &key)?;
-        // Another process may have built it while this one waited for the lock.
-        if !path.is_file() {
-            on_build(&path);
-            compile(module, &key, folder, &path, rustc)?;
-            built = true;
+    let file = match cache.verified(&key) {
+        Some(file) => file,
+        None => {
+            let _lock = cache.lock(&key)?;
+            // Another process may have built it while this one waited for the lock.
+            match cache.verified(&key) {
+                Some(file) => file,
+                None => {
+                    on_build(&shown);
+                    let work = cache.build_folder(&key)?;
+                    let library = compile(module, &key, work.path(), rustc)?;
+                    cache.store(&key, &library)?;
+                    built = true;
+                    cache.verified(&key).ok_or_else(|| Error::Load { path: shown.clone(), reason: "the library just built does not verify".into() })?
+                }
+            }
         }
-    }
-    let loaded = load(&path, &key)?;
-    Ok(Library { loaded: Arc::new(loaded), path, built })
+    };
+    let loaded = load(&file, &shown, &key)?;
+    Ok(Library { loaded: Arc::new(loaded), path: shown, built })
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + use<> {
@@ -166,24 +181,31 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + use<> {
     move |source| Error::Io { path, source }
 }
 
-fn run_rustc(program: &Path, arguments: &[&std::ffi::OsStr], folder: &Path) -> Result<(), Error> {
-    let output = Command::new(program)
+/// Runs rustc in `folder` (every path it is given relative to it).
+fn run_rustc(program: &Path, arguments: &[&str], folder: &Path) -> Result<(), Error> {
+    let result = Command::new(program)
         .args(arguments)
         .current_dir(folder)
         .output()
         .map_err(|source| Error::NoRustc { program: program.display().to_string(), source })?;
-    if output.status.success() {
+    if result.status.success() {
         return Ok(());
     }
-    let text = String::from_utf8_lossy(&output.stderr);
+    let text = String::from_utf8_lossy(&result.stderr);
     let tail: Vec<&str> = text.lines().rev().take(40).collect();
-    Err(Error::Rustc { status: output.status.to_string(), output: tail.into_iter().rev().collect::<Vec<_>>().join("\n") })
+    let output = tail.into_iter().rev().collect::<Vec<_>>().join("\n");
+    #[cfg(unix)]
+    if let Some(signal) = std::os::unix::process::ExitStatusExt::signal(&result.status) {
+        return Err(Error::RustcKilled { signal });
+    }
+    if text.contains("No space left on device") || text.contains("Disk quota exceeded") {
+        return Err(Error::DiskFull { output });
+    }
+    Err(Error::Rustc { status: result.status.to_string(), output })
 }
 
-/// Builds the library of `module` into `target`, through a private temporary folder beside it.
-fn compile(module: &str, key: &str, folder: &Path, target: &Path, rustc: &Path) -> Result<(), Error> {
-    let work = tempfile::Builder::new().prefix(".build-").tempdir_in(folder).map_err(io(folder))?;
-    let dir = work.path();
+/// Builds the library of `module` in the private folder `dir`; the path of the library.
+fn compile(module: &str, key: &str, dir: &Path, rustc: &Path) -> Result<PathBuf, Error> {
     let seam_dir = dir.join("seam");
     std::fs::create_dir(&seam_dir).map_err(io(&seam_dir))?;
     let mut files: Vec<(PathBuf, &[u8])> = SEAM_SOURCES.iter().map(|(name, text)| (seam_dir.join(name), text.as_bytes())).collect();
@@ -194,28 +216,46 @@ fn compile(module: &str, key: &str, folder: &Path, target: &Path, rustc: &Path) 
         (dir.join("key.txt"), key.as_bytes()),
     ]);
     for (path, bytes) in &files {
-        std::fs::write(path, bytes).map_err(io(path))?;
+        std::fs::write(path, bytes).map_err(|e| match e.raw_os_error() {
+            Some(28) => Error::DiskFull { output: e.to_string() },
+            _ => Error::Io { path: path.clone(), source: e },
+        })?;
     }
-    let rlib = dir.join("libseam.rlib");
-    let seam_root = seam_dir.join("lib.rs");
-    let mut arguments: Vec<&std::ffi::OsStr> = SEAM_FLAGS.iter().map(std::ffi::OsStr::new).collect();
-    arguments.extend([std::ffi::OsStr::new("-o"), rlib.as_os_str(), seam_root.as_os_str()]);
+    // rustc runs in `dir` and is given paths relative to it: `dir` may be reached through this
+    // process's handle on the cache, which rustc does not have.
+    let mut arguments: Vec<&str> = SEAM_FLAGS.to_vec();
+    arguments.extend(["-o", "libseam.rlib", "seam/lib.rs"]);
     run_rustc(rustc, &arguments, dir)?;
-    let output = dir.join(target.file_name().expect("a library path has a file name"));
-    let extern_seam = std::ffi::OsString::from(format!("seam={}", rlib.display()));
-    let library_root = dir.join("lib.rs");
-    let mut arguments: Vec<&std::ffi::OsStr> = LIBRARY_FLAGS.iter().map(std::ffi::OsStr::new).collect();
-    arguments.extend([std::ffi::OsStr::new("--extern"), &extern_seam, std::ffi::OsStr::new("-o"), output.as_os_str(), library_root.as_os_str()]);
+    let name = cache::library_name(key);
+    let mut arguments: Vec<&str> = LIBRARY_FLAGS.to_vec();
+    arguments.extend(["--extern", "seam=libseam.rlib", "-o", &name, "lib.rs"]);
     run_rustc(rustc, &arguments, dir)?;
-    std::fs::rename(&output, target).map_err(io(target))
+    Ok(dir.join(name))
 }
 
-/// Loads the library at `path` and checks that it is the one of `key`.
-fn load(path: &Path, key: &str) -> Result<Loaded, Error> {
-    let fail = |reason: String| Error::Load { path: path.to_path_buf(), reason };
-    // SAFETY: the library was built by `compile` from fixed sources and an emitted module; its
-    // only initialization is static data (its model is built on first use, in Rust).
-    let library = unsafe { libloading::Library::new(path) }.map_err(|e| fail(e.to_string()))?;
+/// Loads the library open in `file` (verified against its digest, [`cache::Cache::verified`])
+/// from that same file, and checks that it is the one of `key`. `shown` names it in errors.
+fn load(file: &std::fs::File, shown: &Path, key: &str) -> Result<Loaded, Error> {
+    let fail = |reason: String| Error::Load { path: shown.to_path_buf(), reason };
+    // Through the open file, each time by a name never used before: glibc's `dlopen` returns
+    // the library already loaded under the same name without opening anything, and the number
+    // of a closed file is given to the next one (`/proc/self/./fd/N`, `/proc/self/././fd/N`,
+    // ... all name this process's file N).
+    #[cfg(target_os = "linux")]
+    let path = {
+        static LOADS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let spelling = "./".repeat(LOADS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+        PathBuf::from(format!("/proc/self/{spelling}fd/{}", std::os::fd::AsRawFd::as_raw_fd(file)))
+    };
+    #[cfg(not(target_os = "linux"))]
+    let path = {
+        let _ = file;
+        shown.to_path_buf()
+    };
+    // SAFETY: the library's bytes are those built by `compile` from fixed sources and an
+    // emitted module (their digest was checked on this open file); its only initialization
+    // is static data (its model is built on first use, in Rust).
+    let library = unsafe { libloading::Library::new(&path) }.map_err(|e| fail(e.to_string()))?;
     // SAFETY: each symbol has the type `library/lib.rs` gives it.
     let (stored, call, formulation) = unsafe {
         let stored: [u8; 64] = **library.get::<*const [u8; 64]>(abi::KEY_SYMBOL.as_bytes()).map_err(|e| fail(e.to_string()))?;

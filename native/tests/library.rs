@@ -126,10 +126,11 @@ fn concurrent_builds_of_one_key_build_once() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
-/// A library whose key is not its name's (a file swapped in the cache) is refused, and so is a
-/// library given another model's description.
+/// A library swapped in the cache (another model's, copied over it) or truncated (a full disk,
+/// a killed copy: it ended the tool with SIGBUS) does not match the digest kept beside it: it
+/// is never loaded, and is built again; a library given another model's description is refused.
 #[test]
-fn a_swapped_library_is_refused() {
+fn a_swapped_or_truncated_library_is_built_again() {
     let cache = tempfile::tempdir().unwrap();
     let (spring, spring_model) = generated("spring_cart.ron");
     let (cart, _) = generated("cart_pendulum.ron");
@@ -143,8 +144,39 @@ fn a_swapped_library_is_refused() {
     assert!(e.contains("its formulations are"), "{e}");
     drop(b);
     std::fs::copy(&b_path, &a_path).unwrap();
-    let e = native::build(&spring, cache.path(), &mut |_| {}).err().expect("refused").to_string();
-    assert!(e.contains("built from other sources") && e.contains("delete it"), "{e}");
+    let again = native::build(&spring, cache.path(), &mut |_| {}).unwrap();
+    assert!(again.built(), "the swapped library is built again");
+    let model = again.model(spring_model.clone()).unwrap();
+    assert_eq!(model.formulations.len(), spring_model.formulations.len());
+    drop((again, model));
+    let length = std::fs::metadata(&a_path).unwrap().len();
+    std::fs::OpenOptions::new().write(true).open(&a_path).unwrap().set_len(length / 3).unwrap();
+    let again = native::build(&spring, cache.path(), &mut |_| {}).unwrap();
+    assert!(again.built(), "the truncated library is built again");
+    assert_eq!(std::fs::metadata(&a_path).unwrap().len(), length);
+}
+
+/// A rustc killed midway (out of memory, Ctrl-C) is said to be so, not reported as a fault of
+/// multibody; the folder it left is gone after the next build of the key.
+#[cfg(unix)]
+#[test]
+fn a_killed_rustc_is_named() {
+    use std::os::unix::fs::PermissionsExt;
+    let cache = tempfile::tempdir().unwrap();
+    let (spring, _) = generated("spring_cart.ron");
+    let killer = cache.path().join("killed-rustc");
+    std::fs::write(&killer, "#!/bin/sh\nkill -9 $$\n").unwrap();
+    std::fs::set_permissions(&killer, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let folder = cache.path().join("cache");
+    let e = native::build_with(&spring, &folder, &killer, &mut |_| {}).err().expect("refused").to_string();
+    assert!(e.contains("rustc was killed (signal 9)") && !e.contains("fault of multibody"), "{e}");
+    let leftovers = |dir: &Path| std::fs::read_dir(dir).unwrap().filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with(".build-")).count();
+    // A build killed with the tool (kill -9) leaves its folder: the next build removes it.
+    let key = native::key(&spring);
+    std::fs::create_dir(folder.join(format!("{}stale", native::cache::build_prefix(&key)))).unwrap();
+    assert_eq!(leftovers(&folder), 1);
+    native::build(&spring, &folder, &mut |_| {}).unwrap();
+    assert_eq!(leftovers(&folder), 0);
 }
 
 /// Without rustc, the first build says what is needed and how to do without it.
