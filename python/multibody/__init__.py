@@ -293,6 +293,7 @@ def ensemble(
     h=None,
     threads=None,
     return_reached=False,
+    max_values=None,
 ):
     """N runs of ``model`` on every core (``threads`` to choose), the GIL released, each the
     same bytes as it would be alone: ``params`` (N, k) over every parameter in order, ``q0``
@@ -300,9 +301,11 @@ def ensemble(
     one at least is 2-D. Returns the states of ``formulation`` at ``t_eval`` (the first time is
     the start), an array (N, len(t_eval), states); with ``return_reached``, also how many output
     times each member reached (a terminal event stops a member early: its later rows are NaN,
-    and a warning says which members stopped). Ctrl-C stops every member (``KeyboardInterrupt``)."""
+    and a warning says which members stopped). Ctrl-C stops every member (``KeyboardInterrupt``).
+    The output (N x len(t_eval) x states numbers) may hold at most ``max_values`` (default 10**8,
+    800 MB), checked before anything runs; ``threads`` at most 16 per core."""
     states, reached = _multibody.ensemble(
-        model._native, np.asarray(t_eval, dtype=float), params, q0, qdot0, formulation, method, rtol, atol, h, threads
+        model._native, np.asarray(t_eval, dtype=float), params, q0, qdot0, formulation, method, rtol, atol, h, threads, max_values
     )
     return _ensemble_result(states, reached, return_reached)
 

@@ -45,6 +45,14 @@ def ensemble(client, model, t_eval, params=None, q0=None, qdot0=None, chunk_size
     member order."""
     n = _members(params, q0, qdot0)
     return_reached = options.pop("return_reached", False)
+    # The gathered output is whole on the caller's machine: the same limit as one ensemble's.
+    limit = options.get("max_values") or 10**8
+    values = n * len(np.atleast_1d(t_eval)) * len(model.state_names(options.get("formulation")))
+    if values > limit:
+        raise ValueError(
+            f"the ensemble's output would hold {values} numbers ({values * 8e-9:.1f} GB), more than the limit of {limit}: "
+            "give fewer members or output times, or raise the limit (max_values)"
+        )
     if chunk_size is None:
         threads = max(1, sum(client.nthreads().values()))
         chunk_size = max(1, -(-n // (4 * threads)))

@@ -605,7 +605,7 @@ fn members_of(given: Option<&Bound<'_, PyAny>>) -> Option<usize> {
 /// states), and the number of output times each member reached (fewer only where a terminal
 /// event stopped it; its later rows are NaN).
 #[pyfunction]
-#[pyo3(signature = (model, t_eval, params=None, q0=None, qdot0=None, formulation=None, method=None, rtol=None, atol=None, h=None, threads=None))]
+#[pyo3(signature = (model, t_eval, params=None, q0=None, qdot0=None, formulation=None, method=None, rtol=None, atol=None, h=None, threads=None, max_values=None))]
 fn ensemble<'py>(
     py: Python<'py>,
     model: &Model,
@@ -619,6 +619,7 @@ fn ensemble<'py>(
     atol: Option<f64>,
     h: Option<f64>,
     threads: Option<usize>,
+    max_values: Option<usize>,
 ) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray1<u64>>)> {
     guarded(|| {
         let kind = model.kind(formulation)?;
@@ -628,10 +629,29 @@ fn ensemble<'py>(
         if counts.iter().any(|&c| c != n) {
             return Err(PyValueError::new_err(format!("the 2-D arguments disagree on the number of members: {counts:?}")));
         }
+        let limit = max_values.unwrap_or(runtime::ensemble::DEFAULT_MAX_VALUES);
+        let states = m.formulation(kind).expect("the kind is the model's").states();
+        let values = n as u128 * t_eval.len().unwrap_or(0) as u128 * states as u128;
+        if values > limit as u128 {
+            return Err(PyValueError::new_err(
+                runtime::ensemble::EnsembleError::TooLarge { members: n, times: t_eval.len().unwrap_or(0), states, values, limit }.to_string(),
+            ));
+        }
         let (iq, iqd) = model.initial();
         let (params, q0, qdot0) = (rows(params, n, &m.default_params, "params")?, rows(q0, n, &iq, "q0")?, rows(qdot0, n, &iqd, "qdot0")?);
         let members: Vec<runtime::ensemble::Member> =
             params.into_iter().zip(q0).zip(qdot0).map(|((params, q0), qd0)| runtime::ensemble::Member { params, q0, qd0 }).collect();
+        // Sizes first, before anything is copied or allocated.
+        let count = t_eval.len().unwrap_or(0);
+        if count > seam::MAX_OUTPUTS + 1 {
+            return Err(PyValueError::new_err(format!(
+                "t_eval has {count} times, more than the {} a run may hold: sample the run more coarsely",
+                seam::MAX_OUTPUTS + 1
+            )));
+        }
+        if let Some(n) = threads {
+            runtime::ensemble::check_threads(n).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        }
         let times = vector(t_eval, "t_eval")?;
         let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
         let settings = settings(m, span.max(f64::MIN_POSITIVE), method, rtol, atol, h)?;
@@ -642,7 +662,7 @@ fn ensemble<'py>(
             std::thread::scope(|scope| {
                 let (finished, done) = std::sync::mpsc::channel::<()>();
                 let worker = scope.spawn(|| {
-                    let runs = runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, &|| {}, &stop);
+                    let runs = runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, limit, &|| {}, &stop);
                     drop(finished);
                     runs
                 });
@@ -655,7 +675,10 @@ fn ensemble<'py>(
             })
         });
         let runs = runs.map_err(|e| match e {
-            runtime::ensemble::EnsembleError::Times | runtime::ensemble::EnsembleError::Shape { .. } => PyValueError::new_err(e.to_string()),
+            runtime::ensemble::EnsembleError::Times
+            | runtime::ensemble::EnsembleError::Shape { .. }
+            | runtime::ensemble::EnsembleError::TooLarge { .. }
+            | runtime::ensemble::EnsembleError::Threads { .. } => PyValueError::new_err(e.to_string()),
             runtime::ensemble::EnsembleError::Interrupted => interrupt.into_error(py, "the ensemble stopped".into()),
             other => run_error(other),
         })?;
@@ -680,7 +703,18 @@ fn load_model(path: &Bound<'_, PyAny>) -> PyResult<Model> {
 #[pyfunction]
 #[pyo3(signature = (text, name="<string>"))]
 fn loads(text: &str, name: &str) -> PyResult<Model> {
-    guarded(|| Model::open(::load::Source { file: name.to_string(), text: text.to_string() }))
+    guarded(|| {
+        // The limit of a model file, for a model given as text.
+        if text.len() as u64 > generator::model::MAX_MODEL_BYTES {
+            return Err(ModelError::new_err(format!(
+                "{}: the text holds {} bytes, more than the {} a model may hold (a model of hundreds of bodies takes well under a megabyte; build larger ones in Rust with `ModelBuilder`)",
+                files::printable(name),
+                text.len(),
+                generator::model::MAX_MODEL_BYTES
+            )));
+        }
+        Model::open(::load::Source { file: name.to_string(), text: text.to_string() })
+    })
 }
 
 /// The inverse of `Model.__reduce__`.

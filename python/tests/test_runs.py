@@ -182,3 +182,27 @@ def test_ctrl_c_stops_an_ensemble():
         multibody.ensemble(m, [0.0, 1e4], q0=q0, rtol=1e-13, atol=1e-13, threads=2)
     timer.join()
     assert "multibody: the ensemble stopped" in caught.value.__notes__
+
+
+def test_oversized_ensembles_are_refused_before_they_run():
+    # 10**6 members x 1000 times grew until killed; a t_eval of 1.25e8 points aborted the
+    # interpreter; threads=10**4 hung. Each is refused at once, naming the limit.
+    m = multibody.load("cart_pendulum")
+    q0 = np.tile(m.initial[0], (10**6, 1))
+    with pytest.raises(ValueError, match="max_values"):
+        multibody.ensemble(m, np.linspace(0, 1, 1000), q0=q0)
+    with pytest.raises(ValueError, match="more than the 1000001 a run may hold"):
+        multibody.ensemble(m, np.zeros(1_100_000), q0=q0[:2])
+    for threads in (10**4, 10**6):
+        with pytest.raises(ValueError, match="per core"):
+            multibody.ensemble(m, [0.0, 0.1], q0=q0[:2], threads=threads)
+    # Raised, the limit lets it through.
+    states = multibody.ensemble(m, [0.0, 0.1], q0=q0[:3], max_values=3 * 2 * len(m.state_names()))
+    assert states.shape == (3, 2, len(m.state_names()))
+    with pytest.raises(ValueError, match="max_values"):
+        multibody.ensemble(m, [0.0, 0.1], q0=q0[:3], max_values=3 * 2 * len(m.state_names()) - 1)
+
+
+def test_loads_of_a_huge_text_is_refused_at_once():
+    with pytest.raises(multibody.ModelError, match="more than the 16777216 a model may hold"):
+        multibody.loads("Model(" + " " * (17 << 20) + ")")

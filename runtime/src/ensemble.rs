@@ -12,7 +12,7 @@
 //!     .map(|k| Member { params: model.default_params.clone(), q0: vec![0.1 * k as f64, 0.0, 0.0], qd0: vec![0.0; 3] })
 //!     .collect();
 //! let times = [0.0, 0.5, 1.0];
-//! let runs = ensemble(&model, kind, &members, &times, &Settings::tight(1.0), None, &|| {}, &AtomicBool::new(false)).unwrap();
+//! let runs = ensemble(&model, kind, &members, &times, &Settings::tight(1.0), None, runtime::ensemble::DEFAULT_MAX_VALUES, &|| {}, &AtomicBool::new(false)).unwrap();
 //! assert_eq!((runs.members, runs.times, runs.states), (4, 3, 6));
 //! // Member 0 starts at rest in its equilibrium and stays there.
 //! assert!(runs.member(0).iter().all(|x| x.abs() < 1e-12));
@@ -71,6 +71,13 @@ pub enum EnsembleError {
     Times,
     #[error("cannot start {threads} threads: {message}")]
     Threads { threads: usize, message: String },
+    /// The output would hold more numbers than the caller allows (it is allocated whole).
+    #[error(
+        "the ensemble's output would hold {members} members x {times} times x {states} states = {values} numbers ({:.1} GB), more than the limit of {limit} ({:.1} GB): give fewer members or output times, or raise the limit (max_values)",
+        *values as f64 * 8e-9,
+        *limit as f64 * 8e-9
+    )]
+    TooLarge { members: usize, times: usize, states: usize, values: u128, limit: usize },
     /// The caller set the ensemble's `stop` flag (a Ctrl-C): the members running stopped at
     /// their last accepted step, the others never started.
     #[error("interrupted: the caller asked the ensemble to stop")]
@@ -112,10 +119,34 @@ pub fn run_member(
     Ok((states, reached))
 }
 
+/// The most numbers an ensemble's output holds unless the caller allows more: 10^8, 800 MB
+/// (the members' runs hold as much again while they run).
+pub const DEFAULT_MAX_VALUES: usize = 100_000_000;
+
+/// The most threads per core an ensemble starts: more only cost memory and time (each thread
+/// runs whole members; ten thousand threads took a minute to start and stop).
+pub const MAX_THREADS_PER_CORE: usize = 16;
+
+/// Whether `threads` threads may run an ensemble on this machine ([`MAX_THREADS_PER_CORE`]).
+pub fn check_threads(threads: usize) -> Result<(), EnsembleError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let most = MAX_THREADS_PER_CORE * cores;
+    match threads {
+        0 => Err(EnsembleError::Threads { threads, message: "an ensemble needs one thread at least".into() }),
+        n if n > most => Err(EnsembleError::Threads {
+            threads,
+            message: format!("more than {MAX_THREADS_PER_CORE} per core ({cores} cores here, so at most {most}); more threads than cores only cost memory"),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Every member of `members` run with formulation `kind` over the output `times` (the first
-/// is the start) under `settings`, in parallel on `threads` threads (all cores when `None`);
-/// `on_done` is told of every member finished (for progress). Setting `stop` (from another
-/// thread: a Ctrl-C watcher) ends the ensemble early with [`EnsembleError::Interrupted`].
+/// is the start) under `settings`, in parallel on `threads` threads (all cores when `None`;
+/// at most [`MAX_THREADS_PER_CORE`] per core); `on_done` is told of every member finished (for
+/// progress). The output may hold at most `max_values` numbers ([`DEFAULT_MAX_VALUES`]),
+/// checked before anything runs. Setting `stop` (from another thread: a Ctrl-C watcher) ends
+/// the ensemble early with [`EnsembleError::Interrupted`].
 pub fn ensemble(
     model: &Model,
     kind: FormulationKind,
@@ -123,11 +154,15 @@ pub fn ensemble(
     times: &[f64],
     settings: &Settings,
     threads: Option<usize>,
+    max_values: usize,
     on_done: &(dyn Fn() + Sync),
     stop: &AtomicBool,
 ) -> Result<Trajectories, EnsembleError> {
     if times.is_empty() || !times.windows(2).all(|w| w[1] > w[0]) || !times.iter().all(|t| t.is_finite()) {
         return Err(EnsembleError::Times);
+    }
+    if let Some(n) = threads {
+        check_threads(n)?;
     }
     let states = model.formulation(kind).map(|f| f.states()).ok_or_else(|| EnsembleError::Setup {
         member: 0,
@@ -137,6 +172,10 @@ pub fn ensemble(
             available: model.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", "),
         },
     })?;
+    let values = members.len() as u128 * times.len() as u128 * states as u128;
+    if values > max_values as u128 {
+        return Err(EnsembleError::TooLarge { members: members.len(), times: times.len(), states, values, limit: max_values });
+    }
     let all = || -> Vec<Result<(Vec<f64>, usize), EnsembleError>> {
         members
             .par_iter()
@@ -185,6 +224,41 @@ mod tests {
             .collect()
     }
 
+    /// An output larger than the limit, or more threads than a sane multiple of the cores,
+    /// is refused before anything runs or is allocated, naming the limit.
+    #[test]
+    fn oversized_ensembles_are_refused_before_they_run() {
+        let model = generated::three_body::model();
+        let members = members(&model, 3);
+        let times = [0.0, 0.1, 0.2];
+        let states = model.formulation(FormulationKind::Kane).unwrap().states();
+        let values = 9 * states;
+        let e =
+            ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(0.2), None, values - 1, &|| {}, &AtomicBool::new(false)).unwrap_err();
+        assert!(matches!(e, EnsembleError::TooLarge { values: v, .. } if v == values as u128), "{e}");
+        assert!(e.to_string().contains(&format!("3 members x 3 times x {states} states = {values} numbers")) && e.to_string().contains("max_values"), "{e}");
+        ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(0.2), None, values, &|| {}, &AtomicBool::new(false)).unwrap();
+        // A million members of a thousand times: refused at once, nothing allocated.
+        let many = vec![members[0].clone(); 1_000_000];
+        let long: Vec<f64> = (0..1000).map(|i| i as f64).collect();
+        let e = ensemble(&model, FormulationKind::Kane, &many, &long, &Settings::tight(999.0), None, DEFAULT_MAX_VALUES, &|| {}, &AtomicBool::new(false));
+        assert!(matches!(e, Err(EnsembleError::TooLarge { .. })));
+        for threads in [0, 10_000, 1_000_000] {
+            let e = ensemble(
+                &model,
+                FormulationKind::Kane,
+                &members,
+                &times,
+                &Settings::tight(0.2),
+                Some(threads),
+                DEFAULT_MAX_VALUES,
+                &|| {},
+                &AtomicBool::new(false),
+            );
+            assert!(matches!(e, Err(EnsembleError::Threads { .. })), "{threads}: {e:?}");
+        }
+    }
+
     /// Each member of a parallel ensemble is, to the bit, its run alone; and the result does
     /// not depend on the number of threads.
     #[test]
@@ -198,9 +272,9 @@ mod tests {
             let count = || {
                 done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             };
-            let parallel = ensemble(&model, kind, &members, &times, &settings, Some(2), &count, &AtomicBool::new(false)).unwrap();
+            let parallel = ensemble(&model, kind, &members, &times, &settings, Some(2), DEFAULT_MAX_VALUES, &count, &AtomicBool::new(false)).unwrap();
             assert_eq!(done.into_inner(), members.len());
-            let one_thread = ensemble(&model, kind, &members, &times, &settings, Some(1), &|| {}, &AtomicBool::new(false)).unwrap();
+            let one_thread = ensemble(&model, kind, &members, &times, &settings, Some(1), DEFAULT_MAX_VALUES, &|| {}, &AtomicBool::new(false)).unwrap();
             assert_eq!(parallel, one_thread);
             for (k, member) in members.iter().enumerate() {
                 let (sys, y0) = System::start(&model, kind, member.params.clone(), &member.q0, &member.qd0).unwrap();
@@ -220,9 +294,22 @@ mod tests {
         let model = generated::three_body::model();
         let mut members = members(&model, 5);
         members[3].q0.pop();
-        let e = ensemble(&model, FormulationKind::Kane, &members, &[0.0, 0.1], &Settings::tight(0.1), None, &|| {}, &AtomicBool::new(false)).unwrap_err();
+        let e =
+            ensemble(&model, FormulationKind::Kane, &members, &[0.0, 0.1], &Settings::tight(0.1), None, DEFAULT_MAX_VALUES, &|| {}, &AtomicBool::new(false))
+                .unwrap_err();
         assert!(matches!(e, EnsembleError::Shape { member: 3, what: "q0", .. }), "{e}");
-        let e = ensemble(&model, FormulationKind::Kane, &members[..2], &[0.0, 0.0], &Settings::tight(0.1), None, &|| {}, &AtomicBool::new(false)).unwrap_err();
+        let e = ensemble(
+            &model,
+            FormulationKind::Kane,
+            &members[..2],
+            &[0.0, 0.0],
+            &Settings::tight(0.1),
+            None,
+            DEFAULT_MAX_VALUES,
+            &|| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap_err();
         assert!(matches!(e, EnsembleError::Times), "{e}");
     }
 
@@ -240,10 +327,14 @@ mod tests {
             done.fetch_add(1, Ordering::Relaxed);
             stop.store(true, Ordering::Relaxed);
         };
-        let e = ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(1.0), Some(1), &stop_after_first, &stop).unwrap_err();
+        let e = ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(1.0), Some(1), DEFAULT_MAX_VALUES, &stop_after_first, &stop)
+            .unwrap_err();
         assert!(matches!(e, EnsembleError::Interrupted), "{e}");
         // The same ensemble without the stop runs to the end.
-        assert!(ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(1.0), Some(1), &|| {}, &AtomicBool::new(false)).is_ok());
+        assert!(
+            ensemble(&model, FormulationKind::Kane, &members, &times, &Settings::tight(1.0), Some(1), DEFAULT_MAX_VALUES, &|| {}, &AtomicBool::new(false))
+                .is_ok()
+        );
         let (sys, y0) = System::start(&model, FormulationKind::Kane, members[0].params.clone(), &members[0].q0, &members[0].qd0).unwrap();
         let running = run_member(&model, FormulationKind::Kane, &members[0], 0, &times, &Settings::tight(1.0), &AtomicBool::new(true));
         assert!(matches!(running, Err(EnsembleError::Interrupted)));
@@ -267,8 +358,18 @@ mod tests {
         let model = generated::bouncing_ball::model();
         let member = |speed: f64| Member { params: model.default_params.clone(), q0: vec![0.0, 1.0], qd0: vec![speed, 0.0] };
         let times: Vec<f64> = (0..=8).map(|i| 0.5 * f64::from(i)).collect();
-        let runs =
-            ensemble(&model, FormulationKind::Kane, &[member(2.2), member(1.0)], &times, &Settings::tight(4.0), None, &|| {}, &AtomicBool::new(false)).unwrap();
+        let runs = ensemble(
+            &model,
+            FormulationKind::Kane,
+            &[member(2.2), member(1.0)],
+            &times,
+            &Settings::tight(4.0),
+            None,
+            DEFAULT_MAX_VALUES,
+            &|| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap();
         assert_eq!(runs.reached, [5, 9]);
         let first = runs.member(0);
         assert!(first[..5 * runs.states].iter().all(|x| x.is_finite()));

@@ -18,11 +18,12 @@ fn tight() -> Settings {
     Settings { method: Method::Dop853, rtol: 1e-12, atol: 1e-12, h_max: 1.0, ..Settings::default() }
 }
 
-/// The closed form: impacts at `t_1 (1 + 2 (e + ... + e^(k-1)))` with `t_1 = sqrt(2 h / g)`, the
-/// apex after impact `k` a time `t_1 e^k` later at height `h e^(2k)`, up to the wall at `x = t`.
+/// The closed form: the ball released at rest is at its first apex at the start; impacts at
+/// `t_1 (1 + 2 (e + ... + e^(k-1)))` with `t_1 = sqrt(2 h / g)`, the apex after impact `k` a
+/// time `t_1 e^k` later at height `h e^(2k)`, up to the wall at `x = t`.
 fn closed_form() -> Vec<(&'static str, f64, f64)> {
     let t1 = (2.0 * H0 / G).sqrt();
-    let mut out = Vec::new();
+    let mut out = vec![("apex", 0.0, H0)];
     let (mut t, mut k) = (t1, 1);
     while t < WALL {
         out.push(("floor", t, 0.0));

@@ -126,9 +126,19 @@ pub(super) fn drive<S: Stepper>(
         stepper.accepted(f, t, t_new, h, &y_new, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
         let mut prepared = false;
         if let Some(w) = watch.as_deref_mut() {
-            if w.crossed(t_new, &y_new, &mut stats).map_err(|r| stop(t, &y, r))? {
-                stepper.prepare_dense(f, t, &y, &f0, &y_new, &f1, h, &mut stats).map_err(|r| stop(t, &y, r))?;
-                prepared = true;
+            // The event functions over the step: one changing sign more than once gets
+            // shorter steps, a crossing each.
+            w.ended(t_new, &y_new, &mut stats).map_err(|r| stop(t, &y, r))?;
+            stepper.prepare_dense(f, t, &y, &f0, &y_new, &f1, h, &mut stats).map_err(|r| stop(t, &y, r))?;
+            prepared = true;
+            if let Some(shorter) = w.scan(t, h, n, &mut |theta, out| stepper.dense(theta, out), &mut stats).map_err(|r| stop(t, &y, r))? {
+                stats.rejected += 1;
+                stats.steps -= 1;
+                rejected_last = true;
+                h *= shorter;
+                continue;
+            }
+            if w.crossed() {
                 let hit = w.locate(t, h, n, &mut |theta, out| stepper.dense(theta, out), &mut stats).map_err(|r| stop(t, &y, r))?;
                 if let Some(at) = hit {
                     // The run ends at the event: the outputs before it are the interpolant's.

@@ -65,6 +65,14 @@ pub struct Occurrence {
     pub after: Option<Vec<f64>>,
 }
 
+/// The points of a step at which every event function is sampled (on the method's dense
+/// output, the step's end the last of them): a step in which one event's samples change sign
+/// more than once is done again, shorter, so that each crossing gets a step of its own. A
+/// crossing is found when its function changes sign once between two neighbouring samples;
+/// one that changes sign and back between them (an event faster than an eighth of a step) can
+/// be missed: `h_max` below its time scale finds it.
+pub const SAMPLES_PER_STEP: usize = 8;
+
 /// The tolerance in time of a located event at time `t`: 1e-12, or the resolution of `t`
 /// where that is coarser.
 pub fn time_tolerance(t: f64) -> f64 {
@@ -87,29 +95,94 @@ pub(super) struct Watch<'w, 'a> {
     pub hit: Option<Occurrence>,
     /// The sign of the hit event's function before its crossing.
     pub hit_side: f64,
+    /// The events whose function is zero at the run's start: each is taken to come from the
+    /// side opposite to the one it moves to, so that a run starting on an event's surface and
+    /// moving through it in its direction (a ball released on its floor) has the event at once.
+    at_zero: Vec<bool>,
 }
 
 impl<'w, 'a> Watch<'w, 'a> {
     pub fn new(events: &'w mut Events<'a>, rearmed: Option<(usize, f64)>) -> Self {
         let k = events.kinds.len();
-        Watch { events, rearmed, before: vec![0.0; k], after: vec![0.0; k], probe: vec![0.0; k], recorded: Vec::new(), hit: None, hit_side: 0.0 }
+        Watch {
+            events,
+            rearmed,
+            before: vec![0.0; k],
+            after: vec![0.0; k],
+            probe: vec![0.0; k],
+            recorded: Vec::new(),
+            hit: None,
+            hit_side: 0.0,
+            at_zero: vec![false; k],
+        }
     }
 
     /// The event functions at the stretch's first state.
     pub fn start(&mut self, t: f64, y: &[f64]) -> Result<(), Reason> {
         (self.events.values)(t, y, &mut self.before).map_err(Reason::Rhs)?;
+        for (k, v) in self.before.iter().enumerate() {
+            self.at_zero[k] = *v == 0.0 && !self.rearmed.is_some_and(|(j, _)| j == k);
+        }
         if let Some((k, side)) = self.rearmed {
             self.before[k] = side * f64::MIN_POSITIVE;
         }
         Ok(())
     }
 
-    /// After the accepted step to `(t_new, y_new)`: whether an event function crossed zero in
-    /// it (the caller then prepares the dense output and calls [`Watch::locate`]).
-    pub fn crossed(&mut self, t_new: f64, y_new: &[f64], stats: &mut Stats) -> Result<bool, Reason> {
+    /// After the accepted step to `(t_new, y_new)`: the event functions there.
+    pub fn ended(&mut self, t_new: f64, y_new: &[f64], stats: &mut Stats) -> Result<(), Reason> {
         stats.event_evaluations += 1;
         (self.events.values)(t_new, y_new, &mut self.after).map_err(Reason::Rhs)?;
-        Ok(self.crossings().next().is_some())
+        Ok(())
+    }
+
+    /// Whether an event function crossed zero in its direction between the step's ends (the
+    /// caller then calls [`Watch::locate`]).
+    pub fn crossed(&self) -> bool {
+        self.crossings().next().is_some()
+    }
+
+    /// The event functions at [`SAMPLES_PER_STEP`] points of the step `[t, t + h]` on its
+    /// dense output: `None` when no event's samples change sign more than once, else the
+    /// factor to shorten the step by (it is done again).
+    pub fn scan(&mut self, t: f64, h: f64, n: usize, dense: &mut dyn FnMut(f64, &mut [f64]), stats: &mut Stats) -> Result<Option<f64>, Reason> {
+        let mut y = vec![0.0; n];
+        let samples: Vec<Vec<f64>> = (1..=SAMPLES_PER_STEP)
+            .map(|j| {
+                if j == SAMPLES_PER_STEP {
+                    return Ok(self.after.clone());
+                }
+                let theta = j as f64 / SAMPLES_PER_STEP as f64;
+                dense(theta, &mut y);
+                stats.event_evaluations += 1;
+                (self.events.values)(t + theta * h, &y, &mut self.probe).map_err(Reason::Rhs)?;
+                Ok(self.probe.clone())
+            })
+            .collect::<Result<_, Reason>>()?;
+        // An event that started on its zero comes from the side opposite to the one it leaves
+        // to (its first sample off zero in this step).
+        for k in 0..self.before.len() {
+            if self.at_zero[k]
+                && let Some(first) = samples.iter().map(|v| v[k]).find(|v| *v != 0.0)
+            {
+                self.before[k] = -first.signum() * f64::MIN_POSITIVE;
+            }
+        }
+        let mut last = self.before.clone();
+        let mut changes = vec![0usize; last.len()];
+        for sample in samples {
+            for (k, v) in sample.iter().enumerate() {
+                // A zero continues the sign before it: touching zero is not a change.
+                if *v != 0.0 {
+                    if last[k] != 0.0 && v.signum() != last[k].signum() {
+                        changes[k] += 1;
+                    }
+                    last[k] = *v;
+                }
+            }
+        }
+        let most = changes.iter().copied().max().unwrap_or(0);
+        Ok((most > 1).then(|| 0.5 / most as f64))
     }
 
     fn crossings(&self) -> impl Iterator<Item = usize> + '_ {
@@ -148,6 +221,7 @@ impl<'w, 'a> Watch<'w, 'a> {
     pub fn advance(&mut self) {
         std::mem::swap(&mut self.before, &mut self.after);
         self.rearmed = None;
+        self.at_zero.fill(false);
     }
 
     /// The fraction of the step `[t, t + h]` where event `k` crosses, on the side past its zero.
@@ -155,6 +229,10 @@ impl<'w, 'a> Watch<'w, 'a> {
         let (mut a, mut fa, mut b, mut fb) = (0.0f64, self.before[k], 1.0f64, self.after[k]);
         if fb == 0.0 {
             return Ok(1.0);
+        }
+        if self.at_zero[k] {
+            // On its zero at the start, and leaving it in its direction: it happens there.
+            return Ok(0.0);
         }
         let tol = time_tolerance(t + h) / h.abs();
         if self.rearmed.is_some_and(|(j, _)| j == k) {
@@ -362,6 +440,90 @@ mod tests {
             // Never below the floor.
             assert!(e.state[0] > -1e-9, "{e}");
         }
+    }
+
+    /// A ball starting on its floor and moving down (the event function zero at the start,
+    /// moving in the event's direction) bounces at once; it used to fall through the floor to
+    /// y = -122. Starting on the floor moving up, it has no event there.
+    #[test]
+    fn an_event_at_the_start_happens_at_the_start() {
+        for (speed, first) in [(-2.0, 0.0), (2.0, 2.0 * 2.0 / 9.81)] {
+            let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
+                dy[0] = y[1];
+                dy[1] = -9.81;
+                Ok(())
+            };
+            let mut values = |_t: f64, y: &[f64], out: &mut [f64]| -> Result<(), Failure> {
+                out[0] = y[0];
+                Ok(())
+            };
+            let mut reset = |_: usize, _: f64, y: &[f64], after: &mut [f64]| -> Result<(), Failure> {
+                after[0] = y[0];
+                after[1] = -y[1];
+                Ok(())
+            };
+            let mut events = Events::new(vec![(Direction::Falling, EventAction::Reset)], &mut values, &mut reset);
+            let times: Vec<f64> = (0..=50).map(|i| 0.1 * i as f64).collect();
+            let sol = integrate_with_events(&mut f, None, None, &mut events, &[0.0, speed], &times, &settings(Method::Dop853)).unwrap();
+            assert!((sol.events[0].t - first).abs() < 1e-9, "{speed}: {:?}", sol.events[0]);
+            assert!(sol.states.iter().all(|y| y[0] > -1e-9), "{speed}: never below the floor");
+            // Elastic: the bounces reach 2^2 / (2 g) again and again.
+            let top = sol.states.iter().map(|y| y[0]).fold(0.0f64, f64::max);
+            assert!((top - 4.0 / (2.0 * 9.81)).abs() < 1e-3, "{speed}: {top}");
+        }
+    }
+
+    /// `sin(1000 t)` changes sign 3183 times in 10 s, while the dynamics (none) would take a few
+    /// long steps: every crossing is found (10 were), each to its time, in every method with a
+    /// dense output; and its zero at the start, rising, is one too.
+    #[test]
+    fn a_fast_event_function_loses_no_crossing() {
+        for method in [Method::Dop853, Method::Dopri5, Method::Rosenbrock23] {
+            let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
+                dy[0] = -0.1 * y[0];
+                Ok(())
+            };
+            let mut values = |t: f64, _y: &[f64], out: &mut [f64]| -> Result<(), Failure> {
+                out[0] = (1000.0 * t).sin();
+                Ok(())
+            };
+            let mut reset = |_: usize, _: f64, _: &[f64], _: &mut [f64]| -> Result<(), Failure> { unreachable!() };
+            let mut events = Events::new(vec![(Direction::Either, EventAction::Record)], &mut values, &mut reset);
+            let s = Settings { method, rtol: 1e-8, atol: 1e-8, ..Settings::default() };
+            let sol = integrate_with_events(&mut f, None, None, &mut events, &[1.0], &[0.0, 10.0], &s).unwrap();
+            let expected = (10_000.0 / std::f64::consts::PI).floor() as usize + 1;
+            assert_eq!(sol.events.len(), expected, "{method}");
+            for (k, e) in sol.events.iter().enumerate() {
+                let exact = k as f64 * std::f64::consts::PI / 1000.0;
+                assert!((e.t - exact).abs() < 1e-9, "{method}: crossing {k} at {} against {exact}", e.t);
+            }
+        }
+    }
+
+    /// A reset that puts the state past its event's surface (a floor that throws the ball
+    /// below itself) is named as such; it was reported as more than 10000 events at a Zeno
+    /// point.
+    #[test]
+    fn a_reset_past_the_surface_is_named() {
+        let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
+            dy[0] = y[1];
+            dy[1] = -9.81;
+            Ok(())
+        };
+        let mut values = |_t: f64, y: &[f64], out: &mut [f64]| -> Result<(), Failure> {
+            out[0] = y[0];
+            Ok(())
+        };
+        let mut reset = |_: usize, _: f64, y: &[f64], after: &mut [f64]| -> Result<(), Failure> {
+            after[0] = y[0] - 0.1;
+            after[1] = -y[1];
+            Ok(())
+        };
+        let mut events = Events::new(vec![(Direction::Falling, EventAction::Reset)], &mut values, &mut reset);
+        let e = integrate_with_events(&mut f, None, None, &mut events, &[1.0, 0.0], &[0.0, 10.0], &settings(Method::Dop853)).unwrap_err();
+        assert!(matches!(e.reason, Reason::ResetPastSurface { event: 0, value } if (value + 0.1).abs() < 1e-9), "{e}");
+        assert!(e.to_string().contains("past the event's surface") && e.to_string().contains("event #1"), "{e}");
+        assert!((e.t - (2.0f64 / 9.81).sqrt()).abs() < 1e-9);
     }
 
     /// RK4 has no dense output: a run with events and RK4 is refused.

@@ -266,6 +266,13 @@ pub enum Reason {
     /// [`crate::events::run_interruptible`]); the state is the last accepted step's.
     #[error("interrupted: the caller asked the run to stop")]
     Interrupted,
+    /// A reset map put the state past its event's surface (the event function on the side
+    /// the crossing went to, `value`), where it would cross again at once, without end.
+    #[error(
+        "the reset of the model's event #{} puts the state past the event's surface (its function is {value:e} after the reset, on the side the crossing went to): it would happen again at once, without end; the reset must send the state back to the side it came from, or onto the surface",
+        event + 1
+    )]
+    ResetPastSurface { event: usize, value: f64 },
     /// Events are located on a method's dense output, which RK4 does not have.
     #[error("events need an adaptive method (DOPRI5, DOP853 or ROS23), which interpolates inside its steps; RK4 does not")]
     EventsNeedDenseOutput,
@@ -386,6 +393,16 @@ pub fn integrate_with_events(
         }
         let mut after = vec![0.0; y0.len()];
         (events.reset)(hit.event, hit.t, &hit.state, &mut after).map_err(|e| RunError { t: hit.t, state: hit.state.clone(), reason: Reason::Rhs(e) })?;
+        // A reset sends the state back to the side it came from (or onto the surface): one
+        // that lands past it would cross again at once, without end.
+        // (Past by more than the located crossing's own distance from it, and round-off.)
+        let (mut values, mut at_hit) = (vec![0.0; events.kinds.len()], vec![0.0; events.kinds.len()]);
+        (events.values)(hit.t, &after, &mut values).map_err(|e| RunError { t: hit.t, state: after.clone(), reason: Reason::Rhs(e) })?;
+        (events.values)(hit.t, &hit.state, &mut at_hit).map_err(|e| RunError { t: hit.t, state: hit.state.clone(), reason: Reason::Rhs(e) })?;
+        let near = 1e-9f64.max(100.0 * at_hit[hit.event].abs());
+        if values[hit.event] * side < -near {
+            return Err(RunError { t: hit.t, state: after, reason: Reason::ResetPastSurface { event: hit.event, value: values[hit.event] } });
+        }
         // Go on from the reset state; an output at the event's very time is the state after it.
         let rest: Vec<f64> = outputs.iter().copied().filter(|o| *o >= hit.t).collect();
         skip_first = rest.first() != Some(&hit.t);
