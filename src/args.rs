@@ -31,6 +31,26 @@ impl MethodArg {
     }
 }
 
+impl ValueArgs {
+    /// An initial state the model refuses: located in the model file's `initial` section when
+    /// its own values are at fault, or naming the values given on the command line.
+    pub fn locate(&self, e: runtime::system::SetupError, source: &generator::model::Model) -> CliError {
+        use runtime::system::SetupError;
+        let given: Vec<String> = self.q.iter().map(|(n, v)| format!("--q {n}={v}")).chain(self.qdot.iter().map(|(n, v)| format!("--qdot {n}={v}"))).collect();
+        let place = match &e {
+            SetupError::Violated { position: true, .. } => "initial.q",
+            SetupError::Violated { position: false, .. } | SetupError::NotFinite { .. } => "initial.qdot",
+            _ => return CliError::Setup(e),
+        };
+        if !given.is_empty() {
+            return CliError::Given { given: given.join(" "), source: e };
+        }
+        let message = e.to_string();
+        let (what, fix) = message.split_once("): ").map(|(a, b)| (format!("{a})"), b.to_string())).unwrap_or((message, String::new()));
+        CliError::Model(source.error(generator::model::ErrorKind::InitialState, place, place.rsplit('.').next().unwrap_or(place), what, fix))
+    }
+}
+
 /// Values that change the model's own (its parameters, its coordinates and rates), and how it
 /// is run.
 #[derive(Args, Debug, Clone, PartialEq, Default)]
@@ -66,11 +86,11 @@ pub struct RunArgs {
     /// 1e-3, atol 1e-6 with `--paper` or for a model whose file asks for it).
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
-    /// Relative tolerance (adaptive methods).
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    /// Relative tolerance (adaptive methods): below 1.
+    #[arg(long, value_parser = rtol, allow_hyphen_values = true)]
     pub rtol: Option<f64>,
-    /// Absolute tolerance (adaptive methods).
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    /// Absolute tolerance (adaptive methods): at most 1e10.
+    #[arg(long, value_parser = atol, allow_hyphen_values = true)]
     pub atol: Option<f64>,
     /// The step of `--method rk4`.
     #[arg(long, value_parser = positive, allow_hyphen_values = true, required_if_eq("method", "rk4"))]
@@ -94,6 +114,16 @@ fn assignment(s: &str) -> Result<(String, f64), String> {
 
 pub fn positive(s: &str) -> Result<f64, String> {
     s.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| format!("needs a positive number, not `{s}`"))
+}
+
+fn rtol(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|_| format!("needs a number, not `{s}`"))?;
+    Settings::check_tolerances(x, 1e-10).map(|()| x)
+}
+
+fn atol(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|_| format!("needs a number, not `{s}`"))?;
+    Settings::check_tolerances(1e-10, x).map(|()| x)
 }
 
 fn finite(s: &str) -> Result<f64, String> {
@@ -139,7 +169,11 @@ impl RunArgs {
     /// The model's reference run with `--q`, `--qdot`, `--t-end` and `--dt-out` applied (the
     /// model was loaded with `--param`); a model without an `initial`
     /// section starts at rest at zero, one without `simulation` needs `--t-end` and `--dt-out`.
-    pub fn reference(&self, model: &Model) -> Result<Reference, CliError> {
+    ///
+    /// The initial state is checked against the constraints here, before any run: a violation
+    /// of the model file's own values is located in its `initial` section; one of values given
+    /// with `--q`/`--qdot` names them.
+    pub fn reference(&self, model: &Model, source: &generator::model::Model) -> Result<Reference, CliError> {
         let m = model.coordinates.len();
         let (mut q0, mut qd0) = model.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]));
         // `--param` is applied to the model itself (`load::evaluated`), validated as its file's
@@ -158,6 +192,9 @@ impl RunArgs {
         };
         let reference = Reference { q0, qd0, params, t_start, t_end, dt_out };
         reference.check().map_err(CliError::Grid)?;
+        if let Err(e) = runtime::system::System::start(model, model.default_kind(), reference.params.clone(), &reference.q0, &reference.qd0) {
+            return Err(self.values.locate(e, source));
+        }
         Ok(reference)
     }
 
@@ -193,8 +230,8 @@ impl RunArgs {
 /// The settings in one line, for every table and file header.
 pub fn describe(s: &Settings) -> String {
     match s.method {
-        Method::Rk4 { h } => format!("RK4, h {h}"),
-        m => format!("{m}, rtol {:e}, atol {:e}, h_max {}", s.rtol, s.atol, s.h_max),
+        Method::Rk4 { h } => format!("RK4, h {}", seam::short(h)),
+        m => format!("{m}, rtol {:e}, atol {:e}, h_max {}", s.rtol, s.atol, seam::short(s.h_max)),
     }
 }
 

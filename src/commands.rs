@@ -104,8 +104,8 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     let route = load::Route::of(args.run.values.compiled);
-    let model = crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), route)?;
-    let reference = args.run.reference(&model)?;
+    let (model, source) = crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), route)?;
+    let reference = args.run.reference(&model, &source)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
     options.formulations = formulations(&model, &args.formulations)?;
@@ -159,8 +159,8 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
     let jacobians = if stiff { load::Jacobians::Exact { only: None, by_parameters: false } } else { load::Jacobians::Differenced };
-    let model = crate::evaluated(&args.model, &args.run.values, &Default::default(), jacobians, load::Route::of(args.run.values.compiled))?;
-    let reference = args.run.reference(&model)?;
+    let (model, source) = crate::evaluated(&args.model, &args.run.values, &Default::default(), jacobians, load::Route::of(args.run.values.compiled))?;
+    let reference = args.run.reference(&model, &source)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
         formulations: formulations(&model, &args.formulations)?,
@@ -237,7 +237,21 @@ fn describe_motion(lin: &runtime::linearize::Linear, states: &[String]) -> Strin
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     // The exact Jacobians of the formulation linearized: A, and B with `--input`, to round-off.
     let names = crate::args::Names { inputs: &args.input, sweep: args.sweep.as_deref() };
-    let model = crate::evaluated(
+    if let (Some(name), Some(from), Some(to)) = (&args.sweep, args.from, args.to) {
+        // A swept parameter takes the values its file may hold (a mass stays positive): checked
+        // at the ends of the range before anything is derived (the checks are on convex sets
+        // of the values, so the ends decide).
+        let source = load::model(&args.model)?.with_parameters(&args.values.param)?;
+        if source.parameters.iter().any(|(p, _)| p.name() == *name) {
+            for v in [from, to] {
+                source.with_parameters(&[(name.clone(), v)]).map_err(|mut e| {
+                    e.message = format!("the sweep of `{name}` from {from} to {to} reaches {name} = {v}, which the model refuses: {}", e.message);
+                    e
+                })?;
+            }
+        }
+    }
+    let (model, _) = crate::evaluated(
         &args.model,
         &args.values,
         &names,

@@ -95,6 +95,8 @@ pub enum CliError {
     Stdout(std::io::Error),
     #[error("cannot write the CSV: {0}")]
     Csv(#[from] csv::Error),
+    #[error("with {given} (given on the command line): {source}")]
+    Given { given: String, source: runtime::system::SetupError },
     #[error("{file}:{line}: {message} (an input's time series is two columns `t,value` with increasing times)")]
     Series { file: String, line: usize, message: String },
 }
@@ -143,7 +145,7 @@ pub fn evaluated(
     more: &args::Names,
     exact: load::Jacobians,
     route: load::Route,
-) -> Result<seam::Model, CliError> {
+) -> Result<(seam::Model, generator::model::Model), CliError> {
     let model = load::model(argument)?.with_parameters(&values.param)?;
     args::check_names(&model, values, more)?;
     let loaded = load::evaluate(&model, exact, route, &mut |path| {
@@ -152,7 +154,7 @@ pub fn evaluated(
     for line in &loaded.warnings {
         eprintln!("warning: {line}");
     }
-    Ok(loaded.model)
+    Ok((loaded.model, model))
 }
 
 /// Writes to stdout; a closed pipe (`multibody compare m | head`) ends the program quietly.

@@ -60,12 +60,13 @@ fn series_controller(model: &seam::Model, given: &[(String, PathBuf)]) -> Result
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
-    let model = crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
+    let (model, source) =
+        crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => model.default_kind(),
     };
-    let reference = args.run.reference(&model)?;
+    let reference = args.run.reference(&model, &source)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let (mut sys, y0) = System::start(&model, kind, reference.params.clone(), &reference.q0, &reference.qd0)?;
     if let Some(controller) = series_controller(&model, &args.input)? {
@@ -127,14 +128,14 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     write_file(&base.with_extension("json"), serde_json::to_string(&json).expect("plain data").as_bytes())?;
     let plots = plot::write_trajectory(&model, &sys.form, &solution.times, inv, &base)?;
     let end = match (solution.stopped, solution.events.last()) {
-        (true, Some(o)) => format!("{} (stopped there by event `{}`)", o.t, model.events[o.event].name),
-        _ => reference.t_end.to_string(),
+        (true, Some(o)) => format!("{} (stopped there by event `{}`)", seam::short(o.t), model.events[o.event].name),
+        _ => seam::short(reference.t_end),
     };
     let mut text = format!(
         "{} {kind}: {} outputs from t = {} to {} ({}), {} steps, {} right-hand sides, {:.3} s\n",
         model.module,
         solution.times.len(),
-        reference.t_start,
+        seam::short(reference.t_start),
         end,
         describe(&settings),
         solution.stats.steps,

@@ -244,6 +244,11 @@ class Model:
         t = 1.5."""
         attrs = getattr(result, "attrs", None)
         meta = attrs if attrs is not None and "params" in attrs else vars(result)
+        if meta.get("model") not in (None, self.name):
+            raise ValueError(f"the run is of model `{meta.get('model')}`, not of `{self.name}`: animate it with its own model")
+        missing = [c for c in ["t", *self.coordinates] if c not in getattr(result, "columns", [])]
+        if missing:
+            raise ValueError(f"the run has no column {', '.join(map(repr, missing))}: give what `{self.name}`'s simulate returned")
         times = np.ascontiguousarray(np.asarray(result["t"], dtype=float))
         q = np.ascontiguousarray(np.column_stack([np.asarray(result[c], dtype=float) for c in self.coordinates]))
         self._native.animate(str(path), times, q, meta.get("formulation", ""), meta.get("params"))

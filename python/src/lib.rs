@@ -247,18 +247,16 @@ fn check_len(x: &[f64], n: usize, what: &str) -> PyResult<()> {
 /// 1e-10, or the paper's DOPRI5 where the model asks for it).
 fn settings(model: &seam::Model, span: f64, method: Option<&str>, rtol: Option<f64>, atol: Option<f64>, h: Option<f64>) -> PyResult<Settings> {
     let mut s = if model.paper_settings { Settings::paper(span) } else { Settings::tight(span) };
+    if let Some(x) = h.filter(|x| !(*x > 0.0 && x.is_finite())) {
+        return Err(PyValueError::new_err(format!("h needs a positive number, not {x}")));
+    }
     if let Some(name) = method {
         s.method = Method::from_name(name, h.or(Some(0.01 * span)))
             .ok_or_else(|| PyValueError::new_err(format!("no method `{name}` (known: {}; rk4 takes h=)", Method::NAMES.join(", "))))?;
     }
-    for (value, name, slot) in [(rtol, "rtol", &mut s.rtol), (atol, "atol", &mut s.atol)] {
-        if let Some(x) = value {
-            if !(x > 0.0 && x.is_finite()) {
-                return Err(PyValueError::new_err(format!("{name} needs a positive number, not {x}")));
-            }
-            *slot = x;
-        }
-    }
+    s.rtol = rtol.unwrap_or(s.rtol);
+    s.atol = atol.unwrap_or(s.atol);
+    Settings::check_tolerances(s.rtol, s.atol).map_err(PyValueError::new_err)?;
     Ok(s)
 }
 

@@ -206,3 +206,19 @@ def test_oversized_ensembles_are_refused_before_they_run():
 def test_loads_of_a_huge_text_is_refused_at_once():
     with pytest.raises(multibody.ModelError, match="more than the 16777216 a model may hold"):
         multibody.loads("Model(" + " " * (17 << 20) + ")")
+
+
+def test_bad_arguments_say_what_is_wrong():
+    m = multibody.load("cart_pendulum")
+    with pytest.raises(ValueError, match="h needs a positive number, not 0"):
+        m.simulate("kane", t_end=0.1, dt_out=0.05, method="rk4", h=0.0)
+    with pytest.raises(ValueError, match="rtol = 1e300"):
+        m.simulate("kane", t_end=0.1, dt_out=0.05, rtol=1e300)
+    q0 = list(m.initial[0])
+    q0[0] = float("nan")
+    with pytest.raises(multibody.SimulationError, match="theta1` is NaN, not a finite number"):
+        m.simulate("kane", t_end=0.1, dt_out=0.05, q=q0)
+    # Another model's run is named as such, not a bare KeyError.
+    run = multibody.load("spring_cart").simulate("kane", t_end=0.1, dt_out=0.05)
+    with pytest.raises(ValueError, match="the run is of model `spring_cart`, not of `cart_pendulum`"):
+        m.animate(run, "never.html")

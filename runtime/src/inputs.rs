@@ -62,6 +62,11 @@ pub struct SeriesError {
     pub message: String,
 }
 
+/// A header's field: a name (`t`, `force (N)`), starting with a letter, not a number.
+fn is_a_name(field: &str) -> bool {
+    field.chars().next().is_some_and(|c| c.is_alphabetic() || c == '_') && field.parse::<f64>().is_err()
+}
+
 impl TimeSeries {
     /// Samples at increasing, finite times with finite values (at least one).
     pub fn new(times: Vec<f64>, values: Vec<f64>) -> Result<TimeSeries, SeriesError> {
@@ -80,12 +85,15 @@ impl TimeSeries {
         Ok(TimeSeries { times, values })
     }
 
-    /// Two columns `t,value` of CSV (a first line that is not numbers is a header).
+    /// Two columns `t,value` of CSV (a first line of names, `t,value`, is a header).
     ///
     /// ```
     /// let s = runtime::inputs::TimeSeries::parse("t,F\n0,0\n1,2\n").unwrap();
     /// assert_eq!((s.at(-1.0), s.at(0.25), s.at(5.0)), (0.0, 0.5, 2.0));
     /// assert!(runtime::inputs::TimeSeries::parse("0,1\n0,2\n").unwrap_err().to_string().contains("line 2"));
+    /// // A first row with a typo is an error on line 1, not a header dropped silently.
+    /// let e = runtime::inputs::TimeSeries::parse("0,O.5\n1,2\n").unwrap_err().to_string();
+    /// assert!(e.contains("line 1") && e.contains("`O.5` is not a number"), "{e}");
     /// ```
     pub fn parse(text: &str) -> Result<TimeSeries, SeriesError> {
         let mut reader = csv::ReaderBuilder::new().has_headers(false).trim(csv::Trim::All).from_reader(text.as_bytes());
@@ -99,8 +107,17 @@ impl TimeSeries {
                     values.push(v);
                     lines.push(k + 1);
                 }
-                _ if k == 0 => {} // a header
-                _ => return Err(SeriesError { line: k + 1, message: "expected two numbers `t,value`".into() }),
+                // A header is recognised by its names (`t,value`), not by failing to parse: a
+                // first row with a typo in a number is an error, not a header dropped silently.
+                _ if k == 0 && record.iter().all(is_a_name) => {}
+                _ => {
+                    let bad: Vec<&str> = record.iter().filter(|x| x.parse::<f64>().is_err()).collect();
+                    let message = match (record.len(), bad.first()) {
+                        (2, Some(x)) => format!("`{}` is not a number: expected two numbers `t,value`", x.escape_debug()),
+                        (n, _) => format!("{n} fields: expected two numbers `t,value`"),
+                    };
+                    return Err(SeriesError { line: k + 1, message });
+                }
             }
         }
         TimeSeries::new(times, values).map_err(|mut e| {

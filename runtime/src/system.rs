@@ -47,6 +47,21 @@ pub enum SetupError {
     UnknownFormulation { model: String, kind: FormulationKind, available: String },
     #[error("initial state rejected: {0}")]
     Initial(Failure),
+    /// The initial coordinates (`position`) or rates violate constraint `constraint`.
+    #[error(
+        "the initial {} violate {} constraint `{constraint}` (residual {residual:e}, tolerance {tolerance:e}): {}",
+        if *position { "coordinates" } else { "rates" },
+        if *position { "the position" } else { "the velocity" },
+        if *position {
+            "give coordinates on the constraint (solve it for one of them)"
+        } else {
+            "give rates that satisfy it (for a position constraint, its time derivative); set the rates it determines by it, or leave them to `linearize`, which solves the rates not given from the constraints"
+        }
+    )]
+    Violated { constraint: String, position: bool, residual: f64, tolerance: f64 },
+    /// A coordinate, rate or parameter that is not a finite number.
+    #[error("the initial {what} `{name}` is {value}, not a finite number")]
+    NotFinite { what: &'static str, name: String, value: f64 },
     #[error("{drift:?} applies to {applies}, not to `{kind}`")]
     DriftNotApplicable { drift: Drift, kind: FormulationKind, applies: &'static str },
 }
@@ -54,10 +69,29 @@ pub enum SetupError {
 impl System {
     /// The system of formulation `kind` and its initial state from `q(0), q'(0)`.
     pub fn start(model: &Model, kind: FormulationKind, params: Vec<f64>, q0: &[f64], qd0: &[f64]) -> Result<(System, Vec<f64>), SetupError> {
+        for (what, names, values) in
+            [("coordinate", &model.coordinates, q0), ("rate", &model.coordinates, qd0), ("parameter", &model.parameter_names, &params[..])]
+        {
+            if let Some((name, value)) = names.iter().zip(values).find(|(_, v)| !v.is_finite()) {
+                let name = if what == "rate" { format!("{name}'") } else { name.clone() };
+                return Err(SetupError::NotFinite { what, name, value: *value });
+            }
+        }
         let mut sys = System::new(model, kind, params, vec![0.0; model.ignorable.len()])?;
         let mut y0 = vec![0.0; sys.form.states()];
-        sys.form.initial_state(0.0, q0, qd0, &sys.params, &mut y0, &mut sys.g_i).map_err(SetupError::Initial)?;
-        Ok((sys, y0))
+        match sys.form.initial_state(0.0, q0, qd0, &sys.params, &mut y0, &mut sys.g_i) {
+            Ok(()) => Ok((sys, y0)),
+            Err(Failure::ConstraintViolated { constraint, residual, tolerance }) => {
+                // Position level where the coordinates alone violate it.
+                let holonomic = &model.constraints[..model.holonomic];
+                let position = holonomic.iter().position(|c| *c == constraint).is_some_and(|k| {
+                    let mut out = vec![0.0; model.holonomic];
+                    sys.model.position_residuals(0.0, q0, qd0, &sys.params, &mut out).is_ok() && !(out[k].abs() <= tolerance)
+                });
+                Err(SetupError::Violated { constraint: constraint.into_owned(), position, residual, tolerance })
+            }
+            Err(e) => Err(SetupError::Initial(e)),
+        }
     }
 
     /// The system of formulation `kind` with the conserved momenta `g_i` given (one per

@@ -140,3 +140,42 @@ fn every_command_takes_a_built_in_name() {
         assert!(!err.contains("models live in"), "{err}");
     }
 }
+
+/// An initial state off a constraint is located where it is wrong and says at which level:
+/// in the model file (`initial.q` or `initial.qdot`, with line and column) or on the command
+/// line (naming what was given), each with a fix.
+#[test]
+fn an_initial_state_off_a_constraint_is_located_and_leveled() {
+    let dir = tempfile::tempdir().unwrap();
+    let models = concat!(env!("CARGO_MANIFEST_DIR"), "/models");
+    let scene1 = std::fs::read_to_string(format!("{models}/cart_pendulum.ron")).unwrap();
+    std::fs::write(dir.path().join("rates.ron"), scene1.replace("\"theta2\": \"-cos(theta1 - theta2)*theta1'\"", "\"theta2\": \"0.3\"")).unwrap();
+    let tumbling = std::fs::read_to_string(format!("{models}/tumbling_body.ron")).unwrap();
+    std::fs::write(dir.path().join("norm.ron"), tumbling.replace("\"e0\": \"1\"", "\"e0\": \"0.9\"")).unwrap();
+    std::fs::write(dir.path().join("norm_rate.ron"), tumbling.replace("qdot: {\"e0\": \"0\"", "qdot: {\"e0\": \"0.3\"")).unwrap();
+    for (file, place, words) in [
+        ("rates.ron", "initial.qdot", "the initial rates violate the velocity constraint `wheel`"),
+        ("norm.ron", "initial.q", "the initial coordinates violate the position constraint `unit`"),
+        ("norm_rate.ron", "initial.qdot", "the initial rates violate the position constraint `unit` (its time derivative)"),
+    ] {
+        let out = multibody(dir.path(), &["simulate", file, "--t-end", "0.1"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        let line = std::fs::read_to_string(dir.path().join(file))
+            .unwrap()
+            .lines()
+            .position(|l| l.trim_start().starts_with(&format!("{}: ", place.rsplit('.').next().unwrap())))
+            .unwrap()
+            + 1;
+        assert!(
+            !out.status.success() && err.contains(&format!("{file}:{line}:")) && err.contains(&format!("in {place}: {words}")) && err.contains("help: give"),
+            "{file}: {err}"
+        );
+    }
+    let out = multibody(dir.path(), &["simulate", "cart_pendulum", "--t-end", "0.1", "--qdot", "theta2=0.3"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("with --qdot theta2=0.3 (given on the command line): the initial rates violate the velocity constraint `wheel`")
+            && err.contains("give rates that satisfy it"),
+        "{err}"
+    );
+}

@@ -301,7 +301,9 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     let s = ignorable.len();
     let n_u = mech.p - s;
     let tidy = &mech.tidy;
-    let which = if s == 0 { "full" } else { "reduced" };
+    // The list the quasi-velocities came from, for the errors' place (the reduced list with no
+    // ignorable coordinate is still the reduced list).
+    let which = if s > 0 || (quasi == &model.quasi_reduced[..] && quasi != &model.quasi_full[..]) { "reduced" } else { "full" };
     if quasi.len() != n_u {
         return Err(model.error(
             ErrorKind::QuasiVelocityCount,

@@ -1048,21 +1048,39 @@ impl<'a> Builder<'a> {
         for (s, v) in coordinates.iter().zip(q0).chain(velocities.iter().zip(qd0)) {
             env.set(*s, *v);
         }
-        for c in constraints {
-            let (name, e) = match c {
-                Constraint::Velocity { name, expr } => (name, *expr),
-                Constraint::Position { name, expr } => (name, *expr),
-            };
+        // Position constraints on the coordinates, then every constraint on the rates (a
+        // position constraint's time derivative, `dh/dq q' + dh/dt`).
+        let rate_of = |h: Expr| coordinates.iter().zip(velocities).fold(h.diff(self.t), |acc, (q, v)| acc + h.diff(*q) * v.expr());
+        let positions = constraints.iter().filter_map(|c| match c {
+            Constraint::Position { name, expr } => Some((name, *expr, true)),
+            Constraint::Velocity { .. } => None,
+        });
+        let rates = constraints.iter().map(|c| match c {
+            Constraint::Velocity { name, expr } => (name, *expr, false),
+            Constraint::Position { name, expr } => (name, rate_of(*expr), false),
+        });
+        for (name, e, position) in positions.chain(rates) {
             let residual = e.eval(&env).unwrap_or(f64::NAN);
             let bound = crate::symbolic::eval::magnitude(e).eval(&env).unwrap_or(f64::NAN);
             if !(residual.abs() <= 1e-9 * bound.max(1e-300)) {
-                return Err(self.err(
-                    ErrorKind::InitialState,
-                    "initial",
-                    "initial",
-                    format!("the initial state violates constraint `{name}`: its residual is {residual:e}"),
-                    "give initial values that satisfy every constraint (a rate may be written in terms of others, as in scene 1)",
-                ));
+                let kind = if constraints.iter().any(|c| matches!(c, Constraint::Position { name: n, .. } if n == name)) { "position" } else { "velocity" };
+                let (place, message, help) = if position {
+                    (
+                        "initial.q",
+                        format!("the initial coordinates violate the position constraint `{name}`: its residual is {residual:e}"),
+                        "give coordinates on the constraint (solve it for one of them: a value may be an expression in the others)",
+                    )
+                } else {
+                    (
+                        "initial.qdot",
+                        format!(
+                            "the initial rates violate the {kind} constraint `{name}`{}: its residual is {residual:e}",
+                            if kind == "position" { " (its time derivative)" } else { "" }
+                        ),
+                        "give rates that satisfy it: a rate may be written in terms of the others (`\"theta2\": \"-cos(theta1 - theta2)*theta1'\"`, as in scene 1)",
+                    )
+                };
+                return Err(self.err(ErrorKind::InitialState, place, place.rsplit('.').next().unwrap_or(place), message, help));
             }
         }
         Ok(())
@@ -1208,6 +1226,22 @@ impl<'a> Builder<'a> {
                 "check the values and the sign convention: Products(...) takes the paper's Eq. (75) form, [[Ixx, -Ixy, -Ixz], ...]",
             ));
         }
+        // The principal moments of a rigid body satisfy the triangle inequality: each at most
+        // the sum of the other two (`I_a + I_b = sum m (a^2 + b^2 + 2 c^2) >= I_c`).
+        let trace = vals[0] + vals[4] + vals[8];
+        let max_eig = trace - min_eig - middle_eigenvalue_sym3(&vals, min_eig);
+        if max_eig > trace - max_eig + 1e-9 * scale.max(1e-300) {
+            let others = trace - max_eig;
+            return Err(self.err(
+                ErrorKind::InertiaNotPsd,
+                &p,
+                "inertia",
+                format!(
+                    "the inertia of {place} is no rigid body's: its largest principal moment ({max_eig:.6e}) exceeds the sum of the other two ({others:.6e}), which no distribution of mass allows (the triangle inequality)"
+                ),
+                "check the values (about the centre of mass, in the body's frame): for a box of sides a, b, c, I_x = m (b^2 + c^2) / 12",
+            ));
+        }
         Ok(Some(m))
     }
 
@@ -1291,15 +1325,56 @@ impl<'a> Builder<'a> {
 
     fn quasi(&self, list: &[String], place: &str, want: usize, rule: &str, m: usize, r: usize) -> Result<Vec<Expr>, ModelError> {
         if list.len() != want {
+            // One quasi-velocity too few where a quaternion lacks its unit norm: the missing
+            // constraint is the fault, not the list.
+            if let Some((i, frame, e)) = self.quaternion_without_unit_norm()
+                && list.len() + 1 == want
+            {
+                return Err(self.err(
+                    ErrorKind::QuasiVelocityCount,
+                    &format!("frames[{i}] ({frame}).rotation"),
+                    &format!("\"{}\"", e[0]),
+                    format!(
+                        "the quaternion ({}) of frame `{frame}` has no unit-norm constraint, so the model counts {want} degrees of freedom where it has {}",
+                        e.join(", "),
+                        want - 1
+                    ),
+                    &format!(
+                        "add the constraint `Position(name: \"unit\", expr: \"{}^2 + {}^2 + {}^2 + {}^2 - 1\")` under `constraints`",
+                        e[0], e[1], e[2], e[3]
+                    ),
+                ));
+            }
+            let needle = place.rsplit('.').next().unwrap_or(place);
             return Err(self.err(
                 ErrorKind::QuasiVelocityCount,
                 place,
-                "full",
+                needle,
                 format!("{} quasi-velocities given, but {rule} = {m} - {r} = {want} are needed", list.len()),
                 &format!("list exactly {want} independent combinations of the velocities"),
             ));
         }
         list.iter().enumerate().map(|(k, s)| self.expr(s, &format!("{place}[{k}]"), Scope::Quasi)).collect()
+    }
+
+    /// The first frame turned by a quaternion whose four coordinates no position constraint
+    /// names together (its unit norm is missing): the frame's index, name and the quaternion.
+    fn quaternion_without_unit_norm(&self) -> Option<(usize, String, [String; 4])> {
+        let named = |e: &[String; 4]| {
+            self.def.constraints.iter().any(|c| match c {
+                ConstraintDef::Position { expr, .. } => e.iter().all(|q| expr.contains(q.as_str())),
+                _ => false,
+            })
+        };
+        self.def.frames.iter().enumerate().find_map(|(i, f)| {
+            f.rotation.iter().find_map(|r| match r {
+                RotationDef::Quaternion(a, b, c, d) => {
+                    let e = [a.clone(), b.clone(), c.clone(), d.clone()];
+                    (!named(&e)).then(|| (i, f.name.clone(), e))
+                }
+                _ => None,
+            })
+        })
     }
 
     fn initial(&self, init: &InitialDef, coords: &[String], parameters: &[(Symbol, f64)]) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
@@ -1385,6 +1460,19 @@ impl<'a> Builder<'a> {
 }
 
 /// Smallest eigenvalue of a symmetric 3x3 matrix (row-major), by the trigonometric method.
+/// The middle eigenvalue of a symmetric 3 x 3 matrix (row-major) whose smallest is `min`: the
+/// larger root of the quadratic left once `min` is divided out.
+fn middle_eigenvalue_sym3(a: &[f64], min: f64) -> f64 {
+    let trace = a[0] + a[4] + a[8];
+    // The sum of the principal 2 x 2 minors is the sum of the eigenvalues' pairwise products.
+    let minors = a[0] * a[4] - a[1] * a[3] + a[0] * a[8] - a[2] * a[6] + a[4] * a[8] - a[5] * a[7];
+    // The other two have sum s and product p: p = minors - min s.
+    let s = trace - min;
+    let p = minors - min * s;
+    let disc = (s * s - 4.0 * p).max(0.0).sqrt();
+    0.5 * (s - disc)
+}
+
 fn min_eigenvalue_sym3(a: &[f64]) -> f64 {
     let (a11, a12, a13, a22, a23, a33) = (a[0], a[1], a[2], a[4], a[5], a[8]);
     let p1 = a12 * a12 + a13 * a13 + a23 * a23;

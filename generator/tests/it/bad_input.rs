@@ -653,3 +653,33 @@ fn errors_on_a_wide_line_render_an_excerpt_around_the_column() {
         assert!(report.lines().all(|l| l.chars().count() < 400), "case {k}: {report}");
     }
 }
+
+/// Errors that pointed at the wrong place or blamed the wrong thing (the issue "Every path
+/// works"): a wrong count in `quasi_velocities.reduced` is located there, with no ignorable
+/// coordinate too; a quaternion without its unit norm is blamed on the missing constraint, which
+/// the fix writes out; an inertia no rigid body has (Ixx + Iyy < Izz) is refused.
+#[test]
+fn errors_name_the_place_and_the_fault() {
+    let text = scene1().replacen("ignorable: Declared([\"x\"])", "ignorable: Declared([])", 1);
+    let edited = text.replacen("reduced: [\"theta2' - theta1'\"]", "reduced: [\"theta2' - theta1'\", \"x'\", \"theta1'\"]", 1);
+    let model = from_source("models/broken.ron", &edited).unwrap();
+    let e = generator::formulation::derive(&model, &generator::formulation::Request::all()).expect_err("refused");
+    check(&e, ErrorKind::QuasiVelocityCount, &["in quasi_velocities.reduced", "3 quasi-velocities given"]);
+    let line = text.lines().position(|l| l.contains("reduced: [")).unwrap() + 1;
+    assert_eq!(e.location.unwrap().0, line, "{e}");
+
+    let tumbling = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/tumbling_body.ron")).unwrap();
+    let e = broken(&tumbling, "Position(name: \"unit\", expr: \"e0^2 + e1^2 + e2^2 + e3^2 - 1\"),", "");
+    check(
+        &e,
+        ErrorKind::QuasiVelocityCount,
+        &["quaternion (e0, e1, e2, e3) of frame `body` has no unit-norm constraint", "Position(name: \"unit\", expr: \"e0^2 + e1^2 + e2^2 + e3^2 - 1\")"],
+    );
+    let line = tumbling.lines().position(|l| l.contains("Quaternion(")).unwrap() + 1;
+    assert_eq!(e.location.unwrap().0, line, "{e}");
+
+    let e = broken(&scene2(), "Diagonal([\"J1\", \"J2\", \"J2\"])", "Diagonal([\"J1\", \"J1\", \"3*J1\"])");
+    check(&e, ErrorKind::InertiaNotPsd, &["no rigid body's", "triangle inequality"]);
+    // On the edge (a thin rod, a flat plate) it is a body.
+    from_source("models/ok.ron", &scene2().replacen("Diagonal([\"J1\", \"J2\", \"J2\"])", "Diagonal([\"J1\", \"J1\", \"2*J1\"])", 1)).unwrap();
+}

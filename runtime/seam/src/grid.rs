@@ -6,6 +6,19 @@ use std::fmt;
 /// the monitored invariants), so a million samples of a few dozen numbers stay under a gigabyte.
 pub const MAX_OUTPUTS: usize = 1_000_000;
 
+/// `x` as a person reads it: plain where that is short (`0.25`, `1500`), in exponent form where
+/// the plain form would be long (`1e300`, not three hundred digits).
+///
+/// ```
+/// assert_eq!(seam::short(0.25), "0.25");
+/// assert_eq!(seam::short(1e300), "1e300");
+/// assert_eq!(seam::short(-1e-300), "-1e-300");
+/// ```
+pub fn short(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 { plain } else { format!("{x:e}") }
+}
+
 /// Why `(t_start, t_end, dt_out)` is not a run that can be sampled.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum GridError {
@@ -23,11 +36,14 @@ impl fmt::Display for GridError {
             GridError::NotARun { t_start, t_end, dt_out } => {
                 write!(
                     f,
-                    "a run from t = {t_start} to t_end = {t_end} every dt_out = {dt_out} is not a run: use finite numbers with t_end > t_start and dt_out > 0"
+                    "a run from t = {} to t_end = {} every dt_out = {} is not a run: use finite numbers with t_end > t_start and dt_out > 0",
+                    short(t_start),
+                    short(t_end),
+                    short(dt_out)
                 )
             }
             GridError::StepLongerThanRun { span, dt_out } => {
-                write!(f, "dt_out = {dt_out} is longer than the run ({span}): no output would fall inside it; use dt_out <= t_end - t_start")
+                write!(f, "dt_out = {} is longer than the run ({}): no output would fall inside it; use dt_out <= t_end - t_start", short(dt_out), short(span))
             }
             GridError::TooManyOutputs { count } => write!(
                 f,

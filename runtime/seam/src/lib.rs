@@ -26,7 +26,7 @@ mod model;
 pub use compiled::{InitialFn, JacobianFn, MarginFn, MatrixFn, PointFn, RhsFn, StabilizedFn, StaticFormulation, StaticModel, VelocitiesFn};
 pub use event::{Direction, Event, EventAction};
 pub use failure::Failure;
-pub use grid::{GridError, MAX_OUTPUTS, output_steps, output_times};
+pub use grid::{GridError, MAX_OUTPUTS, output_steps, output_times, short};
 pub use kind::{EnergyBalance, FormulationKind, Speeds, StateLayout};
 pub use model::{Formulation, FormulationFunctions, Model, ModelFunctions};
 

@@ -54,7 +54,7 @@ pub enum Method {
 impl fmt::Display for Method {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Method::Rk4 { h } => write!(f, "RK4 h={h}"),
+            Method::Rk4 { h } => write!(f, "RK4 h={}", seam::short(*h)),
             Method::Dopri5 => write!(f, "DOPRI5"),
             Method::Dop853 => write!(f, "DOP853"),
             Method::Rosenbrock23 => write!(f, "ROS23"),
@@ -86,6 +86,10 @@ impl Method {
     }
 }
 
+/// The largest absolute tolerance [`Settings::check_tolerances`] takes: an error allowed to be
+/// larger than this in any unit controls nothing.
+pub const MAX_ATOL: f64 = 1e10;
+
 /// Integrator settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
@@ -112,6 +116,26 @@ impl Settings {
     /// 5(4) with rtol 1e-3, atol 1e-6, maximum step a tenth of the span.
     pub fn paper(span: f64) -> Settings {
         Settings { method: Method::Dopri5, rtol: 1e-3, atol: 1e-6, h_max: 0.1 * span, ..Settings::default() }
+    }
+
+    /// Whether `rtol` and `atol` control an error at all: each a finite positive number, a
+    /// relative tolerance below 1 (at 1 or above every step passes) and an absolute one at most
+    /// [`MAX_ATOL`].
+    ///
+    /// ```
+    /// use runtime::integrate::Settings;
+    /// assert!(Settings::check_tolerances(1e-10, 1e-10).is_ok());
+    /// assert!(Settings::check_tolerances(1e300, 1e-10).unwrap_err().contains("rtol"));
+    /// assert!(Settings::check_tolerances(1e-3, 1e300).unwrap_err().contains("atol"));
+    /// ```
+    pub fn check_tolerances(rtol: f64, atol: f64) -> Result<(), String> {
+        if !(rtol > 0.0 && rtol < 1.0) {
+            return Err(format!("rtol = {rtol:e}: a relative tolerance is a positive number below 1 (1e-3 is loose, 1e-12 tight)"));
+        }
+        if !(atol > 0.0 && atol <= MAX_ATOL) {
+            return Err(format!("atol = {atol:e}: an absolute tolerance is a positive number at most {MAX_ATOL:e} (beyond it nothing is controlled)"));
+        }
+        Ok(())
     }
 
     /// Tight settings, for a user's model: DOP853 at rtol = atol = 1e-10, maximum step a tenth
