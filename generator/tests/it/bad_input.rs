@@ -395,7 +395,7 @@ fn a_key_given_twice_is_an_error() {
 #[test]
 fn an_initial_state_off_its_constraint_is_refused() {
     let e = broken(&scene1(), "\"theta2\": \"-cos(theta1 - theta2)*theta1'\"", "\"theta2\": \"0.1\"");
-    check(&e, ErrorKind::InitialState, &["violates constraint `wheel`"]);
+    check(&e, ErrorKind::InitialState, &["in initial.qdot", "the initial rates violate the velocity constraint `wheel`"]);
 }
 
 #[test]
