@@ -98,5 +98,5 @@ def test_the_page_shows_the_bodies_where_the_trajectory_puts_them(tmp_path):
 def test_the_page_refuses_a_trajectory_of_another_model(tmp_path):
     m = multibody.load("cart_pendulum")
     other = multibody.load("three_body").simulate("kane", t_end=0.2, dt_out=0.1, frame=False)
-    with pytest.raises(KeyError):
+    with pytest.raises(ValueError, match="the run is of model `three_body`, not of `cart_pendulum`"):
         m.animate(other, tmp_path / "x.html")

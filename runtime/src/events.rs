@@ -6,7 +6,7 @@
 //! reset changes is kept as a [`Jump`]: the monitors take the impact's energy and momentum out of
 //! the balances, which then hold across it.
 
-use crate::integrate::{Events, JacobianFn, Projector, Reason, RunError, Settings, Solution, integrate_with_events};
+use crate::integrate::{Events, JacobianFn, Projector, Reason, RunError, Settings, Solution, States, Stats, integrate_with_events};
 use crate::system::{Drift, System};
 use seam::Failure;
 use std::cell::{Cell, RefCell};
@@ -96,9 +96,9 @@ pub fn run_interruptible(
         current.borrow().rhs(t, y, dy)
     };
     let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| current.borrow().jacobian(t, y, dy, j);
-    let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
+    let mut jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
     let mut project = |t: f64, y: &mut [f64]| current.borrow().project(t, y);
-    let projector: Option<Projector> = if sys.drift == Drift::Projection { Some(&mut project) } else { None };
+    let mut projector: Option<Projector> = if sys.drift == Drift::Projection { Some(&mut project) } else { None };
     let mut values = |t: f64, y: &[f64], g: &mut [f64]| -> Result<(), Failure> {
         let s = current.borrow();
         let (q, qd) = s.velocities(t, y)?;
@@ -128,7 +128,50 @@ pub fn run_interruptible(
     };
     let kinds = model.events.iter().map(|e| (e.direction, e.action)).collect();
     let mut events = Events::new(kinds, &mut values, &mut reset);
-    let solution = integrate_with_events(&mut rhs, jacobian, projector, &mut events, y0, times, settings)
-        .map_err(|e| if interrupted.get() { RunError { reason: Reason::Interrupted, ..e } } else { e })?;
+    // The control law's kinks inside the run: it stops and starts again at each (stepping
+    // across one costs steps and accuracy: the error estimate assumes a smooth right-hand side).
+    let (first, last) = (times.first().copied().unwrap_or(0.0), times.last().copied().unwrap_or(0.0));
+    let breaks: Vec<f64> = sys.controller.as_ref().map_or(Vec::new(), |c| c.breaks().iter().copied().filter(|b| *b > first && *b < last).collect());
+    let mut stretch = |y: &[f64], outputs: &[f64]| {
+        integrate_with_events(
+            &mut rhs,
+            jacobian.as_deref_mut().map(|j| j as JacobianFn),
+            projector.as_deref_mut().map(|p| p as Projector),
+            &mut events,
+            y,
+            outputs,
+            settings,
+        )
+        .map_err(|e| if interrupted.get() { RunError { reason: Reason::Interrupted, ..e } } else { e })
+    };
+    if breaks.is_empty() {
+        let solution = stretch(y0, times)?;
+        drop(stretch);
+        return Ok(EventRun { solution, jumps: jumps.into_inner() });
+    }
+    let mut solution = Solution { times: Vec::new(), states: States::new(y0.len(), times.len()), stats: Stats::default(), events: Vec::new(), stopped: false };
+    let (mut start, mut y) = (first, y0.to_vec());
+    solution.times.push(first);
+    solution.states.push(y0);
+    for end in breaks.into_iter().chain([last]) {
+        let asked: Vec<f64> = times.iter().copied().filter(|t| *t > start && *t <= end).collect();
+        let outputs: Vec<f64> = std::iter::once(start).chain(asked.iter().copied()).chain((asked.last() != Some(&end)).then_some(end)).collect();
+        let part = stretch(&y, &outputs)?;
+        solution.stats.add(&part.stats);
+        solution.events.extend(part.events);
+        for (t, state) in part.times.iter().zip(part.states.iter()).skip(1) {
+            if asked.contains(t) {
+                solution.times.push(*t);
+                solution.states.push(state);
+            }
+        }
+        if part.stopped {
+            solution.stopped = true;
+            break;
+        }
+        y = part.states.last().expect("a stretch has its start").to_vec();
+        start = end;
+    }
+    drop(stretch);
     Ok(EventRun { solution, jumps: jumps.into_inner() })
 }

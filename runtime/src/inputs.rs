@@ -19,25 +19,47 @@ pub type Law = dyn Fn(f64, &[f64], &[f64], &mut [f64]) + Send + Sync;
 /// assert_eq!(u, [-1.0]);
 /// ```
 #[derive(Clone)]
-pub struct Controller(Arc<Law>);
+pub struct Controller {
+    law: Arc<Law>,
+    /// Times where the law has a kink (a time series' samples): a run stops there and starts
+    /// again, rather than stepping across them.
+    breaks: Arc<[f64]>,
+}
 
 impl Controller {
     pub fn new(law: impl Fn(f64, &[f64], &[f64], &mut [f64]) + Send + Sync + 'static) -> Controller {
-        Controller(Arc::new(law))
+        Controller { law: Arc::new(law), breaks: Arc::new([]) }
     }
 
     /// The inputs at `(t, q, q')`.
     pub fn apply(&self, t: f64, q: &[f64], qdot: &[f64], u: &mut [f64]) {
-        (self.0)(t, q, qdot, u)
+        (self.law)(t, q, qdot, u)
     }
 
-    /// Inputs that follow time series, one per input in order.
+    /// Inputs that follow time series, one per input in order; their samples' times are the
+    /// law's breaks.
+    ///
+    /// ```
+    /// use runtime::inputs::{Controller, TimeSeries};
+    /// let c = Controller::series(vec![TimeSeries::parse("0,0\n1,2\n3,0\n").unwrap(), TimeSeries::parse("0,1\n1,1\n").unwrap()]);
+    /// assert_eq!(c.breaks(), [0.0, 1.0, 3.0]);
+    /// ```
     pub fn series(series: Vec<TimeSeries>) -> Controller {
-        Controller::new(move |t, _, _, u| {
+        let mut breaks: Vec<f64> = series.iter().flat_map(|s| s.times.iter().copied()).collect();
+        breaks.sort_by(f64::total_cmp);
+        breaks.dedup();
+        let law = move |t: f64, _: &[f64], _: &[f64], u: &mut [f64]| {
             for (u, s) in u.iter_mut().zip(&series) {
                 *u = s.at(t);
             }
-        })
+        };
+        Controller { law: Arc::new(law), breaks: breaks.into() }
+    }
+
+    /// The times where the law has a kink, in order: an integrator's error estimate does not
+    /// hold across them, so a run stops and starts again at each.
+    pub fn breaks(&self) -> &[f64] {
+        &self.breaks
     }
 }
 

@@ -165,7 +165,7 @@ pub struct Stats {
 
 impl Stats {
     /// Adds the work of another stretch of the same run.
-    fn add(&mut self, other: &Stats) {
+    pub(crate) fn add(&mut self, other: &Stats) {
         self.steps += other.steps;
         self.rejected += other.rejected;
         self.rhs_calls += other.rhs_calls;
