@@ -169,7 +169,13 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     };
     options.adaptive =
         [MethodArg::Dopri5, MethodArg::Dop853, MethodArg::Ros23].into_iter().filter(|a| args.methods.contains(a)).filter_map(MethodArg::adaptive).collect();
-    if !args.methods.contains(&MethodArg::Rk4) {
+    // Events are located on a method's dense output, which RK4 has not: RK4 is left out of a
+    // model with events, and the note says so (its runs would all be refused at the start).
+    let mut notes = Vec::new();
+    if !model.events.is_empty() && args.methods.contains(&MethodArg::Rk4) {
+        notes.push("RK4 left out: the model has events, which are located on the integrator's dense output, and RK4 has none".to_string());
+    }
+    if !args.methods.contains(&MethodArg::Rk4) || !model.events.is_empty() {
         options.rk4_steps.clear();
     }
     if args.quick {
@@ -190,7 +196,11 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     write_file(&base.with_extension("json"), serde_json::to_string_pretty(&points).expect("points serialize").as_bytes())?;
     plot::write_work_precision(&points, &base.with_extension("svg"))?;
     let failed = points.iter().filter(|p| p.failure.is_some()).count();
-    print(&format!("{} runs ({failed} stopped early), written to {}.{{csv,json,svg}}\n", points.len(), files::printable_path(&base)))
+    let mut text = format!("{} runs ({failed} stopped early), written to {}.{{csv,json,svg}}\n", points.len(), files::printable_path(&base));
+    for note in notes {
+        text += &format!("  note: {note}\n");
+    }
+    print(&text)
 }
 
 /// The operating point `args` describe: the model's initial state and parameters with the

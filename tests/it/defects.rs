@@ -179,3 +179,18 @@ fn an_initial_state_off_a_constraint_is_located_and_leveled() {
         "{err}"
     );
 }
+
+/// `sweep` on a model with events: RK4, which cannot locate events, is left out with a note
+/// (it reported "12 stopped early" for runs refused at the start), and every run it makes runs.
+#[test]
+fn a_sweep_with_events_leaves_out_what_cannot_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = crate::common::ok(&multibody(dir.path(), &["sweep", "bouncing_ball", "--quick", "--repeats", "1", "--out", "."]));
+    assert!(out.contains("(0 stopped early)") && out.contains("note: RK4 left out: the model has events"), "{out}");
+    let points: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("bouncing_ball_work_precision.json")).unwrap()).unwrap();
+    let points = points.as_array().unwrap();
+    assert!(
+        !points.is_empty() && points.iter().all(|p| p["failure"].is_null() && p["integrator"].as_str().is_some_and(|i| !i.starts_with("RK4"))),
+        "{points:?}"
+    );
+}
