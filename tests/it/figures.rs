@@ -414,3 +414,35 @@ fn the_goals_quote_the_scaling_rows() {
         assert!(goals.contains(&format!("`{cell}` at {said}")), "docs/goals.md does not quote the spatial chain's `{cell}` at {n} links from docs/scaling.md");
     }
 }
+
+/// The operation counts of the right-hand-side table are the committed modules' own
+/// (`generated/op-counts.txt`): a module regenerated with fewer operations makes the file stale
+/// (scene 2's reduced call was quoted at 632 + 100 operations when the module had 576 + 100).
+#[test]
+fn the_right_hand_side_table_counts_the_committed_modules_operations() {
+    let file = json("docs/benchmarks/rhs.json");
+    let counts = read("generated/op-counts.txt");
+    let mut checked = 0;
+    for row in file["rows"].as_array().unwrap() {
+        let cell = |k: usize| row[k].as_str().unwrap().to_string();
+        let (scene, formulation, ops) = (cell(0), cell(1), cell(4));
+        // Rows of a plain module: "<n> <module>".
+        let Some((_, module)) = scene.split_once(' ').filter(|(_, m)| !m.contains(',')) else { continue };
+        let function = match formulation.as_str() {
+            "Lagrange" => "lagrange::rhs",
+            "Maggi" => "maggi::rhs",
+            "Kane" => "kane::rhs",
+            _ => "reduced_volterra::rhs",
+        };
+        let section = counts.split(&format!("[{module}]\n")).nth(1).unwrap_or_else(|| panic!("no [{module}] in op-counts.txt")).split("\n[").next().unwrap();
+        let line = section.lines().find(|l| l.trim_start().starts_with(&format!("{function} "))).unwrap_or_else(|| panic!("{module}: no {function}"));
+        let (assembly, solve) = ops.split_once(" + ").unwrap();
+        assert!(
+            line.contains(&format!("assembly {assembly} ops")) && line.ends_with(&format!("solve {solve} ops")),
+            "{module} {function}: the table says {ops}, op-counts.txt `{}`",
+            line.trim()
+        );
+        checked += 1;
+    }
+    assert!(checked >= 12, "{checked} rows checked");
+}
