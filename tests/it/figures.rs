@@ -301,6 +301,14 @@ fn the_python_figures_are_the_benchmark_file() {
     assert_quoted(&page, &format!("{speedup} fewer than the ensemble"), "docs/python.md");
     // The loop and the ensemble ran the same runs.
     assert!(number(&runs["largest_difference_at_the_end"]) < 1e-8);
+    // Today's SymPy to the same first right-hand side, measured in the same run, on the same
+    // system (the right-hand sides agree).
+    let sympy = &file["sympy_import_to_first_rhs"];
+    assert!(number(&sympy["relative_difference_of_the_rhs"]) < 1e-12);
+    let sympy_total = format!("takes {:.2} s", number(&sympy["total_s"]));
+    assert_quoted(&readme, &sympy_total, "README.md");
+    assert_quoted(&page, &sympy_total, "docs/python.md");
+    assert!(!readme.contains("3906") && !page.contains("3906"), "the 2019 PyDy figure is gone: today's SymPy is measured");
 }
 
 /// docs/goals.md's SymEngine table is docs/scaling/symengine.json (written by
