@@ -69,6 +69,8 @@ pub struct ValueArgs {
     /// A coordinate's rate, `NAME=VALUE` (repeatable).
     #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
     pub qdot: Vec<(String, f64)>,
+    #[command(flatten)]
+    pub robot: generator::command::RobotArgs,
 }
 
 /// The run: its initial state, parameters, times and integrator.

@@ -41,11 +41,13 @@ enum Command {
     /// Shows what is derived: T, M, N, Q, the constraints, Definition 1 per coordinate, and
     /// the reduced method's W_NI, X_NI, M_NI, L_NI.
     Inspect {
-        /// A model file or the name of a built-in model.
+        /// A model file (RON or URDF) or the name of a built-in model.
         model: std::path::PathBuf,
         /// Print LaTeX instead of text.
         #[arg(long)]
         latex: bool,
+        #[command(flatten)]
+        robot: generator::command::RobotArgs,
     },
     /// Integrates one formulation and writes the trajectory (CSV and JSON) and its plots.
     Simulate(simulate::SimulateArgs),
@@ -107,7 +109,7 @@ fn main() -> ExitCode {
     generator::symbolic::expr::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
-        Command::Inspect { model, latex } => match load::model(&model) {
+        Command::Inspect { model, latex, robot } => match load::model_with(&model, &robot.options()) {
             Ok(model) => return generator::command::exit(generator::command::print_inspection(&model, latex)),
             Err(e) => Err(e.into()),
         },
@@ -146,7 +148,7 @@ pub fn evaluated(
     exact: load::Jacobians,
     route: load::Route,
 ) -> Result<(seam::Model, generator::model::Model), CliError> {
-    let model = load::model(argument)?.with_parameters(&values.param)?;
+    let model = load::model_with(argument, &values.robot.options())?.with_parameters(&values.param)?;
     args::check_names(&model, values, more)?;
     let loaded = load::evaluate(&model, exact, route, &mut |path| {
         eprintln!("compiling the model with rustc into {} (once per model and version)...", files::printable_path(path));

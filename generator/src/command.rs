@@ -39,10 +39,74 @@ impl From<FormulationArg> for Formulation {
     }
 }
 
+/// How a URDF robot is read (ignored for a RON model): `--base`, `--gravity`, `--limits`.
+#[derive(Args, Debug, Clone, PartialEq, Default)]
+pub struct RobotArgs {
+    /// A URDF robot's base: fixed to the world (default), or floating (three translations and a
+    /// unit quaternion).
+    #[arg(long, value_enum, value_name = "BASE")]
+    pub base: Option<BaseArg>,
+    /// A URDF robot's gravity, `X,Y,Z` in world components (default `0,0,-9.81`; `0,0,0` for a
+    /// robot in space).
+    #[arg(long, value_name = "X,Y,Z", value_parser = gravity, allow_hyphen_values = true)]
+    pub gravity: Option<[f64; 3]>,
+    /// What a URDF robot's joint limits become: reported only (default), recorded events, or
+    /// events that stop the run.
+    #[arg(long, value_enum, value_name = "WHAT")]
+    pub limits: Option<LimitsArg>,
+}
+
+/// A URDF robot's base on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BaseArg {
+    Fixed,
+    Floating,
+}
+
+/// What a URDF robot's limits become, on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LimitsArg {
+    Report,
+    Record,
+    Stop,
+}
+
+fn gravity(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| format!("needs `X,Y,Z`, not `{s}`"))?;
+    match parts[..] {
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
+        _ => Err(format!("needs three finite numbers `X,Y,Z`, not `{s}`")),
+    }
+}
+
+impl RobotArgs {
+    /// The URDF options these arguments ask for.
+    pub fn options(&self) -> crate::model::urdf::UrdfOptions {
+        use crate::model::urdf::{Base, LimitAction, UrdfOptions};
+        let d = UrdfOptions::default();
+        UrdfOptions {
+            base: match self.base {
+                Some(BaseArg::Floating) => Base::Floating,
+                Some(BaseArg::Fixed) => Base::Fixed,
+                None => d.base,
+            },
+            gravity: self.gravity.unwrap_or(d.gravity),
+            limits: match self.limits {
+                Some(LimitsArg::Record) => LimitAction::Record,
+                Some(LimitsArg::Stop) => LimitAction::Stop,
+                Some(LimitsArg::Report) => LimitAction::Report,
+                None => d.limits,
+            },
+        }
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct GenerateArgs {
-    /// The model: a RON file, or the name of a built-in model (`three_body`, ...).
+    /// The model: a RON file, a URDF robot, or the name of a built-in model (`three_body`, ...).
     pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub robot: RobotArgs,
     /// Write the module to this file (atomically: a temporary file renamed over it) instead of
     /// stdout.
     #[arg(short, long, value_name = "PATH")]
@@ -153,7 +217,7 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     if let Some(out) = &args.output {
         refuse_overwriting_a_model(&file, out, args.force)?;
     }
-    let model = crate::model::source(&file)?.model()?;
+    let model = crate::model::source_with(&file, &args.robot.options())?.model()?;
     if let Some(out) = &args.output {
         // The model read, the output may not be it (by any path), whatever `--force` says.
         files::check_output(out).map_err(|e| Failure::Message(format!("error: {e}")))?;

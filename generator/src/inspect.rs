@@ -35,6 +35,9 @@ pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], la
     let mut out = String::new();
     let w = &mut out;
     let _ = writeln!(w, "model: {} ({})", model.name, model.file);
+    if !model.description.is_empty() {
+        let _ = writeln!(w, "{}", model.description);
+    }
     let _ = writeln!(w, "m = {}, r = {}, p = {}, s = {}, p - s = {}", mech.m, mech.r, mech.p, s, mech.p.saturating_sub(s));
     let _ = writeln!(w, "coordinates q = [{}]", names.join(", "));
     let ign: Vec<&str> = chosen.iter().map(|&j| names[j].as_str()).collect();

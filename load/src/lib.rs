@@ -33,6 +33,16 @@ pub fn source(argument: impl AsRef<std::ffi::OsStr>) -> Result<Source, LoadError
     Ok(generator::model::source(Path::new(argument.as_ref()))?)
 }
 
+/// [`source`], a URDF robot read with `robot`'s options ([`generator::model::source_with`]).
+pub fn source_with(argument: impl AsRef<std::ffi::OsStr>, robot: &generator::model::urdf::UrdfOptions) -> Result<Source, LoadError> {
+    Ok(generator::model::source_with(Path::new(argument.as_ref()), robot)?)
+}
+
+/// [`model`], a URDF robot read with `robot`'s options.
+pub fn model_with(argument: impl AsRef<std::ffi::OsStr>, robot: &generator::model::urdf::UrdfOptions) -> Result<generator::model::Model, LoadError> {
+    Ok(source_with(argument, robot)?.model()?)
+}
+
 /// The model MODEL names ([`source`]), loaded and validated.
 pub fn model(argument: impl AsRef<std::ffi::OsStr>) -> Result<generator::model::Model, LoadError> {
     Ok(source(argument)?.model()?)

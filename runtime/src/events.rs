@@ -146,7 +146,6 @@ pub fn run_interruptible(
     };
     if breaks.is_empty() {
         let solution = stretch(y0, times)?;
-        drop(stretch);
         return Ok(EventRun { solution, jumps: jumps.into_inner() });
     }
     let mut solution = Solution { times: Vec::new(), states: States::new(y0.len(), times.len()), stats: Stats::default(), events: Vec::new(), stopped: false };
@@ -172,6 +171,5 @@ pub fn run_interruptible(
         y = part.states.last().expect("a stretch has its start").to_vec();
         start = end;
     }
-    drop(stretch);
     Ok(EventRun { solution, jumps: jumps.into_inner() })
 }

@@ -23,6 +23,7 @@ mod ops_against_sympy;
 mod outside;
 mod quaternion;
 mod readme;
+mod robots;
 mod rolling;
 mod rust_version;
 mod stiff;

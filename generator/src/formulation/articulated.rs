@@ -333,8 +333,13 @@ pub(super) fn reduce_on(t: &Tree, model: &Model, mech: &Mechanics, kane: &Volter
         let (axis, k) = &ignorable_axes[a];
         rhs.set(a, 0, reduced.g[a].expr() - *k * axis.motion.power(&momentum[axis.node]));
     }
-    let opts =
-        SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
+    let opts = SolveOptions {
+        constants: model.constant_symbols(),
+        limits: Limits { max_terms: 2_000, max_work: 400_000 },
+        determinant: false,
+        normalize: false,
+        reference: Some(model.initial_env()),
+    };
     let u_i = solve(&m_ii, &rhs, &opts).ok()?;
     let mut sigma: HashMap<Symbol, Expr> = map.iter().zip(&reduced.u).map(|(&r, u)| (kane.u[r], u.expr())).collect();
     for (b, &r) in rates.iter().enumerate() {

@@ -287,8 +287,13 @@ pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_rec: &Recur
             m_ii.set(a, b, dense.get(rates[a], rates[b]));
         }
     }
-    let opts =
-        SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
+    let opts = SolveOptions {
+        constants: model.constant_symbols(),
+        limits: Limits { max_terms: 2_000, max_work: 400_000 },
+        determinant: false,
+        normalize: false,
+        reference: Some(model.initial_env()),
+    };
     // u_I = M_II^-1 (G - n - M_IN u_N), n the momenta at u = 0.
     let mut rhs = Matrix::zeros(s, 1);
     for (a, &j) in reduced.ignorable.iter().enumerate() {

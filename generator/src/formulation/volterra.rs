@@ -208,8 +208,13 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         let coupled = Expr::sum(map.iter().zip(&u).map(|(&r, uk)| mk.get(rates[a], r) * uk.expr()));
         rhs.set(a, 0, tidy.combination(g[a].expr() - n - coupled, m));
     }
-    let opts =
-        SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
+    let opts = SolveOptions {
+        constants: model.constant_symbols(),
+        limits: Limits { max_terms: 2_000, max_work: 400_000 },
+        determinant: false,
+        normalize: false,
+        reference: Some(model.initial_env()),
+    };
     let v_i = solve(&m_ii, &rhs, &opts).ok()?;
     // Kane's quasi-velocities in the reduced ones: u_N renamed, v_I from the momenta.
     let mut sigma: HashMap<Symbol, Expr> = HashMap::new();
@@ -338,6 +343,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         limits: Limits { max_terms: 2_000, max_work: 400_000 },
         determinant: m <= MAX_DETERMINANT_SIZE,
         normalize: true,
+        reference: Some(model.initial_env()),
     };
     // A body's angular velocity in quaternions gives orthogonal rows: inverted as A^T D^-1.
     let rates_only = y.data.iter().all(|e| e.as_num().is_some());

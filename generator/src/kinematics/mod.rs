@@ -53,6 +53,70 @@ pub fn rotation(axis: Axis, angle: Expr) -> Matrix {
     Matrix::from_rows(rows)
 }
 
+/// The rotation about the unit axis `a` (constant components) by `angle` (Rodrigues):
+/// `R = cos I + sin [a]x + (1 - cos) a a^T`.
+pub fn rotation_about(a: &[Expr; 3], angle: Expr) -> Matrix {
+    let (c, s) = (angle.cos(), angle.sin());
+    let v = Expr::one() - c;
+    let rows = (0..3)
+        .map(|i| {
+            (0..3)
+                .map(|j| {
+                    let outer = a[i] * a[j] * v;
+                    let diagonal = if i == j { c } else { Expr::zero() };
+                    // [a]x: row i, column j.
+                    let cross = match (i, j) {
+                        (0, 1) => -a[2] * s,
+                        (0, 2) => a[1] * s,
+                        (1, 0) => a[2] * s,
+                        (1, 2) => -a[0] * s,
+                        (2, 0) => -a[1] * s,
+                        (2, 1) => a[0] * s,
+                        _ => Expr::zero(),
+                    };
+                    diagonal + cross + outer
+                })
+                .collect()
+        })
+        .collect();
+    Matrix::from_rows(rows)
+}
+
+/// One step of a frame's rotation relative to its parent, applied about the current axes.
+#[derive(Clone, Debug)]
+pub enum Turn {
+    /// About a coordinate axis by an angle.
+    About(Axis, Expr),
+    /// About a constant unit axis (its components in the current axes) by an angle: a joint of
+    /// any direction.
+    Along([Expr; 3], Expr),
+    /// A constant rotation (the current axes' components of the new ones, columns): a
+    /// joint's fixed orientation in its parent.
+    Fixed(Matrix),
+}
+
+impl Turn {
+    /// The rotation matrix of the step.
+    fn matrix(&self) -> Matrix {
+        match self {
+            Turn::About(axis, angle) => rotation(*axis, *angle),
+            Turn::Along(a, angle) => rotation_about(a, *angle),
+            Turn::Fixed(m) => m.clone(),
+        }
+    }
+
+    /// The angular velocity of a step about a unit axis, in the current axes.
+    fn rate(&self, chain: &TimeChain) -> [Expr; 3] {
+        match self {
+            Turn::Along(a, angle) => {
+                let rate = chain.dt(*angle);
+                [a[0] * rate, a[1] * rate, a[2] * rate]
+            }
+            Turn::About(..) | Turn::Fixed(_) => [Expr::zero(), Expr::zero(), Expr::zero()],
+        }
+    }
+}
+
 /// The total time derivative along the motion: the time symbol and each coordinate with its
 /// rate (velocities with accelerations for velocity-level expressions). Memoized: one
 /// forward pass over the DAG however many expressions share it.
@@ -170,21 +234,36 @@ impl FrameKinematics {
     /// frame's components) and turned by the elementary rotations `turns`, applied in order
     /// about the current axes.
     pub fn child(&self, parent: usize, name: &str, translation: &[Expr; 3], turns: &[(Axis, Expr)], chain: &TimeChain) -> FrameKinematics {
+        let turns: Vec<Turn> = turns.iter().map(|(axis, angle)| Turn::About(*axis, *angle)).collect();
+        self.child_turned(parent, name, translation, &turns, chain)
+    }
+
+    /// [`FrameKinematics::child`] with any [`Turn`]s: about coordinate axes, about a unit axis
+    /// of any direction, or by a constant rotation.
+    pub fn child_turned(&self, parent: usize, name: &str, translation: &[Expr; 3], turns: &[Turn], chain: &TimeChain) -> FrameKinematics {
         let offset = mat_vec(&self.rotation, translation);
         let origin = add3(&self.origin, &offset);
+        let matrices: Vec<Matrix> = turns.iter().map(Turn::matrix).collect();
         let mut r_pc = Matrix::identity(3);
-        for (axis, angle) in turns {
-            r_pc = r_pc.mul(&rotation(*axis, *angle));
+        for m in &matrices {
+            r_pc = r_pc.mul(m);
         }
         let r_cp = r_pc.transpose();
-        // omega_child = R_pc^T omega_parent + sum_k (R_{k+1}..R_n)^T e_k alpha_k'.
+        // omega_child = R_pc^T omega_parent + sum_k (R_{k+1}..R_n)^T w_k, w_k step k's rate.
         let mut relative = [Expr::zero(), Expr::zero(), Expr::zero()];
         let mut tail = Matrix::identity(3);
-        for (axis, angle) in turns.iter().rev() {
-            let rate = chain.dt(*angle);
-            let e_k = tail.transpose().col(axis.index());
-            relative = add3(&relative, &[e_k[0] * rate, e_k[1] * rate, e_k[2] * rate]);
-            tail = rotation(*axis, *angle).mul(&tail);
+        for (turn, m) in turns.iter().zip(&matrices).rev() {
+            match turn {
+                // A column of the tail, as the elementary rotations always had it.
+                Turn::About(axis, angle) => {
+                    let rate = chain.dt(*angle);
+                    let e_k = tail.transpose().col(axis.index());
+                    relative = add3(&relative, &[e_k[0] * rate, e_k[1] * rate, e_k[2] * rate]);
+                }
+                Turn::Along(..) => relative = add3(&relative, &mat_vec(&tail.transpose(), &turn.rate(chain))),
+                Turn::Fixed(_) => {}
+            }
+            tail = m.mul(&tail);
         }
         let omega = add3(&mat_vec(&r_cp, &self.omega), &relative);
         // v_child = R_pc^T (v_parent + omega_parent x t + t').

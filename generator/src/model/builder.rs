@@ -145,6 +145,7 @@ impl ModelBuilder {
                 bodies: Vec::new(),
                 constraints: Vec::new(),
                 forces: Vec::new(),
+                urdf: None,
                 quasi_velocities: QuasiVelocityDef { full: Vec::new(), reduced: Vec::new() },
                 ignorable: IgnorableDef::Auto,
                 initial: None,
@@ -266,13 +267,7 @@ impl ModelBuilder {
 
     /// The model as RON text, in the format of `models/`.
     pub fn to_ron(&self) -> String {
-        let config = ron::ser::PrettyConfig::new()
-            .struct_names(true)
-            .extensions(ron::extensions::Extensions::IMPLICIT_SOME)
-            .indentor("    ".to_string())
-            .escape_strings(false);
-        // Serializing plain data with string keys cannot fail.
-        ron::ser::to_string_pretty(&self.def, config).expect("a model definition serializes to RON")
+        super::to_ron(&self.def)
     }
 
     /// Validates the model exactly as a file would be (see the module docs).

@@ -55,10 +55,30 @@ impl Source {
 /// assert!(e.contains("no model `three_bdy`") && e.contains("three_body"), "{e}");
 /// ```
 pub fn source(argument: &Path) -> Result<Source, ModelError> {
+    source_with(argument, &super::urdf::UrdfOptions::default())
+}
+
+/// [`source`], a URDF file (`.urdf`) read with `robot`'s options (its base, gravity, limits)
+/// into the RON text of its model ([`super::urdf`]); they are not read for a RON model.
+///
+/// ```
+/// use generator::model::{source_with, urdf::{Base, UrdfOptions}};
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("one.urdf");
+/// std::fs::write(&path, r#"<robot name="one"><link name="a"><inertial><mass value="1"/>
+///   <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>"#).unwrap();
+/// let floating = source_with(&path, &UrdfOptions { base: Base::Floating, ..UrdfOptions::default() }).unwrap();
+/// assert_eq!(floating.model().unwrap().m(), 7); // three translations and a quaternion
+/// ```
+pub fn source_with(argument: &Path, robot: &super::urdf::UrdfOptions) -> Result<Source, ModelError> {
     let text = argument.to_string_lossy();
     let looks_like_a_path = argument.extension().is_some() || text.contains(['/', '\\']) || argument.is_file();
     if looks_like_a_path {
         let (file, text) = super::read_source(argument)?;
+        if argument.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+            let def = super::urdf::model_file(&file, &text, robot)?;
+            return Ok(Source { file, text: super::to_ron(&def) });
+        }
         return Ok(Source { file, text });
     }
     match BUILT_IN.iter().find(|(n, _)| *n == text) {

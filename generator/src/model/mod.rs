@@ -13,12 +13,13 @@ pub mod error;
 pub mod examples;
 pub mod schema;
 pub mod spans;
+pub mod urdf;
 
-pub use built_in::{Source, built_in, source};
+pub use built_in::{Source, built_in, source, source_with};
 pub use error::{ErrorKind, ModelError};
 pub use schema::*;
 
-use crate::kinematics::{Axis, FrameKinematics, TimeChain};
+use crate::kinematics::{Axis, FrameKinematics, TimeChain, Turn};
 use crate::symbolic::eval::Env;
 use crate::symbolic::number::rat_from_f64;
 use crate::symbolic::parse::{self, Ast, AstKind, LowerError, Resolver};
@@ -198,6 +199,21 @@ impl Model {
         let mut pairs = self.position_chain().pairs;
         pairs.extend(self.velocities.iter().zip(&self.accelerations).map(|(v, a)| (*v, a.expr())));
         TimeChain::new(self.t, pairs)
+    }
+
+    /// [`Model::parameter_env`] with the initial coordinates and rates bound too (zeros without
+    /// an `initial` section), at the run's start: the state a model's equations are first used
+    /// at.
+    pub fn initial_env(&self) -> Env {
+        let mut env = self.parameter_env();
+        env.set(self.t, self.simulation.as_ref().map_or(0.0, |s| s.t_start));
+        let m = self.coordinates.len();
+        let (q, qd) = self.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]));
+        for ((c, v), (x, xd)) in self.coordinates.iter().zip(&self.velocities).zip(q.iter().zip(&qd)) {
+            env.set(*c, *x);
+            env.set(*v, *xd);
+        }
+        env
     }
 
     /// An evaluation environment with the parameters, `pi` and the time functions bound.
@@ -381,6 +397,17 @@ impl Model {
     }
 }
 
+/// A model definition as the RON text of a model file.
+pub fn to_ron(def: &ModelFile) -> String {
+    let config = ron::ser::PrettyConfig::new()
+        .struct_names(true)
+        .extensions(ron::extensions::Extensions::IMPLICIT_SOME)
+        .indentor("    ".to_string())
+        .escape_strings(false);
+    // Serializing plain data with string keys cannot fail.
+    ron::ser::to_string_pretty(def, config).expect("a model definition serializes to RON")
+}
+
 /// Parses and validates model text; `file` names it in errors.
 pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
     let options = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
@@ -397,6 +424,19 @@ pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
         let at = offset_of(source, line, col);
         ModelError::at(ErrorKind::Syntax, file, source, Some(at..(at + 1).min(source.len()).max(at)), "", format!("malformed model: {code}"), help)
     })?;
+    if def.urdf.is_some() {
+        // The robot first, then this file's items: validated as one model file would be.
+        let merged = urdf::include(file, def)?;
+        return from_source(file, &to_ron(&merged));
+    }
+    if def.quasi_velocities.is_empty() {
+        return Err(ModelError::unlocated(
+            ErrorKind::QuasiVelocityCount,
+            file,
+            "the model gives no quasi-velocities".into(),
+            "add `quasi_velocities: QuasiVelocities(full: [...], reduced: [...])` (the rates `q'` are a choice that always works)".into(),
+        ));
+    }
     build_within_budget(file, source, def)
 }
 
@@ -1145,17 +1185,54 @@ impl<'a> Builder<'a> {
                     let rp = format!("{place}.rotation[{k}]");
                     match r {
                         RotationDef::Quaternion(..) => unreachable!("handled above"),
-                        RotationDef::X(a) => turns.push((Axis::X, self.expr(a, &rp, Scope::Position)?)),
-                        RotationDef::Y(a) => turns.push((Axis::Y, self.expr(a, &rp, Scope::Position)?)),
-                        RotationDef::Z(a) => turns.push((Axis::Z, self.expr(a, &rp, Scope::Position)?)),
+                        RotationDef::X(a) => turns.push(Turn::About(Axis::X, self.expr(a, &rp, Scope::Position)?)),
+                        RotationDef::Y(a) => turns.push(Turn::About(Axis::Y, self.expr(a, &rp, Scope::Position)?)),
+                        RotationDef::Z(a) => turns.push(Turn::About(Axis::Z, self.expr(a, &rp, Scope::Position)?)),
                         RotationDef::EulerZYX(psi, theta, phi) => {
-                            turns.push((Axis::Z, self.expr(psi, &rp, Scope::Position)?));
-                            turns.push((Axis::Y, self.expr(theta, &rp, Scope::Position)?));
-                            turns.push((Axis::X, self.expr(phi, &rp, Scope::Position)?));
+                            turns.push(Turn::About(Axis::Z, self.expr(psi, &rp, Scope::Position)?));
+                            turns.push(Turn::About(Axis::Y, self.expr(theta, &rp, Scope::Position)?));
+                            turns.push(Turn::About(Axis::X, self.expr(phi, &rp, Scope::Position)?));
+                        }
+                        RotationDef::Axis(axis, angle) => {
+                            let a = self.vec3(axis, &format!("{rp}.axis"), Scope::Parameters)?;
+                            self.check_numeric(&a, &rp, "axis", |v| {
+                                let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                                ((norm - 1.0).abs() <= 1e-9).then_some(()).ok_or(format!("the axis has length {norm}, not 1"))
+                            })?;
+                            turns.push(Turn::Along(a, self.expr(angle, &rp, Scope::Position)?));
+                        }
+                        RotationDef::Matrix(rows) => {
+                            if rows.len() != 3 {
+                                return Err(self.err(
+                                    ErrorKind::Dimension,
+                                    &rp,
+                                    "Matrix",
+                                    format!("a rotation matrix has 3 rows, not {}", rows.len()),
+                                    "write [[r11, r12, r13], [r21, r22, r23], [r31, r32, r33]]",
+                                ));
+                            }
+                            let mut m = Vec::new();
+                            for (i, row) in rows.iter().enumerate() {
+                                m.push(self.vec3(row, &format!("{rp}[{i}]"), Scope::Parameters)?.to_vec());
+                            }
+                            let entries: Vec<Expr> = m.iter().flatten().copied().collect();
+                            self.check_numeric(&entries, &rp, "Matrix", |v| {
+                                let r = |i: usize, j: usize| v[3 * i + j];
+                                let worst = (0..3)
+                                    .flat_map(|i| (0..3).map(move |j| (i, j)))
+                                    .map(|(i, j)| ((0..3).map(|k| r(k, i) * r(k, j)).sum::<f64>() - if i == j { 1.0 } else { 0.0 }).abs())
+                                    .fold(0.0f64, f64::max);
+                                let det = r(0, 0) * (r(1, 1) * r(2, 2) - r(1, 2) * r(2, 1)) - r(0, 1) * (r(1, 0) * r(2, 2) - r(1, 2) * r(2, 0))
+                                    + r(0, 2) * (r(1, 0) * r(2, 1) - r(1, 1) * r(2, 0));
+                                (worst <= 1e-9 && det > 0.0)
+                                    .then_some(())
+                                    .ok_or(format!("it is not a rotation (R^T R - I is off by {worst:e}, determinant {det})"))
+                            })?;
+                            turns.push(Turn::Fixed(Matrix::from_rows(m)));
                         }
                     }
                 }
-                done.push(parent.child(parent_index, &f.name, &translation, &turns, chain));
+                done.push(parent.child_turned(parent_index, &f.name, &translation, &turns, chain));
             }
             if still.len() == before {
                 let names: Vec<&str> = still.iter().map(|i| def.frames[*i].name.as_str()).collect();
@@ -1355,6 +1432,16 @@ impl<'a> Builder<'a> {
             ));
         }
         list.iter().enumerate().map(|(k, s)| self.expr(s, &format!("{place}[{k}]"), Scope::Quasi)).collect()
+    }
+
+    /// Checks constant entries (parameters allowed) with the file's parameter values: `test`
+    /// gets their numbers and says what is wrong; located at `place`.
+    fn check_numeric(&self, entries: &[Expr], place: &str, needle: &str, test: impl Fn(&[f64]) -> Result<(), String>) -> Result<(), ModelError> {
+        let env = self.param_env(&self.def.parameters.iter().map(|(k, v)| (Symbol::new(k), *v)).collect::<Vec<_>>());
+        let values: Vec<f64> = entries.iter().map(|e| e.eval(&env).unwrap_or(f64::NAN)).collect();
+        test(&values).map_err(|why| {
+            self.err(ErrorKind::BadValue, place, needle, why, "give constant numbers of a unit axis, or of a rotation matrix (orthonormal, determinant 1)")
+        })
     }
 
     /// The first frame turned by a quaternion whose four coordinates no position constraint

@@ -63,7 +63,14 @@ pub struct ModelFile {
     /// Applied forces and potentials.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub forces: Vec<ForceDef>,
-    /// The choice of quasi-velocities.
+    /// A URDF robot this model starts from (its path relative to this file, and how it is
+    /// read): its coordinates, frames, bodies, forces and quasi-velocities come first, and
+    /// this file's items are added to them ([`crate::model::urdf`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub urdf: Option<UrdfInclude>,
+    /// The choice of quasi-velocities (with `urdf` and none given: the robot's, followed by the
+    /// rates of this file's own coordinates).
+    #[serde(default, skip_serializing_if = "QuasiVelocityDef::is_empty")]
     pub quasi_velocities: QuasiVelocityDef,
     /// Which coordinates are ignorable.
     #[serde(default)]
@@ -228,6 +235,12 @@ pub enum RotationDef {
     /// configuration. The frame's only rotation; the model keeps `e0^2 + e1^2 + e2^2 + e3^2 = 1`
     /// as a `Position` constraint of its own.
     Quaternion(String, String, String, String),
+    /// About a constant unit axis `[x, y, z]` (in the current axes) by an angle: a joint of any
+    /// direction (a URDF joint's `axis`).
+    Axis(Vec<String>, String),
+    /// A constant rotation, its rows in the current axes' components (the columns are the new
+    /// axes): a URDF joint's `rpy`. Orthonormal with determinant 1.
+    Matrix(Vec<Vec<String>>),
 }
 
 /// A body attached to a frame.
@@ -314,11 +327,33 @@ pub enum ForceDef {
 /// Quasi-velocities: `full` has p of them (Maggi, Kane/Gibbs-Appell); `reduced` has p - s
 /// (the reduced Volterra method). Expressions in `q`, `q'`, `t` and `omega_x(body)`,
 /// `omega_y(body)`, `omega_z(body)` (body-frame angular velocity components).
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "QuasiVelocities")]
 pub struct QuasiVelocityDef {
     pub full: Vec<String>,
     pub reduced: Vec<String>,
+}
+
+impl QuasiVelocityDef {
+    /// No quasi-velocity given.
+    pub fn is_empty(&self) -> bool {
+        self.full.is_empty() && self.reduced.is_empty()
+    }
+}
+
+/// A URDF a model starts from: `urdf: Urdf(file: "robot.urdf", base: Floating)`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename = "Urdf")]
+pub struct UrdfInclude {
+    /// The URDF's path, relative to the model file.
+    pub file: String,
+    #[serde(default)]
+    pub base: crate::model::urdf::Base,
+    /// Gravity in world components (default `["0", "0", "-9.81"]`; zeros for none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
+    #[serde(default)]
+    pub limits: crate::model::urdf::LimitAction,
 }
 
 /// Ignorable coordinates: found automatically, or declared (and verified).

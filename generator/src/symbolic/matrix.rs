@@ -202,11 +202,16 @@ pub struct SolveOptions {
     /// Put eliminated entries in the polynomial normal form, so that common factors show and
     /// cancel (off for systems built from already simplified pieces).
     pub normalize: bool,
+    /// A state the equations will be used at (the model's initial one): a pivot that vanishes
+    /// there is taken only when no other is left, so that the solution does not divide by zero
+    /// where a run starts (an off-diagonal entry of a floating base's mass block, zero at the
+    /// identity attitude, chosen for being short).
+    pub reference: Option<crate::symbolic::eval::Env>,
 }
 
 impl Default for SolveOptions {
     fn default() -> Self {
-        SolveOptions { constants: HashSet::new(), limits: Limits::default(), determinant: true, normalize: true }
+        SolveOptions { constants: HashSet::new(), limits: Limits::default(), determinant: true, normalize: true, reference: None }
     }
 }
 
@@ -271,6 +276,14 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
         // only when no other is left (and said so), never one known to be zero.
         let mut chosen = None;
         let mut undecided = None;
+        let mut vanishing = None;
+        // Zero at the reference state (to round-off of its terms' size).
+        let vanishes_there = |e: Expr| {
+            opts.reference.as_ref().is_some_and(|env| {
+                let scale = crate::symbolic::eval::magnitude(e).eval(env).unwrap_or(f64::NAN);
+                e.eval(env).is_ok_and(|v| v.abs() <= 1e-12 * scale)
+            })
+        };
         for (_, i, j) in cands {
             let e = rows[i][j];
             if e.as_num().is_some() {
@@ -278,6 +291,9 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
                 break;
             }
             match zero_test(e) {
+                ZeroVerdict::NonZero { .. } if vanishes_there(e) => {
+                    vanishing.get_or_insert((i, j));
+                }
                 ZeroVerdict::NonZero { .. } => {
                     chosen = Some((i, j));
                     break;
@@ -287,6 +303,9 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
                 }
                 ZeroVerdict::Zero { .. } => rows[i][j] = Expr::zero(),
             }
+        }
+        if chosen.is_none() {
+            chosen = vanishing;
         }
         if chosen.is_none() && undecided.is_some() {
             super::report::record(|c| {

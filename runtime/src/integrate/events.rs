@@ -121,7 +121,7 @@ impl<'w, 'a> Watch<'w, 'a> {
     pub fn start(&mut self, t: f64, y: &[f64]) -> Result<(), Reason> {
         (self.events.values)(t, y, &mut self.before).map_err(Reason::Rhs)?;
         for (k, v) in self.before.iter().enumerate() {
-            self.at_zero[k] = *v == 0.0 && !self.rearmed.is_some_and(|(j, _)| j == k);
+            self.at_zero[k] = *v == 0.0 && self.rearmed.is_none_or(|(j, _)| j != k);
         }
         if let Some((k, side)) = self.rearmed {
             self.before[k] = side * f64::MIN_POSITIVE;

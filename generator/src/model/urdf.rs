@@ -1,0 +1,856 @@
+//! Robots described in URDF, read as models: each moving joint a coordinate named after it, each
+//! link a body (links fixed to one another merged into one, exactly), the base fixed to the world
+//! or free (six degrees of freedom, its attitude in a unit quaternion, its angular velocity a
+//! quasi-velocity), gravity along `-z` unless set. The result is a [`ModelFile`], as a RON file
+//! would give; every error of the robot's file is located in it (line and column, the element).
+//!
+//! The XML is parsed by `roxmltree`, which keeps every element's place in the text: `urdf-rs`
+//! (serde) gives the values without their places, and a wrong joint type, a loop or a missing
+//! link could then not be shown where it is.
+//!
+//! What is read, and how (`docs/robots.md`):
+//! - joints `revolute`, `continuous`, `prismatic` (one coordinate each, named after the joint;
+//!   its `origin` xyz/rpy and an `axis` of any direction), `fixed` (the child merged into its
+//!   parent: mass, centre of mass and inertia combined); `floating` and `planar` joints,
+//!   `mimic`, closed loops and several roots are refused, located;
+//! - links' `inertial` (mass, the centre of mass `origin` with its own rotation, the inertia
+//!   tensor); `visual` and `collision` are not read;
+//! - `limit` (lower, upper) becomes events on request ([`LimitAction`]); `dynamics` `damping`
+//!   a generalized force `-damping q'` (its friction is not modelled, and said so);
+//! - the parameters are each moving body's mass (`mass_<link>`) and each damped joint's
+//!   damping (`damping_<joint>`); names that are not identifiers have their other characters
+//!   replaced by `_`.
+//!
+//! ```
+//! use generator::model::urdf::{UrdfOptions, model_file};
+//! let xml = r#"<robot name="arm">
+//!   <link name="base"/>
+//!   <link name="upper"><inertial><mass value="2"/><origin xyz="0 0 0.5"/>
+//!     <inertia ixx="0.1" iyy="0.1" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+//!   <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+//!     <origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+//! </robot>"#;
+//! let def = model_file("arm.urdf", xml, &UrdfOptions::default()).unwrap();
+//! assert_eq!(def.coordinates, ["shoulder"]);
+//! assert!(def.parameters.contains_key("mass_upper"));
+//! let model = generator::model::from_source("arm.urdf", &generator::model::to_ron(&def)).unwrap();
+//! assert_eq!(model.m(), 1);
+//! ```
+
+use super::error::{ErrorKind, ModelError};
+use super::schema::*;
+use indexmap::IndexMap;
+use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
+
+/// How the robot's root link is held.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub enum Base {
+    /// Fixed to the world (an arm on a table).
+    #[default]
+    Fixed,
+    /// Free: three translations and a unit quaternion (a humanoid, a quadruped, a satellite).
+    Floating,
+}
+
+/// What the joints' `limit`s become.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub enum LimitAction {
+    /// Nothing in the equations: `inspect` lists them.
+    #[default]
+    Report,
+    /// Events that record each crossing of a limit.
+    Record,
+    /// Events that stop the run at the first limit reached.
+    Stop,
+}
+
+/// How a URDF becomes a model.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, rename = "Urdf")]
+pub struct UrdfOptions {
+    #[serde(default)]
+    pub base: Base,
+    /// Gravity in world components (default `(0, 0, -9.81)`; all zero for none).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    #[serde(default)]
+    pub limits: LimitAction,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+impl Default for UrdfOptions {
+    fn default() -> Self {
+        UrdfOptions { base: Base::Fixed, gravity: default_gravity(), limits: LimitAction::Report }
+    }
+}
+
+/// A 3 x 3 matrix of numbers, row-major.
+type M3 = [[f64; 3]; 3];
+const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+fn mul(a: &M3, b: &M3) -> M3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+fn transpose(a: &M3) -> M3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| a[j][i]))
+}
+
+fn apply(a: &M3, v: &[f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
+}
+
+fn add(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| a[i] + b[i])
+}
+
+/// URDF's `rpy`: fixed-axis roll about x, pitch about y, yaw about z, `R = Rz Ry Rx`.
+fn rpy(r: f64, p: f64, y: f64) -> M3 {
+    let (cr, sr, cp, sp, cy, sy) = (r.cos(), r.sin(), p.cos(), p.sin(), y.cos(), y.sin());
+    [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]]
+}
+
+/// A pose: the rotation (components of the child's axes in the parent's, columns) and the
+/// origin's offset, in the parent's components.
+#[derive(Clone, Copy, Debug)]
+struct Pose {
+    r: M3,
+    p: [f64; 3],
+}
+
+impl Pose {
+    const IDENTITY: Pose = Pose { r: IDENTITY, p: [0.0; 3] };
+
+    /// This pose followed by `then` (given in this pose's frame).
+    fn then(&self, then: &Pose) -> Pose {
+        Pose { r: mul(&self.r, &then.r), p: add(&self.p, &apply(&self.r, &then.p)) }
+    }
+}
+
+/// A number as a model file writes it: exact where the float is an integer or a short decimal,
+/// else its shortest round trip; float noise of an exact `0` or `1` (a rotation by `pi/2`
+/// written to 16 digits gives `6e-17`) made exact.
+fn num(x: f64) -> String {
+    let snapped = [-1.0, 0.0, 1.0].into_iter().find(|k| (x - k).abs() <= 1e-15).unwrap_or(x);
+    if snapped == 0.0 {
+        return "0".to_string();
+    }
+    // Fifteen significant digits: a product of the file's numbers in floats carries noise in
+    // the sixteenth and seventeenth (`1.0000000000000002`), which as an exact rational would
+    // grow every coefficient it meets.
+    let rounded: f64 = format!("{snapped:.14e}").parse().expect("a float prints as one");
+    format!("{rounded:?}")
+}
+
+/// An identifier from a URDF name: other characters made `_`, a leading digit prefixed.
+fn ident(name: &str) -> String {
+    let mut out: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
+    if !out.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
+        out.insert(0, 'j');
+        out.insert(1, '_');
+    }
+    if ["t", "pi", "world", "e"].contains(&out.as_str()) {
+        out.push('_');
+    }
+    out
+}
+
+/// A link's inertial: mass, centre of mass and inertia about it, in the link's frame.
+#[derive(Clone, Copy, Debug)]
+struct Inertial {
+    mass: f64,
+    com: [f64; 3],
+    inertia: M3,
+}
+
+impl Inertial {
+    /// The same mass seen from a frame in which the link's frame is at `pose`.
+    fn moved(&self, pose: &Pose) -> Inertial {
+        Inertial { mass: self.mass, com: add(&pose.p, &apply(&pose.r, &self.com)), inertia: mul(&mul(&pose.r, &self.inertia), &transpose(&pose.r)) }
+    }
+
+    /// Two masses combined: the total mass, the centre of mass, and the inertia about it
+    /// (each shifted by the parallel-axis theorem).
+    fn combined(&self, other: &Inertial) -> Inertial {
+        let mass = self.mass + other.mass;
+        let com: [f64; 3] = std::array::from_fn(|i| (self.mass * self.com[i] + other.mass * other.com[i]) / mass);
+        let shifted = |part: &Inertial| -> M3 {
+            let d: [f64; 3] = std::array::from_fn(|i| part.com[i] - com[i]);
+            let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            std::array::from_fn(|i| std::array::from_fn(|j| part.inertia[i][j] + part.mass * (if i == j { d2 } else { 0.0 } - d[i] * d[j])))
+        };
+        let (a, b) = (shifted(self), shifted(other));
+        Inertial { mass, com, inertia: std::array::from_fn(|i| std::array::from_fn(|j| a[i][j] + b[i][j])) }
+    }
+}
+
+/// A joint as the file gives it.
+struct Joint<'a> {
+    name: String,
+    kind: &'a str,
+    parent: String,
+    child: String,
+    origin: Pose,
+    axis: [f64; 3],
+    limit: Option<(f64, f64)>,
+    damping: f64,
+    friction: f64,
+    /// `q = multiplier q_master + offset`: no coordinate of its own.
+    mimic: Option<(String, f64, f64, roxmltree::Node<'a, 'a>)>,
+    node: roxmltree::Node<'a, 'a>,
+}
+
+/// The file's reader: its text and name for errors.
+struct Reader<'a> {
+    file: &'a str,
+    xml: &'a str,
+}
+
+impl<'a> Reader<'a> {
+    /// An error at `node` of the file.
+    fn err(&self, kind: ErrorKind, node: roxmltree::Node, place: &str, message: String, help: &str) -> ModelError {
+        let range = node.range();
+        // The start tag only: an element's whole text may span the file.
+        let end = self.xml[range.start..range.end].find('>').map_or(range.end, |i| range.start + i + 1);
+        ModelError::at(kind, self.file, self.xml, Some(range.start..end), place, message, help.to_string())
+    }
+
+    /// The attribute `name` of `node` as numbers (`xyz="0 0 1"`), `default` where absent.
+    fn numbers<const N: usize>(&self, node: roxmltree::Node, name: &str, default: [f64; N], place: &str) -> Result<[f64; N], ModelError> {
+        let Some(text) = node.attribute(name) else { return Ok(default) };
+        let values: Vec<f64> = text.split_whitespace().map(|s| s.parse::<f64>()).collect::<Result<_, _>>().map_err(|_| {
+            self.err(ErrorKind::BadValue, node, place, format!("`{name}=\"{text}\"` is not {N} numbers"), &format!("give {N} numbers separated by spaces"))
+        })?;
+        if values.len() != N || values.iter().any(|v| !v.is_finite()) {
+            return Err(self.err(
+                ErrorKind::BadValue,
+                node,
+                place,
+                format!("`{name}=\"{text}\"` is not {N} finite numbers"),
+                &format!("give {N} finite numbers separated by spaces"),
+            ));
+        }
+        Ok(std::array::from_fn(|i| values[i]))
+    }
+
+    /// The attribute `name` of `node` as one number.
+    fn number(&self, node: roxmltree::Node, name: &str, place: &str) -> Result<Option<f64>, ModelError> {
+        match node.attribute(name) {
+            None => Ok(None),
+            Some(_) => Ok(Some(self.numbers::<1>(node, name, [0.0], place)?[0])),
+        }
+    }
+
+    /// The pose of an `<origin xyz rpy>` child of `node` (identity without one).
+    fn origin(&self, node: roxmltree::Node, place: &str) -> Result<Pose, ModelError> {
+        let Some(o) = child(node, "origin") else { return Ok(Pose::IDENTITY) };
+        let p = self.numbers(o, "xyz", [0.0; 3], &format!("{place}.origin"))?;
+        let [r, pi, y] = self.numbers(o, "rpy", [0.0; 3], &format!("{place}.origin"))?;
+        Ok(Pose { r: rpy(r, pi, y), p })
+    }
+
+    fn inertial(&self, link: roxmltree::Node, name: &str) -> Result<Option<Inertial>, ModelError> {
+        let Some(node) = child(link, "inertial") else { return Ok(None) };
+        let place = format!("link `{name}`.inertial");
+        let frame = self.origin(node, &place)?;
+        let mass_node = child(node, "mass")
+            .ok_or_else(|| self.err(ErrorKind::Syntax, node, &place, format!("link `{name}`'s inertial has no mass"), "add <mass value=\"...\"/>"))?;
+        let mass = self.number(mass_node, "value", &place)?.unwrap_or(0.0);
+        if mass < 0.0 {
+            return Err(self.err(ErrorKind::NonPositiveMass, mass_node, &place, format!("link `{name}` has mass {mass}"), "give a mass of zero or more"));
+        }
+        let tensor = match child(node, "inertia") {
+            None => [[0.0; 3]; 3],
+            Some(i) => {
+                let v = |k: &str| self.number(i, k, &place).map(|x| x.unwrap_or(0.0));
+                let (xx, yy, zz, xy, xz, yz) = (v("ixx")?, v("iyy")?, v("izz")?, v("ixy")?, v("ixz")?, v("iyz")?);
+                [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
+            }
+        };
+        // The tensor is given in the inertial frame, turned by its rpy in the link's. Whether
+        // it is a rigid body's is checked on the body it becomes part of (a placeholder link of
+        // 1e-6 kg fixed to the real one is common, and harmless once merged).
+        let inertia = mul(&mul(&frame.r, &tensor), &transpose(&frame.r));
+        Ok((mass > 0.0).then_some(Inertial { mass, com: frame.p, inertia }))
+    }
+}
+
+/// Why an inertia tensor belongs to no rigid body (not symmetric positive semi-definite, or
+/// its principal moments break the triangle inequality), if it does not.
+fn not_a_body(i: &M3) -> Option<String> {
+    let scale = i.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
+    let m = nalgebra_free_eigen(i);
+    if m[0] < -tol {
+        return Some(format!("it has a negative principal moment ({:e})", m[0]));
+    }
+    if m[2] > m[0] + m[1] + tol {
+        return Some(format!("its largest principal moment ({:e}) exceeds the sum of the other two ({:e})", m[2], m[0] + m[1]));
+    }
+    None
+}
+
+/// The eigenvalues of a symmetric 3 x 3 matrix, ascending (the trigonometric closed form).
+fn nalgebra_free_eigen(a: &M3) -> [f64; 3] {
+    let p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    if p1 == 0.0 {
+        let mut d = [a[0][0], a[1][1], a[2][2]];
+        d.sort_by(f64::total_cmp);
+        return d;
+    }
+    let p2 = (a[0][0] - q).powi(2) + (a[1][1] - q).powi(2) + (a[2][2] - q).powi(2) + 2.0 * p1;
+    let p = (p2 / 6.0).sqrt();
+    let b: M3 = std::array::from_fn(|i| std::array::from_fn(|j| (a[i][j] - if i == j { q } else { 0.0 }) / p));
+    let det = b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) - b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0])
+        + b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
+    let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+    let largest = q + 2.0 * p * phi.cos();
+    let smallest = q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos();
+    [smallest, 3.0 * q - largest - smallest, largest]
+}
+
+fn child<'a>(node: roxmltree::Node<'a, 'a>, tag: &str) -> Option<roxmltree::Node<'a, 'a>> {
+    node.children().find(|c| c.has_tag_name(tag))
+}
+
+/// The model file of the robot in `xml` (the URDF at `file`), built as `options` say.
+pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelFile, ModelError> {
+    let doc = roxmltree::Document::parse(xml).map_err(|e| {
+        let pos = e.pos();
+        let at = super::offset_of(xml, pos.row as usize, pos.col as usize);
+        ModelError::at(
+            ErrorKind::Syntax,
+            file,
+            xml,
+            Some(at..(at + 1).min(xml.len()).max(at)),
+            "",
+            format!("malformed URDF: {e}"),
+            "fix the XML at this place".into(),
+        )
+    })?;
+    let reader = Reader { file, xml };
+    let robot = doc.root_element();
+    if !robot.has_tag_name("robot") {
+        return Err(reader.err(
+            ErrorKind::Syntax,
+            robot,
+            "",
+            format!("the root element is <{}>, not <robot>", robot.tag_name().name()),
+            "a URDF file holds one <robot>",
+        ));
+    }
+    let robot_name = ident(robot.attribute("name").unwrap_or("robot"));
+
+    // Links, in file order, with their inertials.
+    let mut links: IndexMap<String, (roxmltree::Node, Option<Inertial>)> = IndexMap::new();
+    for node in robot.children().filter(|n| n.has_tag_name("link")) {
+        let name = node.attribute("name").unwrap_or_default().to_string();
+        if links.contains_key(&name) {
+            return Err(reader.err(
+                ErrorKind::Duplicate,
+                node,
+                &format!("link `{name}`"),
+                format!("link `{name}` is defined twice"),
+                "give every link its own name",
+            ));
+        }
+        let inertial = reader.inertial(node, &name)?;
+        links.insert(name, (node, inertial));
+    }
+
+    // Joints.
+    let mut joints: Vec<Joint> = Vec::new();
+    let mut child_of: HashMap<String, usize> = HashMap::new();
+    for node in robot.children().filter(|n| n.has_tag_name("joint")) {
+        let name = node.attribute("name").unwrap_or_default().to_string();
+        let place = format!("joint `{name}`");
+        let kind = node.attribute("type").unwrap_or("");
+        match kind {
+            "revolute" | "continuous" | "prismatic" | "fixed" => {}
+            "floating" | "planar" => {
+                return Err(reader.err(
+                    ErrorKind::BadValue,
+                    node,
+                    &place,
+                    format!("joint `{name}` is {kind}: a {kind} joint inside a robot is not read"),
+                    "give the robot a floating base instead (`--base floating`, `base: Floating`), or split the joint into revolute and prismatic ones",
+                ));
+            }
+            other => {
+                return Err(reader.err(
+                    ErrorKind::BadValue,
+                    node,
+                    &place,
+                    format!("joint `{name}` has type `{other}`"),
+                    "use revolute, continuous, prismatic or fixed",
+                ));
+            }
+        }
+        let mimic = match child(node, "mimic") {
+            None => None,
+            Some(m) => {
+                let master = m.attribute("joint").unwrap_or_default().to_string();
+                let multiplier = reader.number(m, "multiplier", &place)?.unwrap_or(1.0);
+                let offset = reader.number(m, "offset", &place)?.unwrap_or(0.0);
+                Some((master, multiplier, offset, m))
+            }
+        };
+        let link_of = |tag: &str| -> Result<String, ModelError> {
+            let l = child(node, tag).and_then(|c| c.attribute("link")).ok_or_else(|| {
+                reader.err(ErrorKind::Syntax, node, &place, format!("joint `{name}` has no <{tag} link=\"...\"/>"), &format!("name the joint's {tag} link"))
+            })?;
+            if !links.contains_key(l) {
+                return Err(reader.err(
+                    ErrorKind::UnknownFrame,
+                    node,
+                    &place,
+                    format!("joint `{name}`'s {tag} `{l}` is not a link of the robot"),
+                    "name a link defined by a <link>",
+                ));
+            }
+            Ok(l.to_string())
+        };
+        let (parent, childl) = (link_of("parent")?, link_of("child")?);
+        if let Some(&other) = child_of.get(&childl) {
+            return Err(reader.err(
+                ErrorKind::FrameCycle,
+                node,
+                &place,
+                format!("link `{childl}` is the child of joints `{}` and `{name}`: the robot closes a loop", joints[other].name),
+                "a URDF is a tree: cut the loop at one joint, and close it with a constraint in a RON model that includes this URDF",
+            ));
+        }
+        let origin = reader.origin(node, &place)?;
+        let mut axis = child(node, "axis").map_or(Ok([1.0, 0.0, 0.0]), |a| reader.numbers(a, "xyz", [1.0, 0.0, 0.0], &place))?;
+        let norm = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+        if kind != "fixed" && !(norm > 0.0) {
+            return Err(reader.err(
+                ErrorKind::BadValue,
+                child(node, "axis").unwrap_or(node),
+                &place,
+                format!("joint `{name}` has a zero axis"),
+                "give the axis a direction",
+            ));
+        }
+        if norm > 0.0 {
+            axis = axis.map(|a| a / norm);
+        }
+        let limit = match (kind, child(node, "limit")) {
+            ("revolute" | "prismatic", Some(l)) => match (reader.number(l, "lower", &place)?, reader.number(l, "upper", &place)?) {
+                (Some(lo), Some(hi)) if lo < hi => Some((lo, hi)),
+                _ => None,
+            },
+            _ => None,
+        };
+        let dynamics = child(node, "dynamics");
+        let damping = dynamics.map_or(Ok(None), |d| reader.number(d, "damping", &place))?.unwrap_or(0.0);
+        let friction = dynamics.map_or(Ok(None), |d| reader.number(d, "friction", &place))?.unwrap_or(0.0);
+        if damping < 0.0 {
+            return Err(reader.err(
+                ErrorKind::BadValue,
+                dynamics.unwrap_or(node),
+                &place,
+                format!("joint `{name}` has damping {damping}"),
+                "give a damping of zero or more",
+            ));
+        }
+        child_of.insert(childl.clone(), joints.len());
+        joints.push(Joint { name, kind, parent, child: childl, origin, axis, limit, damping, friction, mimic, node });
+    }
+
+    // One root: the links that are no joint's child.
+    let roots: Vec<&String> = links.keys().filter(|l| !child_of.contains_key(*l)).collect();
+    if roots.len() != 1 {
+        let node = roots.get(1).map_or(robot, |l| links[*l].0);
+        return Err(reader.err(
+            ErrorKind::FrameCycle,
+            node,
+            "robot",
+            if roots.is_empty() {
+                "every link is a joint's child: the links form a loop, and the robot has no root".to_string()
+            } else {
+                format!(
+                    "the robot has {} roots ({}): its links are not one tree",
+                    roots.len(),
+                    roots.iter().map(|r| format!("`{r}`")).collect::<Vec<_>>().join(", ")
+                )
+            },
+            "join the trees with a joint, or remove the links that belong to no tree",
+        ));
+    }
+    let root = roots[0].clone();
+    let children: HashMap<&str, Vec<usize>> = joints.iter().enumerate().fold(HashMap::new(), |mut m, (k, j)| {
+        m.entry(j.parent.as_str()).or_default().push(k);
+        m
+    });
+
+    // Each link's frame in the model (the nearest ancestor-or-self reached by a moving joint, or
+    // the root), and the link's pose in it; joints in breadth-first order from the root.
+    let mut frame_of: HashMap<String, (String, Pose)> = HashMap::new();
+    let root_frame = if options.base == Base::Floating { ident(&root) } else { "world".to_string() };
+    frame_of.insert(root.clone(), (root_frame.clone(), Pose::IDENTITY));
+    let mut order: Vec<usize> = Vec::new();
+    let mut queue: VecDeque<String> = VecDeque::from([root.clone()]);
+    let mut reached: HashSet<String> = HashSet::from([root.clone()]);
+    while let Some(link) = queue.pop_front() {
+        for &k in children.get(link.as_str()).map(Vec::as_slice).unwrap_or(&[]) {
+            let j = &joints[k];
+            if !reached.insert(j.child.clone()) {
+                continue;
+            }
+            let (frame, pose) = frame_of[&link].clone();
+            let joint_pose = pose.then(&j.origin);
+            if j.kind == "fixed" {
+                frame_of.insert(j.child.clone(), (frame, joint_pose));
+            } else {
+                frame_of.insert(j.child.clone(), (ident(&j.child), Pose::IDENTITY));
+            }
+            order.push(k);
+            queue.push_back(j.child.clone());
+        }
+    }
+    // Links no joint reaches from the root sit in a loop of their own.
+    if let Some((l, (node, _))) = links.iter().find(|(l, _)| !reached.contains(*l)) {
+        return Err(reader.err(
+            ErrorKind::FrameCycle,
+            *node,
+            &format!("link `{l}`"),
+            format!("link `{l}` is not reached from the root `{root}`: its joints form a loop"),
+            "a URDF is a tree: cut the loop",
+        ));
+    }
+
+    // The bodies: every link's mass in its model frame, combined per frame.
+    let mut bodies: BTreeMap<String, (usize, Inertial)> = BTreeMap::new();
+    for (k, (link, (_, inertial))) in links.iter().enumerate() {
+        let Some(inertial) = inertial else { continue };
+        let (frame, pose) = &frame_of[link];
+        let moved = inertial.moved(pose);
+        bodies.entry(frame.clone()).and_modify(|(_, b)| *b = b.combined(&moved)).or_insert((k, moved));
+    }
+
+    // Each body (the links merged into it) is a rigid body's.
+    for (frame, (first, b)) in &bodies {
+        if let Some(why) = not_a_body(&b.inertia) {
+            let (link, (node, _)) = links.get_index(*first).expect("a body starts at a link");
+            let merged: Vec<&String> = links.keys().filter(|l| frame_of[*l].0 == *frame && links[*l].1.is_some()).collect();
+            let at = child(*node, "inertial").and_then(|i| child(i, "inertia")).unwrap_or(*node);
+            return Err(reader.err(
+                ErrorKind::InertiaNotPsd,
+                at,
+                &format!("link `{link}`.inertial"),
+                format!(
+                    "the inertia of {} is no rigid body's: {why}",
+                    if merged.len() > 1 { format!("links {} (fixed to one another)", merged.iter().map(|l| format!("`{l}`")).collect::<Vec<_>>().join(", ")) } else { format!("link `{link}`") }
+                ),
+                "check the values: ixy, ixz, iyz are the tensor's off-diagonal entries (-sum m x y), and each principal moment is at most the sum of the other two",
+            ));
+        }
+    }
+
+    // Moving joints need mass beyond them.
+    let mut subtree_mass: HashMap<&str, f64> = HashMap::new();
+    for &k in order.iter().rev() {
+        let j = &joints[k];
+        let own = links[&j.child].1.map_or(0.0, |i| i.mass);
+        let below: f64 =
+            children.get(j.child.as_str()).map_or(0.0, |ks| ks.iter().map(|c| subtree_mass.get(joints[*c].child.as_str()).copied().unwrap_or(0.0)).sum());
+        subtree_mass.insert(j.child.as_str(), own + below);
+        if j.kind != "fixed" && !(own + below > 0.0) {
+            return Err(reader.err(
+                ErrorKind::NonPositiveMass,
+                j.node,
+                &format!("joint `{}`", j.name),
+                format!("joint `{}` moves link `{}` and the links beyond it, which carry no mass: its equation of motion is singular", j.name, j.child),
+                &format!("give link `{}` (or a link beyond it) an <inertial>, or make joint `{}` fixed", j.child, j.name),
+            ));
+        }
+    }
+    if options.base == Base::Floating && !bodies.contains_key(&root_frame) {
+        return Err(reader.err(
+            ErrorKind::NonPositiveMass,
+            links[&root].0,
+            &format!("link `{root}`"),
+            format!("the root link `{root}` carries no inertia (nor do links fixed to it), yet as a floating base it must move the robot"),
+            &format!("give link `{root}` an <inertial>, or fix the base"),
+        ));
+    }
+
+    // The model.
+    let mut parameters: IndexMap<String, f64> = IndexMap::new();
+    let mut coordinates: Vec<String> = Vec::new();
+    let mut frames: Vec<FrameDef> = Vec::new();
+    let mut full: Vec<String> = Vec::new();
+    let mut ignorable: Vec<String> = Vec::new();
+    let mut q0: IndexMap<String, String> = IndexMap::new();
+    let mut constraints = Vec::new();
+    let moving_gravity = options.gravity.iter().any(|g| *g != 0.0);
+    if options.base == Base::Floating {
+        let b = ["base_x", "base_y", "base_z"];
+        let e = ["base_qw", "base_qx", "base_qy", "base_qz"];
+        coordinates.extend(b.iter().chain(&e).map(|s| s.to_string()));
+        frames.push(FrameDef {
+            name: root_frame.clone(),
+            parent: "world".into(),
+            translation: Some(b.iter().map(|s| s.to_string()).collect()),
+            rotation: vec![RotationDef::Quaternion(e[0].into(), e[1].into(), e[2].into(), e[3].into())],
+        });
+        constraints.push(ConstraintDef::Position { name: "unit".into(), expr: e.iter().map(|c| format!("{c}^2")).collect::<Vec<_>>().join(" + ") + " - 1" });
+        full.extend(["x", "y", "z"].iter().map(|a| format!("omega_{a}({root_frame})")));
+        full.extend(b.iter().map(|c| format!("{c}'")));
+        // A translation gravity has no component along is ignorable.
+        for (k, c) in b.iter().enumerate() {
+            if options.gravity[k] == 0.0 {
+                ignorable.push(c.to_string());
+            }
+        }
+        for c in b {
+            q0.insert(c.into(), "0".into());
+        }
+        for (c, v) in e.iter().zip(["1", "0", "0", "0"]) {
+            q0.insert(c.to_string(), v.into());
+        }
+    }
+    let mut taken: HashSet<String> = coordinates.iter().cloned().collect();
+    let mut forces: Vec<ForceDef> = Vec::new();
+    let mut damping: IndexMap<String, String> = IndexMap::new();
+    let mut events: Vec<EventDef> = Vec::new();
+    let mut limits_text: Vec<String> = Vec::new();
+    let mut unmodelled: Vec<String> = Vec::new();
+    // Each moving joint's coordinate (a mimic joint's master's, resolved along chains).
+    let mut coordinate_of: HashMap<&str, String> = HashMap::new();
+    for &k in &order {
+        let j = &joints[k];
+        if j.kind != "fixed" && j.mimic.is_none() {
+            let mut q = ident(&j.name);
+            while !taken.insert(q.clone()) {
+                q.push('_');
+            }
+            coordinate_of.insert(j.name.as_str(), q);
+        }
+    }
+    let angle_of = |k: usize| -> Result<String, ModelError> {
+        let (mut j, mut multiplier, mut offset) = (&joints[k], 1.0, 0.0);
+        for _ in 0..=joints.len() {
+            let Some((master, m, o, node)) = &j.mimic else {
+                let q = &coordinate_of[j.name.as_str()];
+                return Ok(match (multiplier == 1.0, offset == 0.0) {
+                    (true, true) => q.clone(),
+                    (false, true) => format!("{}*{q}", num(multiplier)),
+                    (true, false) => format!("{q} + {}", num(offset)),
+                    (false, false) => format!("{}*{q} + {}", num(multiplier), num(offset)),
+                });
+            };
+            let Some(next) = joints.iter().find(|x| x.name == *master && x.kind != "fixed") else {
+                return Err(reader.err(
+                    ErrorKind::UnknownName,
+                    *node,
+                    &format!("joint `{}`", j.name),
+                    format!("joint `{}` mimics `{master}`, which is not a moving joint of the robot", j.name),
+                    "name a revolute, continuous or prismatic joint",
+                ));
+            };
+            // q = m (m' q'' + o') + o.
+            offset += multiplier * o;
+            multiplier *= m;
+            j = next;
+        }
+        Err(reader.err(
+            ErrorKind::Cycle,
+            joints[k].node,
+            &format!("joint `{}`", joints[k].name),
+            format!("joint `{}`'s mimics form a loop", joints[k].name),
+            "let one of them be a joint of its own",
+        ))
+    };
+    for &k in &order {
+        let j = &joints[k];
+        if j.kind == "fixed" {
+            continue;
+        }
+        let own = coordinate_of.get(j.name.as_str()).cloned();
+        let q = angle_of(k)?;
+        let (frame, pose) = frame_of[&j.parent].clone();
+        let joint = pose.then(&j.origin);
+        let mut rotation = Vec::new();
+        if joint.r != IDENTITY {
+            rotation.push(RotationDef::Matrix(joint.r.iter().map(|row| row.iter().map(|x| num(*x)).collect()).collect()));
+        }
+        let along = |sign: f64| if sign > 0.0 { q.clone() } else { format!("-({q})") };
+        let unit = j.axis.iter().position(|a| a.abs() == 1.0);
+        let mut translation: Vec<String> = joint.p.iter().map(|x| num(*x)).collect();
+        match j.kind {
+            "prismatic" => {
+                // Along the axis turned into the frame's components.
+                let a = apply(&joint.r, &j.axis);
+                for (t, ak) in translation.iter_mut().zip(a) {
+                    let ak = num(ak);
+                    if ak != "0" {
+                        *t = format!("{t} + {ak}*({q})");
+                    }
+                }
+            }
+            _ => rotation.push(match unit {
+                Some(0) => RotationDef::X(along(j.axis[0])),
+                Some(1) => RotationDef::Y(along(j.axis[1])),
+                Some(2) => RotationDef::Z(along(j.axis[2])),
+                _ => RotationDef::Axis(j.axis.iter().map(|x| num(*x)).collect(), q.clone()),
+            }),
+        }
+        frames.push(FrameDef { name: ident(&j.child), parent: frame, translation: Some(translation), rotation });
+        // A mimic joint adds no coordinate: its angle is its master's.
+        let Some(q) = own else { continue };
+        coordinates.push(q.clone());
+        full.push(format!("{q}'"));
+        let start = match j.limit {
+            Some((lo, hi)) if !(lo..=hi).contains(&0.0) => 0.5 * (lo + hi),
+            _ => 0.0,
+        };
+        q0.insert(q.clone(), num(start));
+        if j.damping > 0.0 {
+            let p = format!("damping_{q}");
+            parameters.insert(p.clone(), j.damping);
+            damping.insert(q.clone(), format!("-{p}*{q}'"));
+        }
+        if j.friction > 0.0 {
+            unmodelled.push(format!("joint `{}`'s friction {}", j.name, j.friction));
+        }
+        if let Some((lo, hi)) = j.limit {
+            limits_text.push(format!("{q} in [{}, {}]", num(lo), num(hi)));
+            let action = match options.limits {
+                LimitAction::Report => None,
+                LimitAction::Record => Some(ActionDef::Record),
+                LimitAction::Stop => Some(ActionDef::Stop),
+            };
+            if let Some(action) = action {
+                events.push(EventDef {
+                    name: format!("{q}_upper"),
+                    when: format!("{q} - {}", num(hi)),
+                    direction: DirectionDef::Rising,
+                    action: action.clone(),
+                });
+                events.push(EventDef { name: format!("{q}_lower"), when: format!("{} - {q}", num(lo)), direction: DirectionDef::Rising, action });
+            }
+        }
+    }
+    if !damping.is_empty() {
+        forces.push(ForceDef::Generalized { name: "joint damping".into(), components: damping });
+    }
+    if moving_gravity {
+        forces.insert(0, ForceDef::Gravity { vector: options.gravity.iter().map(|g| num(*g)).collect() });
+    }
+    // Bodies: the root's only where it moves; each a mass parameter, its inertia as numbers.
+    let mut body_defs = Vec::new();
+    let mut mass_parameters = IndexMap::new();
+    for (frame, (_, b)) in &bodies {
+        if frame == "world" {
+            continue;
+        }
+        let p = format!("mass_{frame}");
+        mass_parameters.insert(p.clone(), b.mass);
+        body_defs.push(BodyDef {
+            name: frame.clone(),
+            frame: frame.clone(),
+            mass: p,
+            com: Some(b.com.iter().map(|x| num(*x)).collect()),
+            inertia: InertiaDef::Matrix(b.inertia.iter().map(|row| row.iter().map(|x| num(*x)).collect()).collect()),
+        });
+    }
+    // The bodies in the frames' order (a parent before its children).
+    body_defs.sort_by_key(|b| frames.iter().position(|f| f.name == b.frame).unwrap_or(usize::MAX));
+    mass_parameters.extend(parameters);
+    let reduced: Vec<String> = full.iter().filter(|u| !ignorable.iter().any(|c| **u == format!("{c}'"))).cloned().collect();
+    let qdot0: IndexMap<String, String> = coordinates.iter().map(|c| (c.clone(), "0".to_string())).collect();
+    let mut description =
+        format!("{} (from {}, {} base)", robot.attribute("name").unwrap_or("robot"), file, if options.base == Base::Floating { "floating" } else { "fixed" });
+    if !limits_text.is_empty() {
+        description += &format!(
+            "; joint limits ({}): {}",
+            match options.limits {
+                LimitAction::Report => "not enforced",
+                LimitAction::Record => "recorded",
+                LimitAction::Stop => "stop the run",
+            },
+            limits_text.join(", ")
+        );
+    }
+    if !unmodelled.is_empty() {
+        description += &format!("; not modelled: {}", unmodelled.join(", "));
+    }
+    Ok(ModelFile {
+        name: robot_name,
+        description,
+        parameters: mass_parameters,
+        inputs: IndexMap::new(),
+        coordinates,
+        time_functions: IndexMap::new(),
+        frames,
+        bodies: body_defs,
+        constraints,
+        forces,
+        urdf: None,
+        quasi_velocities: QuasiVelocityDef { full, reduced },
+        ignorable: IgnorableDef::Declared(ignorable),
+        initial: Some(InitialDef { q: q0, qdot: qdot0 }),
+        simulation: Some(SimulationDef { t_start: 0.0, t_end: 1.0, dt_out: 0.01, paper: false }),
+        events,
+        emit: EmitDef::default(),
+    })
+}
+
+/// `def` with the URDF it includes (`urdf: Urdf(file, ...)`, the path relative to `file`, the
+/// model file's own path) put first: its parameters, coordinates, frames, bodies, constraints,
+/// forces and events, then this file's; this file's quasi-velocities, or the robot's followed by
+/// the rates of this file's coordinates; the robot's ignorable coordinates unless this file
+/// declares its own; the initial values merged (this file's win).
+pub fn include(file: &str, def: ModelFile) -> Result<ModelFile, ModelError> {
+    let Some(urdf) = def.urdf.clone() else { return Ok(def) };
+    let dir = std::path::Path::new(file).parent().unwrap_or(std::path::Path::new(""));
+    let path = dir.join(&urdf.file);
+    let (robot_file, xml) = super::read_source(&path)?;
+    let options = UrdfOptions { base: urdf.base, gravity: urdf.gravity.unwrap_or_else(default_gravity), limits: urdf.limits };
+    let robot = model_file(&robot_file, &xml, &options)?;
+    let mut out = robot.clone();
+    out.name = def.name.clone();
+    out.description = if def.description.is_empty() { robot.description.clone() } else { def.description.clone() };
+    out.parameters.extend(def.parameters.clone());
+    out.inputs.extend(def.inputs.clone());
+    out.coordinates.extend(def.coordinates.iter().cloned());
+    out.time_functions.extend(def.time_functions.clone());
+    out.frames.extend(def.frames.iter().cloned());
+    out.bodies.extend(def.bodies.iter().cloned());
+    out.constraints.extend(def.constraints.iter().cloned());
+    out.forces.extend(def.forces.iter().cloned());
+    out.events.extend(def.events.iter().cloned());
+    out.quasi_velocities = if def.quasi_velocities.is_empty() {
+        let own: Vec<String> = def.coordinates.iter().map(|c| format!("{c}'")).collect();
+        QuasiVelocityDef {
+            full: robot.quasi_velocities.full.iter().cloned().chain(own.iter().cloned()).collect(),
+            reduced: robot.quasi_velocities.reduced.iter().cloned().chain(own).collect(),
+        }
+    } else {
+        def.quasi_velocities.clone()
+    };
+    // The robot's ignorable coordinates, unless this file declares some.
+    if matches!(&def.ignorable, IgnorableDef::Declared(list) if !list.is_empty()) {
+        out.ignorable = def.ignorable.clone();
+    }
+    let mut initial = robot.initial.clone().unwrap_or(InitialDef { q: IndexMap::new(), qdot: IndexMap::new() });
+    for c in &def.coordinates {
+        initial.q.entry(c.clone()).or_insert_with(|| "0".into());
+        initial.qdot.entry(c.clone()).or_insert_with(|| "0".into());
+    }
+    if let Some(own) = &def.initial {
+        initial.q.extend(own.q.clone());
+        initial.qdot.extend(own.qdot.clone());
+    }
+    out.initial = Some(initial);
+    out.simulation = def.simulation.clone().or(robot.simulation);
+    out.emit = def.emit.clone();
+    out.urdf = None;
+    Ok(out)
+}

@@ -1,0 +1,240 @@
+//! Robots read from URDF (the issue "Robots"), on small files written for the tests
+//! (`tests/fixtures/urdf/`): a branching tree with fixed, prismatic and tilted joints, on a fixed
+//! and on a floating base. Their properties: the four formulations agree, Lagrange's equations
+//! hold at random states, the energy and the base's momenta are conserved without gravity, a
+//! tilted axis meets its closed form, fixed links are merged exactly; and every refusal is
+//! located in the XML.
+
+use crate::common::{check_formulations_agree, multibody, ok};
+use generator::model::urdf::{Base, LimitAction, UrdfOptions, model_file};
+use generator::model::{from_source, to_ron};
+use runtime::integrate::Settings;
+use runtime::system::System;
+use seam::FormulationKind;
+
+fn fixture(name: &str) -> String {
+    format!("{}/tests/fixtures/urdf/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn robot(name: &str, options: &UrdfOptions) -> generator::model::Model {
+    generator::model::source_with(fixture(name).as_ref(), options).unwrap().model().unwrap()
+}
+
+fn floating(gravity: [f64; 3]) -> UrdfOptions {
+    UrdfOptions { base: Base::Floating, gravity, limits: LimitAction::Report }
+}
+
+/// On a fixed base, the tree's four formulations give the same accelerations, which satisfy
+/// Lagrange's equations derived from T, at random states; coordinates are the joints, in the
+/// tree's breadth-first order, the fixed `neck` none.
+#[test]
+fn a_fixed_tree_obeys_lagrange_in_every_formulation() {
+    let model = robot("tree.urdf", &UrdfOptions::default());
+    let names: Vec<String> = model.coordinates.iter().map(|c| c.name()).collect();
+    assert_eq!(names, ["waist", "left_shoulder", "right_shoulder", "left_elbow", "right_wrist"]);
+    let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    check_formulations_agree("tree", &d, &model, 4, 42);
+}
+
+/// The head, fixed to the torso, is one body with it: their masses add, the centre of mass is
+/// their weighted mean, and the inertia about it is each one's moved there (parallel axes),
+/// in the torso's frame.
+#[test]
+fn fixed_links_merge_exactly() {
+    let xml = std::fs::read_to_string(fixture("tree.urdf")).unwrap();
+    let def = model_file("tree.urdf", &xml, &UrdfOptions::default()).unwrap();
+    assert_eq!(def.parameters["mass_torso"], 4.0);
+    let torso = def.bodies.iter().find(|b| b.name == "torso").unwrap();
+    assert!(def.bodies.iter().all(|b| b.name != "head"));
+    let com: Vec<f64> = torso.com.as_ref().unwrap().iter().map(|x| x.parse().unwrap()).collect();
+    // The torso's own centre of mass (0, 0, 0.3); the head's (0.02, 0, 0.1) in a frame at
+    // (0, 0, 0.55) turned by 0.4 about z: (0.02 cos 0.4, 0.02 sin 0.4, 0.65).
+    let head = [0.02 * 0.4f64.cos(), 0.02 * 0.4f64.sin(), 0.65];
+    let want = [(3.0 * 0.0 + head[0]) / 4.0, head[1] / 4.0, (3.0 * 0.3 + head[2]) / 4.0];
+    for k in 0..3 {
+        assert!((com[k] - want[k]).abs() < 1e-14, "{com:?} against {want:?}");
+    }
+    // Izz about the combined centre: the torso's (its tensor turned by roll 0.1 about x) and the
+    // head's 0.004, each shifted by m d^2 across the plane.
+    let generator::model::InertiaDef::Matrix(rows) = &torso.inertia else { panic!("a matrix") };
+    let izz: f64 = rows[2][2].parse().unwrap();
+    let (c, s) = (0.1f64.cos(), 0.1f64.sin());
+    let torso_zz = s * s * 0.10 + c * c * 0.04 + 2.0 * s * c * 0.001;
+    let d2 = |p: [f64; 3]| (p[0] - want[0]).powi(2) + (p[1] - want[1]).powi(2);
+    let expected = torso_zz + 3.0 * d2([0.0, 0.0, 0.3]) + 0.004 + 1.0 * d2(head);
+    assert!((izz - expected).abs() < 1e-14, "{izz} against {expected}");
+}
+
+/// A rod turning about the tilted axis (0.6, 0, 0.8) through the origin, its centre 0.5 from the
+/// axis along y: `z = 0.3 sin(q)`, so `I_a q'' = -0.3 m g cos(q)` with
+/// `I_a = a^T I a + m 0.25`. Every formulation gives it.
+#[test]
+fn a_tilted_axis_meets_its_closed_form() {
+    let model = robot("tilted.urdf", &UrdfOptions::default());
+    let seam = load::evaluate(&model, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap().model;
+    let (m, g) = (2.0, 9.81);
+    let ia = 0.36 * 0.02 + 0.64 * 0.01 + m * 0.25;
+    for q in [0.0, 0.4, -1.3] {
+        let expected = -0.3 * m * g * f64::cos(q) / ia;
+        for kind in FormulationKind::ALL {
+            let (sys, y) = System::start(&seam, kind, seam.default_params.clone(), &[q], &[0.7]).unwrap();
+            let mut dy = vec![0.0; y.len()];
+            sys.rhs(0.0, &y, &mut dy).unwrap();
+            assert!((dy[1] - expected).abs() < 1e-12, "{kind} at q = {q}: q'' = {} against {expected}", dy[1]);
+        }
+    }
+}
+
+/// On a floating base without gravity the robot keeps its energy and its linear momentum
+/// (the base's three translations are ignorable): the reduced method to round-off, every
+/// formulation to the tolerance; the four agree on the motion.
+#[test]
+fn a_floating_tree_keeps_energy_and_momentum() {
+    let model = robot("tree.urdf", &floating([0.0; 3]));
+    let names: Vec<String> = model.coordinates.iter().take(7).map(|c| c.name()).collect();
+    assert_eq!(names, ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz"]);
+    let seam = load::evaluate(&model, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap().model;
+    assert_eq!(seam.ignorable.len(), 3);
+    let (q0, mut qd0) = seam.initial.clone().unwrap();
+    for (name, v) in [("waist", 1.0), ("left_shoulder", 0.5), ("left_elbow", -0.7), ("right_wrist", 0.05), ("base_x", 0.2), ("base_qz", 0.3)] {
+        qd0[seam.coordinate_index(name).unwrap()] = v;
+    }
+    let times: Vec<f64> = (0..=20).map(|i| 0.05 * i as f64).collect();
+    let settings = Settings { rtol: 1e-11, atol: 1e-11, ..Settings::tight(1.0) };
+    let mut ends = Vec::new();
+    for kind in FormulationKind::ALL {
+        let (sys, y0) = System::start(&seam, kind, seam.default_params.clone(), &q0, &qd0).unwrap();
+        let run = runtime::trajectory::simulate(&sys, &y0, &times, &settings, &mut |_| {}).unwrap();
+        let inv = &run.invariants;
+        let worst = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(worst(&inv.energy_error) < 1e-9 * inv.energy0.abs(), "{kind}: energy {:e}", worst(&inv.energy_error));
+        let momentum_bound = if kind == FormulationKind::ReducedVolterra { 1e-13 } else { 1e-8 };
+        for (k, drift) in inv.momentum_error.iter().enumerate() {
+            assert!(worst(drift) < momentum_bound * (1.0 + inv.momentum0[k].abs()), "{kind}: momentum {k} drifts {:e}", worst(drift));
+        }
+        assert!(worst(&inv.position_constraint) < 1e-9, "{kind}: the unit norm drifts {:e}", worst(&inv.position_constraint));
+        ends.push(inv.coordinates.last().unwrap().clone());
+    }
+    for end in &ends[1..] {
+        for (a, b) in end.iter().zip(&ends[0]) {
+            assert!((a - b).abs() < 1e-7, "{end:?} against {:?}", ends[0]);
+        }
+    }
+}
+
+/// With gravity along -z, the floating base's horizontal translations stay ignorable and the
+/// vertical one does not; the reduced method solves two equations fewer than Kane's.
+#[test]
+fn gravity_decides_the_ignorable_translations() {
+    let model = robot("tree.urdf", &floating([0.0, 0.0, -9.81]));
+    let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    let names: Vec<String> = d.ignorable.iter().map(|&j| model.coordinates[j].name()).collect();
+    assert_eq!(names, ["base_x", "base_y"]);
+    let kane = d.equations("kane").unwrap().equations;
+    assert_eq!(d.equations("reduced_volterra").unwrap().equations, kane - 2);
+}
+
+/// A RON model that includes the URDF and adds to it: a payload on the right hand, a spring on
+/// the waist, a torque input per shoulder; its own coordinates and rates follow the robot's.
+#[test]
+fn a_ron_model_includes_a_urdf_and_adds_to_it() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fixture("tree.urdf"), dir.path().join("tree.urdf")).unwrap();
+    let ron = r#"Model(
+        name: "tree_with_payload",
+        urdf: Urdf(file: "tree.urdf", base: Fixed),
+        parameters: { "m_payload": 0.5, "k": 3.0 },
+        inputs: { "tau_left": 0.0, "tau_right": 0.0 },
+        coordinates: ["slide"],
+        frames: [Frame(name: "payload", parent: "right_hand", translation: ["slide", "-0.05", "0"])],
+        bodies: [Body(name: "payload", frame: "payload", mass: "m_payload", inertia: PointMass)],
+        forces: [
+            Potential(name: "waist spring", expr: "k*waist^2/2 + 10*slide^2"),
+            Generalized(name: "motors", components: {"left_shoulder": "tau_left", "right_shoulder": "tau_right"}),
+        ],
+        initial: Initial(q: {"slide": "0.01"}, qdot: {}),
+    )"#;
+    let path = dir.path().join("with_payload.ron");
+    std::fs::write(&path, ron).unwrap();
+    let model = generator::model::load(&path).unwrap();
+    let names: Vec<String> = model.coordinates.iter().map(|c| c.name()).collect();
+    assert_eq!(names, ["waist", "left_shoulder", "right_shoulder", "left_elbow", "right_wrist", "slide"]);
+    assert_eq!(model.inputs.len(), 2);
+    let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    check_formulations_agree("tree_with_payload", &d, &model, 3, 7);
+    // The command line runs it as it runs any model.
+    let text = ok(&multibody(dir.path(), &["compare", "with_payload.ron", "--t-end", "0.2", "--repeats", "1"]));
+    assert!(text.contains("| reduced_volterra |"), "{text}");
+}
+
+/// Every refusal names the file, the line and column of the element at fault, and the fix.
+#[test]
+fn refusals_are_located_in_the_xml() {
+    let tree = std::fs::read_to_string(fixture("tree.urdf")).unwrap();
+    let cases: [(&str, &str, &str); 8] = [
+        (r#"<joint name="waist" type="continuous">"#, r#"<joint name="waist" type="floating">"#, "joint `waist` is floating"),
+        (r#"<joint name="waist" type="continuous">"#, r#"<joint name="waist" type="screw">"#, "joint `waist` has type `screw`"),
+        (r#"<child link="left_lower"/>"#, r#"<child link="right_hand"/>"#, "closes a loop"),
+        (r#"<parent link="base"/><child link="torso"/>"#, r#"<parent link="base"/><child link="nowhere"/>"#, "`nowhere` is not a link"),
+        (r#"<mass value="0.4"/>"#, r#"<mass value="-0.4"/>"#, "has mass -0.4"),
+        (r#"ixx="0.0008" iyy="0.0004" izz="0.0008""#, r#"ixx="0.0008" iyy="0.0004" izz="0.008""#, "no rigid body's"),
+        (r#"<axis xyz="0 -1 0"/>"#, r#"<axis xyz="0 0 0"/>"#, "zero axis"),
+        (r#"<robot name="tree">"#, r#"<robot name="tree"><link name="stray"/>"#, "2 roots"),
+    ];
+    for (from, to, words) in cases {
+        assert!(tree.contains(from), "{from}");
+        let xml = tree.replacen(from, to, 1);
+        let e = model_file("tree.urdf", &xml, &UrdfOptions::default()).expect_err(words);
+        let text = e.render(false);
+        assert!(text.contains(words) && text.contains("tree.urdf:") && text.contains("help:"), "{words}: {text}");
+        let (line, _) = e.location.unwrap_or_else(|| panic!("{words}: located"));
+        let at = xml.lines().nth(line - 1).unwrap();
+        assert!(!at.trim().is_empty(), "{words}: line {line}");
+    }
+    // Malformed XML: the parser's place.
+    let e = model_file("tree.urdf", &tree.replacen("</link>", "</lnk>", 1), &UrdfOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("malformed URDF") && e.location.is_some(), "{e}");
+    // A massless link moved by a joint; a floating root with no inertia.
+    let massless = tree.replacen(r#"<mass value="0.4"/>"#, r#"<mass value="0"/>"#, 1);
+    let e = model_file("tree.urdf", &massless, &UrdfOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("joint `right_wrist` moves link `right_hand`") && e.to_string().contains("carry no mass"), "{e}");
+    let rootless = tree.replacen(r#"<mass value="4.0"/>"#, r#"<mass value="0"/>"#, 1);
+    let e = model_file("tree.urdf", &rootless, &floating([0.0; 3])).unwrap_err();
+    assert!(e.to_string().contains("the root link `base` carries no inertia"), "{e}");
+}
+
+/// A mimic joint follows its master (`q = 2 q_master + 0.1`): no coordinate of its own.
+#[test]
+fn a_mimic_joint_follows_its_master() {
+    let tree = std::fs::read_to_string(fixture("tree.urdf")).unwrap();
+    let xml = tree.replacen(
+        r#"<limit lower="-1.5" upper="1.5" effort="20" velocity="3"/>"#,
+        r#"<limit lower="-1.5" upper="1.5" effort="20" velocity="3"/><mimic joint="left_shoulder" multiplier="2" offset="0.1"/>"#,
+        1,
+    );
+    let def = model_file("tree.urdf", &xml, &UrdfOptions::default()).unwrap();
+    assert!(!def.coordinates.contains(&"left_elbow".to_string()));
+    let elbow = def.frames.iter().find(|f| f.name == "left_lower").unwrap();
+    let text = to_ron(&def);
+    assert!(text.contains("2.0*left_shoulder + 0.1"), "{elbow:?}");
+    let model = from_source("tree.urdf", &text).unwrap();
+    let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    check_formulations_agree("mimic", &d, &model, 3, 9);
+}
+
+/// The command line reads a URDF as any model, from a folder with no Rust toolchain: a fixed
+/// and a floating base, gravity off, limits as events that stop the run.
+#[test]
+fn the_command_line_runs_a_urdf() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fixture("tree.urdf"), dir.path().join("tree.urdf")).unwrap();
+    let text = ok(&multibody(dir.path(), &["compare", "tree.urdf", "--t-end", "0.2", "--repeats", "1"]));
+    assert!(text.contains("| kane | 11 | 5 |"), "{text}");
+    let text = ok(&multibody(dir.path(), &["compare", "tree.urdf", "--base", "floating", "--gravity", "0,0,0", "--t-end", "0.1", "--repeats", "1"]));
+    assert!(text.contains("momentum err (base_z)") && text.contains("| reduced_volterra | 21 | 8 |"), "{text}");
+    let text = ok(&multibody(dir.path(), &["inspect", "tree.urdf"]));
+    assert!(text.contains("joint limits (not enforced): left_shoulder in [-2.0, 2.0]"), "{text}");
+    // Gravity pulls the left arm's shoulder past its limit at -2: the run stops there.
+    let text = ok(&multibody(dir.path(), &["simulate", "tree.urdf", "--limits", "stop", "--q", "left_shoulder=-1.9", "--t-end", "3"]));
+    assert!(text.contains("left_shoulder_lower (stop)") || text.contains("(stopped there by event"), "{text}");
+}
