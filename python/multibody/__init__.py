@@ -46,11 +46,13 @@ __all__ = [
 ]
 
 
-def load(path) -> "Model":
-    """The model in the RON file at ``path`` (a str or a path), or the built-in model of that
-    name (``multibody.built_in()`` lists them). Raises ``ModelError`` with the file, the line
-    and column, the place in the model and the fix."""
-    return Model(_multibody.load(path))
+def load(path, base=None, gravity=None, limits=None) -> "Model":
+    """The model in the RON or URDF file at ``path`` (a str or a path), or the built-in model of
+    that name (``multibody.built_in()`` lists them). A URDF robot's base is ``"fixed"`` (the
+    default) or ``"floating"``, its ``gravity`` three numbers (default ``(0, 0, -9.81)``), its
+    joint ``limits`` ``"report"`` (default), ``"record"`` or ``"stop"``. Raises ``ModelError``
+    with the file, the line and column, the place in the model and the fix."""
+    return Model(_multibody.load(path, base, None if gravity is None else [float(g) for g in gravity], limits))
 
 
 def loads(text: str, name: str = "<string>") -> "Model":

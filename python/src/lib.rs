@@ -686,14 +686,34 @@ fn ensemble<'py>(
     })
 }
 
-/// The model in the RON file at `path`, or the built-in model of that name.
+/// The model in the RON or URDF file at `path`, or the built-in model of that name; a URDF
+/// robot's base (`"fixed"` or `"floating"`), gravity (three numbers) and limits (`"report"`,
+/// `"record"`, `"stop"`).
 #[pyfunction]
-#[pyo3(name = "load")]
-fn load_model(path: &Bound<'_, PyAny>) -> PyResult<Model> {
+#[pyo3(name = "load", signature = (path, base=None, gravity=None, limits=None))]
+fn load_model(path: &Bound<'_, PyAny>, base: Option<&str>, gravity: Option<[f64; 3]>, limits: Option<&str>) -> PyResult<Model> {
     guarded(|| {
+        use generator::model::urdf::{Base, LimitAction, UrdfOptions};
         let argument: std::path::PathBuf = path.extract()?;
-        let argument = argument.to_str().ok_or_else(|| PyValueError::new_err("the path is not valid UTF-8"))?.to_string();
-        Model::open(::load::source(&argument).map_err(model_error)?)
+        let mut robot = UrdfOptions::default();
+        robot.base = match base {
+            None | Some("fixed") => Base::Fixed,
+            Some("floating") => Base::Floating,
+            Some(other) => return Err(PyValueError::new_err(format!("base=`{other}`: give \"fixed\" or \"floating\""))),
+        };
+        if let Some(g) = gravity {
+            if !g.iter().all(|x| x.is_finite()) {
+                return Err(PyValueError::new_err(format!("gravity={g:?}: give three finite numbers")));
+            }
+            robot.gravity = g;
+        }
+        robot.limits = match limits {
+            None | Some("report") => LimitAction::Report,
+            Some("record") => LimitAction::Record,
+            Some("stop") => LimitAction::Stop,
+            Some(other) => return Err(PyValueError::new_err(format!("limits=`{other}`: give \"report\", \"record\" or \"stop\""))),
+        };
+        Model::open(::load::source_with(&argument, &robot).map_err(model_error)?)
     })
 }
 
