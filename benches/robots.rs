@@ -78,7 +78,8 @@ fn child(path: &Path, base: &str, rustc: bool) {
     let mut dy = vec![0.0; y.len()];
     sys.rhs(0.0, &y, &mut dy).unwrap();
     let (cpu, peak) = usage();
-    let mut record = Record { robot: String::new(), base: base.into(), coordinates: m.coordinates.len(), cpu_s: cpu, peak_mb: peak, rustc_s: None, code_bytes: 0 };
+    let mut record =
+        Record { robot: String::new(), base: base.into(), coordinates: m.coordinates.len(), cpu_s: cpu, peak_mb: peak, rustc_s: None, code_bytes: 0 };
     let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     record.code_bytes = generated.code.len();
     if rustc {
@@ -118,7 +119,13 @@ fn main() {
                 assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
                 let mut r: Record = serde_json::from_slice(&o.stdout).unwrap();
                 r.robot = name.into();
-                eprintln!("  {name} run {}: {:.2} s CPU, {:.0} MB{}", k + 1, r.cpu_s, r.peak_mb, r.rustc_s.map_or(String::new(), |s| format!(", rustc {s:.1} s")));
+                eprintln!(
+                    "  {name} run {}: {:.2} s CPU, {:.0} MB{}",
+                    k + 1,
+                    r.cpu_s,
+                    r.peak_mb,
+                    r.rustc_s.map_or(String::new(), |s| format!(", rustc {s:.1} s"))
+                );
                 r
             })
             .collect();
