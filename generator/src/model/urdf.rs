@@ -11,8 +11,9 @@
 //! What is read, and how (`docs/robots.md`):
 //! - joints `revolute`, `continuous`, `prismatic` (one coordinate each, named after the joint;
 //!   its `origin` xyz/rpy and an `axis` of any direction), `fixed` (the child merged into its
-//!   parent: mass, centre of mass and inertia combined); `floating` and `planar` joints,
-//!   `mimic`, closed loops and several roots are refused, located;
+//!   parent: mass, centre of mass and inertia combined); a `mimic` joint follows its master
+//!   (no coordinate of its own); `floating` and `planar` joints, closed loops and several roots
+//!   are refused, located;
 //! - links' `inertial` (mass, the centre of mass `origin` with its own rotation, the inertia
 //!   tensor); `visual` and `collision` are not read;
 //! - `limit` (lower, upper) becomes events on request ([`LimitAction`]); `dynamics` `damping`
@@ -41,6 +42,41 @@ use super::error::{ErrorKind, ModelError};
 use super::schema::*;
 use indexmap::IndexMap;
 use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
+
+/// A floating base's coordinates: the root link's position in the world.
+pub const BASE_POSITION: [&str; 3] = ["base_x", "base_y", "base_z"];
+/// A floating base's coordinates: the root link's attitude, a unit quaternion `(w, x, y, z)`
+/// turning the link's axes into the world's.
+pub const BASE_ATTITUDE: [&str; 4] = ["base_qw", "base_qx", "base_qy", "base_qz"];
+
+/// The rates the coordinates of a robot on a floating base take when the whole robot turns
+/// about the world axis `axis` at unit rate, at `q`: the base's position turns (`axis x r`), its
+/// attitude turns on the left (`(0, axis) q / 2`), the joints stay. The momentum conjugate to
+/// it is the angular momentum about that axis (`runtime::monitor::momentum_along`). `None`
+/// when the coordinates have no floating base.
+///
+/// ```
+/// use generator::model::urdf::world_rotation;
+/// let names: Vec<String> = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz", "elbow"].map(String::from).into();
+/// let q = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.3];
+/// let xi = world_rotation(&names, &q, [0.0, 0.0, 1.0]).unwrap();
+/// assert_eq!(xi, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0]);
+/// ```
+pub fn world_rotation(coordinates: &[String], q: &[f64], axis: [f64; 3]) -> Option<Vec<f64>> {
+    let at = |name: &str| coordinates.iter().position(|c| c == name);
+    let r: Vec<usize> = BASE_POSITION.iter().map(|n| at(n)).collect::<Option<_>>()?;
+    let e: Vec<usize> = BASE_ATTITUDE.iter().map(|n| at(n)).collect::<Option<_>>()?;
+    let (p, [w, x, y, z]) = ([q[r[0]], q[r[1]], q[r[2]]], [q[e[0]], q[e[1]], q[e[2]], q[e[3]]]);
+    let [a, b, c] = axis;
+    let mut xi = vec![0.0; q.len()];
+    for (&i, v) in r.iter().zip([b * p[2] - c * p[1], c * p[0] - a * p[2], a * p[1] - b * p[0]]) {
+        xi[i] = v;
+    }
+    for (&i, v) in e.iter().zip([-(a * x + b * y + c * z), a * w + b * z - c * y, b * w + c * x - a * z, c * w + a * y - b * x]) {
+        xi[i] = v / 2.0;
+    }
+    Some(xi)
+}
 
 /// How the robot's root link is held.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -590,8 +626,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
     let mut constraints = Vec::new();
     let moving_gravity = options.gravity.iter().any(|g| *g != 0.0);
     if options.base == Base::Floating {
-        let b = ["base_x", "base_y", "base_z"];
-        let e = ["base_qw", "base_qx", "base_qy", "base_qz"];
+        let (b, e) = (BASE_POSITION, BASE_ATTITUDE);
         coordinates.extend(b.iter().chain(&e).map(|s| s.to_string()));
         frames.push(FrameDef {
             name: root_frame.clone(),
