@@ -695,12 +695,12 @@ fn load_model(path: &Bound<'_, PyAny>, base: Option<&str>, gravity: Option<[f64;
     guarded(|| {
         use generator::model::urdf::{Base, LimitAction, UrdfOptions};
         let argument: std::path::PathBuf = path.extract()?;
-        let mut robot = UrdfOptions::default();
-        robot.base = match base {
+        let base = match base {
             None | Some("fixed") => Base::Fixed,
             Some("floating") => Base::Floating,
             Some(other) => return Err(PyValueError::new_err(format!("base=`{other}`: give \"fixed\" or \"floating\""))),
         };
+        let mut robot = UrdfOptions { base, ..UrdfOptions::default() };
         if let Some(g) = gravity {
             if !g.iter().all(|x| x.is_finite()) {
                 return Err(PyValueError::new_err(format!("gravity={g:?}: give three finite numbers")));
