@@ -17,14 +17,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// The robots: name, URDF under example-robot-data's `robots/`, base.
-const ROBOTS: [(&str, &str, &str); 5] = [
-    ("ur5", "ur_description/urdf/ur5_robot.urdf", "fixed"),
-    ("panda", "panda_description/urdf/panda.urdf", "fixed"),
-    ("solo12", "solo_description/robots/solo12.urdf", "floating"),
-    ("anymal", "anymal_b_simple_description/robots/anymal.urdf", "floating"),
-    ("talos_reduced", "talos_data/robots/talos_reduced.urdf", "floating"),
-];
+#[path = "support/robots.rs"]
+mod robots;
+use robots::ROBOTS;
 
 /// Fresh processes per robot; the median CPU and the largest peak are reported.
 const RUNS: usize = 3;

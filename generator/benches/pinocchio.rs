@@ -16,7 +16,7 @@
 //! Outside CI: it installs the `pin` wheel (Pinocchio's headers and library) and Eigen's
 //! headers (`cmeel-eigen`) into a virtual environment under `target/peers/`, and builds
 //! `benches/pinocchio/aba.cpp` with `g++ -O3 -march=native` against them, header-only (every
-//! template instantiated for this machine). Our modules are compiled by `rustc -C opt-level=3`
+//! template instantiated for this machine; `benches/support/pinocchio.rs`). Our modules are compiled by `rustc -C opt-level=3`
 //! for plain x86-64 (`benches/support/timing.rs`): the comparison gives Pinocchio the newer
 //! instructions (FMA, AVX2) and us none. Both sides time one call the same way (the best, over
 //! 7 rounds, of the mean of 200 calls at one state), in separate processes run alternately,
@@ -34,21 +34,15 @@
 mod timing;
 #[path = "support/point.rs"]
 mod point;
+// Its robots' functions serve the workspace's robots benchmark.
+#[allow(dead_code)]
+#[path = "support/pinocchio.rs"]
+mod pinocchio;
 
 use generator::emit::{Options, generate};
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-/// The `pin` wheel's version (Pinocchio 4.1) and the Eigen headers it builds with.
-const PIN: &str = "pin==4.1.0";
-const EIGEN: &str = "cmeel-eigen==3.4.1";
-
-/// The compile definitions Pinocchio's CMake package gives its users (Boost's variant of 25
-/// joint kinds), without `PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION`: every template is
-/// instantiated here, for this machine.
-const DEFINES: [&str; 4] =
-    ["-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30", "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS", "-DBOOST_FUSION_INVOKE_MAX_ARITY=12"];
 
 struct Case {
     /// The row's name, and the model's name in `aba.cpp` with its size.
@@ -68,59 +62,6 @@ fn cases() -> Vec<Case> {
         Case { label: "spatial chain, 8 links on a floating base".into(), aba: ("floating_chain", 8), model: built(floating_chain(8)) },
         Case { label: "spatial chain, 20 links on a floating base".into(), aba: ("floating_chain", 20), model: built(floating_chain(20)) },
     ]
-}
-
-fn run(cmd: &mut Command, what: &str) {
-    let out = cmd.output().unwrap_or_else(|e| panic!("{what}: {e}"));
-    assert!(out.status.success(), "{what} failed:\n{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-}
-
-/// The `pin` wheel's prefix (headers and libraries), installed once under `target/peers/`.
-fn pinocchio_prefix(peers: &Path) -> PathBuf {
-    let venv = peers.join("venv");
-    let python = venv.join("bin/python3");
-    if !python.exists() {
-        eprintln!("pinocchio: creating {} ...", venv.display());
-        run(Command::new("python3").args(["-m", "venv"]).arg(&venv), "python3 -m venv");
-    }
-    let prefix = || {
-        let out =
-            Command::new(&python).args(["-c", "import cmeel, os; print(os.path.join(os.path.dirname(cmeel.__path__[0]), 'cmeel.prefix'))"]).output().ok()?;
-        let p = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
-        p.join("include/pinocchio/algorithm/aba.hpp").exists().then_some(p).filter(|p| p.join("include/eigen3").exists())
-    };
-    if let Some(p) = prefix() {
-        return p;
-    }
-    eprintln!("pinocchio: pip install {PIN} {EIGEN} ...");
-    run(Command::new(&python).args(["-m", "pip", "install", "--quiet", PIN, EIGEN]), "pip install");
-    prefix().expect("the pin wheel installs its headers and Eigen's")
-}
-
-/// `aba.cpp` built against the wheel, once per change of the source.
-fn build_aba(peers: &Path, prefix: &Path) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/pinocchio/aba.cpp");
-    let exe = peers.join("aba");
-    let stale = |exe: &Path| -> Option<bool> { Some(std::fs::metadata(exe).ok()?.modified().ok()? < std::fs::metadata(&source).ok()?.modified().ok()?) };
-    if stale(&exe) != Some(false) {
-        eprintln!("pinocchio: g++ -O3 -march=native aba.cpp (about two minutes) ...");
-        let (include, lib) = (prefix.join("include"), prefix.join("lib"));
-        run(
-            Command::new("g++")
-                .args(["-O3", "-march=native", "-DNDEBUG", "-std=c++17"])
-                .args(DEFINES)
-                .arg(format!("-I{}", include.display()))
-                .arg(format!("-I{}", include.join("eigen3").display()))
-                .arg(&source)
-                .arg(format!("-L{}", lib.display()))
-                .arg("-lpinocchio_default")
-                .arg(format!("-Wl,-rpath,{}", lib.display()))
-                .arg("-o")
-                .arg(&exe),
-            "g++ aba.cpp",
-        );
-    }
-    exe
 }
 
 fn aba_ns(exe: &Path, (model, n): (&str, usize)) -> (f64, usize) {
@@ -210,9 +151,7 @@ fn main() {
             other => panic!("unknown option `{other}`"),
         }
     }
-    let peers = root.join("target/peers");
-    std::fs::create_dir_all(&peers).expect("target/peers");
-    let aba = build_aba(&peers, &pinocchio_prefix(&peers));
+    let aba = pinocchio::Peers::new(&root).aba();
     if check_only {
         for case in cases() {
             println!("{}: ABA's accelerations are ours within {:.1e}", case.label, check_against_aba(&aba, &case));

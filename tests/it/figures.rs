@@ -454,3 +454,154 @@ fn the_right_hand_side_table_counts_the_committed_modules_operations() {
     }
     assert!(checked >= 12, "{checked} rows checked");
 }
+
+/// docs/robots.md's tables are the files its benchmarks and scripts write: the check against
+/// Pinocchio (`docs/robots/pinocchio_check.py`), the derivation at robot scale (`cargo bench
+/// --bench robots`), the calls against Pinocchio (`cargo bench --bench robot_calls`), the space
+/// manipulator (`cargo run --release --example space_manipulator`); and its verdicts on the
+/// issue's goals follow from them.
+#[test]
+fn the_robot_figures_are_the_files() {
+    let page = read("docs/robots.md");
+    let f = |v: &serde_json::Value| v.as_f64().unwrap_or_else(|| panic!("a number: {v}"));
+    let s = |v: &serde_json::Value| v.as_str().unwrap_or_else(|| panic!("a string: {v}")).to_string();
+    let table = |head: &[&str], rows: Vec<Vec<String>>| -> String {
+        let mut t = format!("| {} |\n|{}\n", head.join(" | "), "---|".repeat(head.len()));
+        for r in rows {
+            t += &format!("| {} |\n", r.join(" | "));
+        }
+        t
+    };
+    let quoted = |t: &str, what: &str| assert!(page.contains(t), "docs/robots.md does not hold the {what} table of its file; it is:\n{t}");
+
+    let check = json("docs/robots/pinocchio_check.json");
+    let tolerance = f(&check["tolerance"]);
+    let forms = ["lagrange", "maggi", "kane", "reduced_volterra"];
+    let rows = check["records"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let worst = &r["worst_relative_difference"];
+            forms.iter().for_each(|k| assert!(f(&worst[*k]) <= tolerance, "{}: {k} is off Pinocchio", s(&r["robot"])));
+            let mut row = vec![s(&r["robot"]), s(&r["base"]), r["nv"].to_string(), r["states"].to_string()];
+            row.extend(forms.iter().map(|k| format!("{:.0e}", f(&worst[*k]))));
+            row
+        })
+        .collect();
+    quoted(&table(&["robot", "base", "dof", "states", "lagrange", "maggi", "kane", "reduced"], rows), "Pinocchio check");
+
+    let derive = json("docs/robots/derive.json");
+    let records = derive["records"].as_array().unwrap();
+    let rows = records
+        .iter()
+        .map(|r| {
+            vec![
+                s(&r["robot"]),
+                s(&r["base"]),
+                r["coordinates"].to_string(),
+                format!("{:.2}", f(&r["cpu_s"])),
+                format!("{:.0}", f(&r["peak_mb"])),
+                format!("{:.1}", f(&r["rustc_s"])),
+                format!("{:.0}", f(&r["code_bytes"]) / 1024.0),
+            ]
+        })
+        .collect();
+    quoted(&table(&["robot", "base", "coordinates", "CPU s", "peak MB", "rustc s", "module KB"], rows), "derivation");
+    // The humanoid's verdicts: 3 s of CPU, 500 MB, 30 s of rustc.
+    let talos = records.iter().find(|r| r["robot"] == "talos_reduced").expect("the humanoid");
+    let verdict = |value: f64, goal: f64, unit: &str| {
+        let v = format!("{value:.1} {unit} against < {goal} {unit}: {}", if value < goal { "met" } else { "missed" });
+        assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
+    };
+    verdict(f(&talos["cpu_s"]), 3.0, "s");
+    verdict(f(&talos["peak_mb"]), 500.0, "MB");
+    verdict(f(&talos["rustc_s"]), 30.0, "s of rustc");
+
+    let calls = json("docs/robots/per_call.json");
+    let rows: Vec<Vec<String>> = calls["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            vec![
+                s(&r["robot"]),
+                s(&r["base"]),
+                format!("{} / {}", r["dof"], r["pinocchio_dof"]),
+                format!("{:.0}", f(&r["aba_ns"])),
+                format!("{:.0}", f(&r["crba_cholesky_ns"])),
+                format!("{:.0}", f(&r["kane_ns"])),
+                format!("{:.0}", f(&r["reduced_ns"])),
+                format!("{:.2}", f(&r["kane_over_aba"])),
+                format!("{:.2}", f(&r["reduced_over_aba"])),
+                format!("{:.0}", f(&r["kane_jit_ns"])),
+                format!("{:.0}", f(&r["reduced_jit_ns"])),
+                format!("{:.2} / {:.2}", f(&r["kane_jit_over_compiled"]), f(&r["reduced_jit_over_compiled"])),
+                s(&r["check"]),
+            ]
+        })
+        .collect();
+    for r in calls["rows"].as_array().unwrap() {
+        let ratio = f(&r["kane_ns"]) / f(&r["aba_ns"]);
+        assert!((ratio - f(&r["kane_over_aba"])).abs() < 1e-9, "the ratios are the times'");
+    }
+    let head = [
+        "robot",
+        "base",
+        "dof (ours / Pinocchio)",
+        "ABA ns",
+        "CRBA + Cholesky ns",
+        "Kane ns",
+        "reduced ns",
+        "Kane / ABA",
+        "reduced / ABA",
+        "Kane JIT ns",
+        "reduced JIT ns",
+        "JIT / compiled (Kane / reduced)",
+        "accelerations against ABA",
+    ];
+    quoted(&table(&head, rows), "calls");
+    // The verdicts: the better of Kane's and the reduced form within half of ABA's time, the
+    // JIT within twice the compiled module.
+    let list = |names: Vec<String>| if names.is_empty() { "none".to_string() } else { names.join(", ") };
+    let (met, missed): (Vec<_>, Vec<_>) = calls["rows"].as_array().unwrap().iter().partition(|r| f(&r["kane_over_aba"]).min(f(&r["reduced_over_aba"])) <= 0.5);
+    let names = |rows: Vec<&serde_json::Value>| list(rows.iter().map(|r| s(&r["robot"])).collect());
+    let v = format!("At most 0.5 of ABA's time (the better of Kane's and the reduced form): met on {}; missed on {}.", names(met), names(missed));
+    assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
+    let (within, beyond): (Vec<_>, Vec<_>) =
+        calls["rows"].as_array().unwrap().iter().partition(|r| f(&r["kane_jit_over_compiled"]).max(f(&r["reduced_jit_over_compiled"])) <= 2.0);
+    let v = format!("The JIT within twice the compiled module: met on {}; missed on {}.", names(within), names(beyond));
+    assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
+
+    let arm = json("docs/robots/space_manipulator.json");
+    let rows = arm["records"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            vec![
+                s(&r["settings"]),
+                s(&r["formulation"]),
+                r["equations"].to_string(),
+                format!("{:.0}", f(&r["ns_per_call"])),
+                r["rhs_calls"].to_string(),
+                format!("{:.1e}", f(&r["error_at_the_end"])),
+                format!("{:.1e}", f(&r["momentum_drift"])),
+                format!("{:.1e}", f(&r["angular_momentum_drift"])),
+                format!("{:.1e}", f(&r["energy_balance_drift"])),
+            ]
+        })
+        .collect();
+    let head = [
+        "settings",
+        "formulation",
+        "equations",
+        "ns per call",
+        "calls",
+        "error at 10 s",
+        "linear momentum drift",
+        "angular momentum drift",
+        "energy balance drift",
+    ];
+    quoted(&table(&head, rows), "space manipulator");
+}

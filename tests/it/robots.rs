@@ -167,6 +167,27 @@ fn a_ron_model_includes_a_urdf_and_adds_to_it() {
     assert!(text.contains("| reduced_volterra |"), "{text}");
 }
 
+/// The Rust builder includes a URDF as a RON model does, and adds to it.
+#[test]
+fn the_builder_includes_a_urdf_and_adds_to_it() {
+    use generator::model::builder::{Body, Frame, ModelBuilder};
+    let model = ModelBuilder::new("tree_with_payload")
+        .urdf(fixture("tree.urdf"), &UrdfOptions::default())
+        .parameter("m_payload", 0.5)
+        .coordinate("slide")
+        .frame(Frame::new("payload", "right_hand").translation(["slide", "-0.05", "0"]))
+        .body(Body::new("payload", "payload", "m_payload"))
+        .build()
+        .unwrap();
+    let names: Vec<String> = model.coordinates.iter().map(|c| c.name()).collect();
+    assert_eq!(names, ["waist", "left_shoulder", "right_shoulder", "left_elbow", "right_wrist", "slide"]);
+    let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    check_formulations_agree("tree_with_payload (builder)", &d, &model, 2, 11);
+    // A URDF that is not there is named in the error.
+    let err = ModelBuilder::new("missing").urdf("/nonexistent/robot.urdf", &UrdfOptions::default()).build().unwrap_err();
+    assert!(err.to_string().contains("/nonexistent/robot.urdf"), "{err}");
+}
+
 /// Every refusal names the file, the line and column of the element at fault, and the fix.
 #[test]
 fn refusals_are_located_in_the_xml() {

@@ -156,6 +156,30 @@ impl ModelBuilder {
         }
     }
 
+    /// Includes a robot read from a URDF file (`path` as given: relative to the working
+    /// directory, or absolute), as a RON model's `urdf: Urdf(...)` does: the robot's
+    /// parameters, coordinates, frames, bodies and forces come first, this builder's after them;
+    /// its quasi-velocities, unless this builder gives some, are the robot's followed by the
+    /// rates of this builder's coordinates (`docs/robots.md`).
+    ///
+    /// ```no_run
+    /// use generator::model::builder::{Body, Frame, ModelBuilder};
+    /// use generator::model::urdf::{Base, UrdfOptions};
+    /// // A panda with a 0.5 kg payload between its fingers.
+    /// let model = ModelBuilder::new("panda_with_payload")
+    ///     .urdf("panda.urdf", &UrdfOptions { base: Base::Fixed, ..UrdfOptions::default() })
+    ///     .parameter("m_payload", 0.5)
+    ///     .frame(Frame::new("payload", "panda_hand").translation(["0", "0", "0.1"]))
+    ///     .body(Body::new("payload", "payload", "m_payload"))
+    ///     .build()
+    ///     .unwrap();
+    /// assert_eq!(model.m(), 8);
+    /// ```
+    pub fn urdf(mut self, path: impl Into<String>, options: &super::urdf::UrdfOptions) -> ModelBuilder {
+        self.def.urdf = Some(UrdfInclude { file: path.into(), base: options.base, gravity: Some(options.gravity), limits: options.limits });
+        self
+    }
+
     /// Free text describing the model.
     pub fn description(mut self, text: impl Into<String>) -> ModelBuilder {
         self.def.description = text.into();

@@ -181,8 +181,16 @@ fn num(x: f64) -> String {
     format!("{rounded:?}")
 }
 
-/// An identifier from a URDF name: other characters made `_`, a leading digit prefixed.
-fn ident(name: &str) -> String {
+/// An identifier from a URDF name: other characters made `_`, a leading digit prefixed, a
+/// name the expressions reserve suffixed. A joint's coordinate is named so (and suffixed by
+/// `_` again while the name is taken).
+///
+/// ```
+/// assert_eq!(generator::model::urdf::ident("arm/elbow-1"), "arm_elbow_1");
+/// assert_eq!(generator::model::urdf::ident("2nd"), "j_2nd");
+/// assert_eq!(generator::model::urdf::ident("world"), "world_");
+/// ```
+pub fn ident(name: &str) -> String {
     let mut out: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
     if !out.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
         out.insert(0, 'j');

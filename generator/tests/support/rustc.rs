@@ -11,7 +11,12 @@ pub fn seam_rlib() -> &'static Path {
     RLIB.get_or_init(|| {
         let dir = std::env::temp_dir().join(format!("seam-rlib-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("a scratch directory");
-        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../runtime/seam/src/lib.rs");
+        // From the generator's package or the workspace's.
+        let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let src = [manifest.join("../runtime/seam/src/lib.rs"), manifest.join("runtime/seam/src/lib.rs")]
+            .into_iter()
+            .find(|p| p.exists())
+            .expect("runtime/seam/src/lib.rs");
         let out = Command::new("rustc")
             .args(["--edition", "2024", "--crate-type", "rlib", "--crate-name", "seam", "-C", "opt-level=3", "--out-dir"])
             .arg(&dir)
