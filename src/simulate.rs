@@ -92,10 +92,16 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     };
     let run = trajectory::simulate(&sys, &y0, &times, &settings, &mut progress);
     bar.finish_and_clear();
-    let run = run.map_err(|e| match e {
-        trajectory::TrajectoryError::Run(e) => CliError::Run(e),
-        trajectory::TrajectoryError::Monitor(e) => CliError::Monitor(e),
-    })?;
+    // A run that stops early keeps its trajectory up to the stop: it is written, then the
+    // error is reported.
+    let (run, failed) = match run {
+        Ok(run) => (run, None),
+        Err(trajectory::TrajectoryError::Run(e)) => match trajectory::up_to(&sys, &y0, &times, &settings, &e) {
+            Some(kept) => (kept, Some(e)),
+            None => return Err(CliError::Run(e)),
+        },
+        Err(trajectory::TrajectoryError::Monitor(e)) => return Err(CliError::Monitor(e)),
+    };
     let elapsed = start.elapsed();
     let (solution, inv, header, rows) = (&run.solution, &run.invariants, &run.columns, &run.rows);
     if let Some(t) = solution.stats.stiff_at {
@@ -121,14 +127,20 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         "rejected": solution.stats.rejected,
         "rhs_calls": solution.stats.rhs_calls,
         "stopped_by_event": solution.stopped,
+        "stopped_by_error": failed.as_ref().map(|e| e.to_string()),
         "events": run.events.iter().map(|e| serde_json::json!({ "event": e.name, "action": e.action.name(), "t": e.t, "q": e.q, "qdot": e.qdot })).collect::<Vec<_>>(),
         "columns": header,
         "rows": rows,
     });
     write_file(&base.with_extension("json"), serde_json::to_string(&json).expect("plain data").as_bytes())?;
     let plots = plot::write_trajectory(&model, &sys.form, &solution.times, inv, &base)?;
-    let end = match (solution.stopped, solution.events.last()) {
-        (true, Some(o)) => format!("{} (stopped there by event `{}`)", seam::short(o.t), model.events[o.event].name),
+    let end = match (solution.stopped, solution.events.last(), &failed) {
+        (_, _, Some(e)) => format!(
+            "{} (the last output before the run stopped at t = {}: see the error below)",
+            seam::short(*solution.times.last().expect("kept outputs")),
+            seam::short(e.t)
+        ),
+        (true, Some(o), None) => format!("{} (stopped there by event `{}`)", seam::short(o.t), model.events[o.event].name),
         _ => seam::short(reference.t_end),
     };
     let mut text = format!(
@@ -176,5 +188,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     for p in plots {
         text += &format!(", {}", files::printable_path(&p));
     }
-    print(&(text + "\n"))
+    print(&(text + "\n"))?;
+    match failed {
+        Some(e) => Err(CliError::Run(e)),
+        None => Ok(()),
+    }
 }

@@ -57,6 +57,10 @@ pub const DT_OUT: f64 = 0.1;
 pub const ENERGY_BALANCE: ::seam::EnergyBalance = ::seam::EnergyBalance::Energy;
 ///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
 pub const PAPER_SETTINGS: bool = true;
+///Number of frames turned by ZYX Euler angles.
+pub const NUM_GIMBALS: usize = 1;
+///The frames turned by ZYX Euler angles: the frame and the index of its pitch in `COORDINATES`, singular where the pitch's cosine vanishes (a run stops before it).
+pub const GIMBALS: [(&str, usize); NUM_GIMBALS] = [("middle", 1)];
 ///True when the parameters were folded into the code as constants.
 pub const PARAMETERS_BAKED: bool = false;
 ///The model's parameters; `Default` holds the values from the model file.
@@ -9353,6 +9357,7 @@ pub fn model() -> ::seam::Model {
             );
             Ok(())
         },
+        gimbals: &GIMBALS,
         formulations: &FORMULATIONS,
         ..::seam::StaticModel::EMPTY
     })

@@ -90,6 +90,32 @@ pub fn simulate(sys: &System, y0: &[f64], times: &[f64], settings: &Settings, on
     })
 }
 
+/// The trajectory of a run that stopped early with `error` (a singular configuration, steps
+/// that vanish), up to the last output time before it stopped: the same run over those
+/// outputs. The integrator is deterministic and its steps do not depend on the output times
+/// before the last, so they are the failed run's up to there. `None` when no output after the
+/// first comes before the stop, or when the shorter run fails too.
+///
+/// ```
+/// use runtime::{integrate::Settings, system::System, trajectory};
+/// use seam::FormulationKind;
+/// let model = generated::find("three_body").unwrap();
+/// let (q0, qd0) = model.initial.clone().unwrap();
+/// let (sys, y0) = System::start(&model, FormulationKind::Kane, model.default_params.clone(), &q0, &qd0).unwrap();
+/// let times: Vec<f64> = (0..=10).map(|k| k as f64 * 0.1).collect();
+/// // A run that failed at t = 0.55 (say) kept the outputs up to 0.5.
+/// let failed = runtime::integrate::RunError { t: 0.55, state: y0.clone(), reason: runtime::integrate::Reason::TooManySteps(0) };
+/// let kept = trajectory::up_to(&sys, &y0, &times, &Settings::tight(1.0), &failed).unwrap();
+/// assert_eq!(kept.solution.times.len(), 6);
+/// ```
+pub fn up_to(sys: &System, y0: &[f64], times: &[f64], settings: &Settings, error: &RunError) -> Option<Trajectory> {
+    let before: Vec<f64> = times.iter().copied().take_while(|t| *t <= error.t).collect();
+    if before.len() < 2 {
+        return None;
+    }
+    simulate(sys, y0, &before, settings, &mut |_| {}).ok()
+}
+
 /// [`simulate`], stopped with [`crate::integrate::Reason::Interrupted`] where `on_rhs(t)`
 /// breaks ([`crate::events::run_interruptible`]).
 pub fn simulate_interruptible(

@@ -82,11 +82,19 @@ fn a_zyx_body_at_cos_theta_zero_is_refused_and_near_it_reported() {
     for (theta, must_stop) in [(std::f64::consts::FRAC_PI_2, true), (std::f64::consts::FRAC_PI_2 - 1e-3, false)] {
         let mut q = q0.to_vec();
         q[1] = theta;
-        for form in ["kane", "reduced_volterra"] {
-            let (_, out) = simulate(&m, form, m.default_params.to_vec(), &q, qd0, 2.0, 0.1, &Settings::paper(2.0));
-            finite_or_reported(&format!("{form} theta {theta}"), &out, 2.0);
+        for form in m.kinds() {
             if must_stop {
-                let e = out.unwrap_err();
+                // Refused at the start, by every formulation, naming the condition.
+                let e = System::start(&m, form, m.default_params.to_vec(), &q, qd0).unwrap_err();
+                assert!(
+                    matches!(&e, runtime::system::SetupError::Initial(runtime::seam::Failure::Singular { condition, .. }) if condition.contains("cos(theta)")),
+                    "{form}: {e}"
+                );
+                continue;
+            }
+            let (_, out) = simulate(&m, form.name(), m.default_params.to_vec(), &q, qd0, 2.0, 0.1, &Settings::paper(2.0));
+            finite_or_reported(&format!("{form} theta {theta}"), &out, 2.0);
+            if let Err(e) = out {
                 assert!(
                     matches!(&e.reason, Reason::Rhs(runtime::seam::Failure::Singular { condition, .. }) if condition.contains("cos(theta)")),
                     "{form}: {e}"

@@ -358,6 +358,7 @@ impl Emitter<'_> {
             has_initial: self.model.initial.is_some(),
             has_run: self.model.simulation.is_some(),
             has_events: !self.model.events.is_empty(),
+            has_gimbals: !self.model.gimbals().is_empty(),
             has_inputs: !self.model.inputs.is_empty(),
         }));
         let text = self.print(items)?;
@@ -607,6 +608,18 @@ impl Emitter<'_> {
                 pub const INPUTS: [usize; NUM_INPUTS] = [#(#idx),*];
             });
         }
+        let gimbals = model.gimbals();
+        if !gimbals.is_empty() {
+            let ng = usize_lit(gimbals.len());
+            let frames = gimbals.iter().map(|(f, _)| f.as_str());
+            let pitches = gimbals.iter().map(|(_, p)| usize_lit(*p));
+            out.extend(quote! {
+                #[doc = "Number of frames turned by ZYX Euler angles."]
+                pub const NUM_GIMBALS: usize = #ng;
+                #[doc = "The frames turned by ZYX Euler angles: the frame and the index of its pitch in `COORDINATES`, singular where the pitch's cosine vanishes (a run stops before it)."]
+                pub const GIMBALS: [(&str, usize); NUM_GIMBALS] = [#((#frames, #pitches)),*];
+            });
+        }
         if !model.events.is_empty() {
             let ne = usize_lit(model.events.len());
             let names = model.events.iter().map(|e| e.name.as_str());
@@ -675,6 +688,7 @@ impl Emitter<'_> {
             paper_settings: model.simulation.as_ref().is_some_and(|s| s.paper),
             energy_balance: m.energy_balance,
             events: model.events.iter().map(|e| seam::Event { name: e.name.clone(), direction: e.direction, action: e.action }).collect(),
+            gimbals: model.gimbals().into_iter().map(|(frame, pitch)| seam::Gimbal { frame, pitch }).collect(),
         }
     }
 

@@ -24,6 +24,7 @@ pub struct Description {
     pub paper_settings: bool,
     pub energy_balance: seam::EnergyBalance,
     pub events: Vec<seam::Event>,
+    pub gimbals: Vec<seam::Gimbal>,
 }
 
 /// What a formulation's hand-written functions do around its tapes: the layout of `assemble`'s

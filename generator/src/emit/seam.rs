@@ -112,6 +112,7 @@ pub(super) struct SeamParts<'a> {
     pub has_initial: bool,
     pub has_run: bool,
     pub has_events: bool,
+    pub has_gimbals: bool,
     pub has_inputs: bool,
 }
 
@@ -168,6 +169,9 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
     }
     if parts.has_inputs {
         fields.push(quote!(inputs: &INPUTS,));
+    }
+    if parts.has_gimbals {
+        fields.push(quote!(gimbals: &GIMBALS,));
     }
     if parts.has_events {
         fields.push(quote! {

@@ -193,6 +193,7 @@ impl Evaluated {
             paper_settings: d.paper_settings,
             energy_balance: d.energy_balance,
             events: d.events,
+            gimbals: d.gimbals,
             formulations,
             functions: Arc::new(functions),
         }

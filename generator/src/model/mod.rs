@@ -189,6 +189,29 @@ impl Transfer for Model {
 }
 
 impl Model {
+    /// The frames turned by ZYX Euler angles whose three angles are coordinates: each frame's
+    /// name and the index of its pitch, singular where `cos(pitch)` vanishes (gimbal lock).
+    ///
+    /// ```
+    /// let model = generator::model::load("../models/three_body.ron").unwrap();
+    /// assert_eq!(model.gimbals(), vec![("middle".to_string(), 1)]);
+    /// ```
+    pub fn gimbals(&self) -> Vec<(String, usize)> {
+        let index = |name: &str| self.coordinates.iter().position(|q| q.name() == name.trim());
+        self.def
+            .frames
+            .iter()
+            .flat_map(|f| f.rotation.iter().map(move |r| (f, r)))
+            .filter_map(|(f, r)| match r {
+                RotationDef::EulerZYX(psi, theta, phi) => {
+                    let (a, b, c) = (index(psi)?, index(theta)?, index(phi)?);
+                    (a != b && b != c && a != c).then(|| (f.name.clone(), b))
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
     /// The time chain `q -> q'` for total time derivatives of position-level expressions.
     pub fn position_chain(&self) -> TimeChain {
         TimeChain::new(self.t, self.coordinates.iter().zip(&self.velocities).map(|(q, v)| (*q, v.expr())).collect())

@@ -90,6 +90,8 @@ pub struct StaticModel {
     pub energy_balance: crate::EnergyBalance,
     /// The events: `(name, direction, action)`, in the order of `event_values`' outputs.
     pub events: &'static [(&'static str, crate::Direction, crate::EventAction)],
+    /// The frames turned by ZYX Euler angles: `(frame, index of the pitch coordinate)`.
+    pub gimbals: &'static [(&'static str, usize)],
     pub event_values: PointFn,
     pub event_resets: PointFn,
     pub energy: PointFn,
@@ -118,6 +120,7 @@ impl StaticModel {
         paper_settings: false,
         energy_balance: crate::EnergyBalance::Energy,
         events: &[],
+        gimbals: &[],
         event_values: |_, _, _, _, _| Err(Failure::Missing { function: "event_values" }),
         event_resets: |_, _, _, _, _| Err(Failure::Missing { function: "event_resets" }),
         energy: |_, _, _, _, _| Err(Failure::Missing { function: "energy" }),
@@ -249,6 +252,7 @@ impl From<StaticModel> for Model {
             paper_settings: m.paper_settings,
             energy_balance: m.energy_balance,
             events: m.events.iter().map(|(name, direction, action)| crate::Event { name: name.to_string(), direction: *direction, action: *action }).collect(),
+            gimbals: m.gimbals.iter().map(|(frame, pitch)| crate::Gimbal { frame: frame.to_string(), pitch: *pitch }).collect(),
             formulations: m.formulations.iter().map(|f| Formulation::from(*f)).collect(),
             functions: Arc::new(m),
         }

@@ -28,7 +28,7 @@ pub use event::{Direction, Event, EventAction};
 pub use failure::Failure;
 pub use grid::{GridError, MAX_OUTPUTS, output_steps, output_times, short};
 pub use kind::{EnergyBalance, FormulationKind, Speeds, StateLayout};
-pub use model::{Formulation, FormulationFunctions, Model, ModelFunctions};
+pub use model::{Formulation, FormulationFunctions, Gimbal, Model, ModelFunctions};
 
 /// `slice` as an array of `N`, or [`Failure::Dimension`] naming `argument`.
 ///

@@ -149,6 +149,28 @@ impl Formulation {
     }
 }
 
+/// A frame turned by ZYX Euler angles `(psi, theta, phi)`, all three coordinates: singular
+/// where `cos(theta)` vanishes.
+///
+/// ```
+/// let g = seam::Gimbal { frame: "body".into(), pitch: 1 };
+/// assert_eq!(g.margin(&[0.3, std::f64::consts::FRAC_PI_2, 0.0]).abs() < 1e-15, true);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gimbal {
+    /// The frame's name.
+    pub frame: String,
+    /// The index of the pitch `theta` among the model's coordinates.
+    pub pitch: usize,
+}
+
+impl Gimbal {
+    /// `cos(theta)` at the coordinates `q`: zero at the singular attitude.
+    pub fn margin(&self, q: &[f64]) -> f64 {
+        q[self.pitch].cos()
+    }
+}
+
 /// One model: its description and its functions, compiled or evaluated in-process.
 #[derive(Clone)]
 pub struct Model {
@@ -180,6 +202,10 @@ pub struct Model {
     pub energy_balance: crate::EnergyBalance,
     /// The model's events, in the order of [`ModelFunctions::event_values`]' outputs.
     pub events: Vec<crate::Event>,
+    /// The frames turned by ZYX Euler angles: where a pitch's cosine vanishes the three angles
+    /// lose a degree of freedom (gimbal lock) and their rates grow without bound; a run stops
+    /// before it (`runtime::system`).
+    pub gimbals: Vec<Gimbal>,
     pub formulations: Vec<Formulation>,
     pub functions: Arc<dyn ModelFunctions>,
 }
