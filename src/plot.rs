@@ -95,21 +95,22 @@ fn log_panel(
         .margin(8)
         .x_label_area_size(30)
         .y_label_area_size(64)
-        .build_cartesian_2d(t0..t1, (lo / 3.0..hi * 3.0).log_scale())
+        // The axis is log10 of the values on a linear scale, labelled with the values: plotters'
+        // own logarithmic axis gave a panel spanning three decades near 1e-16 a single label.
+        .build_cartesian_2d(t0..t1, (lo / 3.0).log10()..(hi * 3.0).log10())
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .x_desc("t [s]")
         .y_desc(y_label)
         .x_label_formatter(&|v| tick(*v))
-        .y_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(10f64.powf(*v)))
         .draw()
         .map_err(|e| e.to_string())?;
     for (k, (_, values)) in magnitudes.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
-        chart
-            .draw_series(LineSeries::new(times.iter().copied().zip(values.iter().copied()).filter(|(_, v)| v.is_finite()), color.stroke_width(1)))
-            .map_err(|e| e.to_string())?;
+        let points = times.iter().copied().zip(values.iter().map(|v| v.log10())).filter(|(_, v)| v.is_finite());
+        chart.draw_series(LineSeries::new(points, color.stroke_width(1))).map_err(|e| e.to_string())?;
     }
     legend_row(&legend, magnitudes.iter().map(|(n, _)| *n))
 }
@@ -334,5 +335,35 @@ mod tests {
     fn ticks_read_as_numbers() {
         let t = super::tick;
         assert_eq!([t(0.6), t(-12.5), t(1e-12), t(3e5), t(0.0), t(2.0)], ["0.6", "-12.5", "1e-12", "3e5", "0", "2"]);
+    }
+
+    /// The y labels of a logarithmic panel of `values`, in drawing order.
+    fn log_labels(values: Vec<f64>) -> Vec<String> {
+        use plotters::prelude::*;
+        let mut svg = String::new();
+        let times: Vec<f64> = (0..values.len()).map(|k| k as f64).collect();
+        {
+            let root = SVGBackend::with_string(&mut svg, (600, 300)).into_drawing_area();
+            super::log_panel(&root, "drift", "|G - G(0)|", &times, &[("x", values)]).unwrap();
+            root.present().unwrap();
+        }
+        svg.split("</text>")
+            .filter_map(|t| t.rsplit('>').next())
+            .map(|t| t.trim().to_string())
+            .filter(|t| t.contains('e') && t.parse::<f64>().is_ok())
+            .collect()
+    }
+
+    /// A panel spanning a few decades near round-off (the reduced method's momentum drift) has
+    /// a label at every decade or closer: plotters' logarithmic axis gave it one.
+    #[test]
+    fn a_log_panel_near_round_off_has_numbers_on_its_axis() {
+        let labels = log_labels((0..50).map(|k| if k % 3 == 0 { 0.0 } else { 1e-16 * (1.0 + (k % 7) as f64 * 4.0) }).collect());
+        assert!(labels.len() >= 4, "{labels:?}");
+        let values: Vec<f64> = labels.iter().map(|l| l.parse().unwrap()).collect();
+        assert!(values.windows(2).all(|w| w[1] / w[0] <= 10.0 + 1e-9 || w[0] / w[1] <= 10.0 + 1e-9), "{labels:?}");
+        // Twelve decades get labels too, and none reads as noise.
+        let labels = log_labels((0..50).map(|k| 10f64.powi(-(k % 13))).collect());
+        assert!(labels.len() >= 5 && labels.iter().all(|l| l.starts_with('1') || l.starts_with('3')), "{labels:?}");
     }
 }
