@@ -1,6 +1,7 @@
-//! The README's commands leave tracked files alone: every output path they name (`-o PATH`,
-//! `--out DIR`) in a shell block is neither a tracked file nor a directory holding tracked
-//! files. (The text names the commands that regenerate `docs/` on purpose, outside the blocks.)
+//! The README's commands leave the checkout as it was (`git status` clean): every output path
+//! they name (`-o PATH`, `--out DIR`, `--animate PAGE`) in a shell block is outside it or
+//! ignored by git, and neither a tracked file nor a directory holding tracked files. (The text
+//! names the commands that regenerate `docs/` on purpose, outside the blocks.)
 
 use std::process::Command;
 
@@ -18,7 +19,7 @@ fn output_paths(readme: &str) -> Vec<String> {
         }
         let words: Vec<&str> = line.split_whitespace().collect();
         for w in words.windows(2) {
-            if w[0] == "-o" || w[0] == "--out" {
+            if w[0] == "-o" || w[0] == "--out" || w[0] == "--animate" {
                 out.push(w[1].to_string());
             }
         }
@@ -41,6 +42,9 @@ fn readme_commands_write_only_untracked_paths() {
         assert!(listed.status.success());
         let tracked = String::from_utf8_lossy(&listed.stdout);
         assert!(tracked.trim().is_empty(), "the README's command writes `{path}`, which holds tracked files:\n{tracked}");
+        // And `git status` does not list it: it is ignored.
+        let ignored = Command::new("git").args(["check-ignore", "-q", "--no-index", "--", &path]).current_dir(root).status().expect("git runs in a checkout");
+        assert!(ignored.success(), "the README's command writes `{path}`, which `git status` would then list: write under `target/` or outside the checkout");
     }
 }
 
@@ -51,4 +55,7 @@ fn a_tracked_target_would_be_found() {
     assert_eq!(paths, ["docs/plots"]);
     let listed = Command::new("git").args(["ls-files", "--", "docs/plots"]).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
     assert!(!String::from_utf8_lossy(&listed.stdout).trim().is_empty());
+    // A new file at the root is not ignored: `git status` would list it.
+    let ignored = Command::new("git").args(["check-ignore", "-q", "--no-index", "--", "cart_pendulum.rs"]).current_dir(env!("CARGO_MANIFEST_DIR")).status().unwrap();
+    assert!(!ignored.success());
 }
