@@ -56,6 +56,7 @@ fn a_tracked_target_would_be_found() {
     let listed = Command::new("git").args(["ls-files", "--", "docs/plots"]).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
     assert!(!String::from_utf8_lossy(&listed.stdout).trim().is_empty());
     // A new file at the root is not ignored: `git status` would list it.
-    let ignored = Command::new("git").args(["check-ignore", "-q", "--no-index", "--", "cart_pendulum.rs"]).current_dir(env!("CARGO_MANIFEST_DIR")).status().unwrap();
+    let ignored =
+        Command::new("git").args(["check-ignore", "-q", "--no-index", "--", "cart_pendulum.rs"]).current_dir(env!("CARGO_MANIFEST_DIR")).status().unwrap();
     assert!(!ignored.success());
 }

@@ -135,7 +135,14 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         let second = std::thread::Builder::new()
             .name("emit".into())
             .stack_size(EMITTER_STACK)
-            .spawn_scoped(scope, move || Context::new().enter(|| analyze_and_emit(inbox, ignorable_back, options)))
+            .spawn_scoped(scope, move || {
+                let part = Context::new().enter(|| analyze_and_emit(inbox, ignorable_back, options));
+                // This thread's spent budget is reported as the derivation's would be.
+                match crate::symbolic::expr::take_spent() {
+                    Some(spent) => Err(model.budget_error(spent)),
+                    None => part,
+                }
+            })
             .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("cannot start the emitting thread: {e}"), String::new()))?;
         // Every formulation derived but the last goes to the second thread.
         let distinct = request.formulations.iter().collect::<std::collections::BTreeSet<_>>().len();

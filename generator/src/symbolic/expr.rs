@@ -22,7 +22,7 @@
 
 use super::number::{Rat, rat_from_i64};
 use rustc_hash::FxHashMap;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering as AtomicOrdering};
 
@@ -45,41 +45,48 @@ pub fn max_nodes() -> usize {
     MAX_NODES.load(AtomicOrdering::Relaxed)
 }
 
-/// What a derivation unwinds with when a context's node budget is spent: the library's entry
-/// points catch it ([`catch_budget`]) and return a located error naming the budget.
+/// A context's node budget, spent: the library's entry points ([`catch_budget`]) return a
+/// located error naming it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NodeBudgetSpent {
     pub limit: usize,
 }
 
-/// Runs `f`; a spent node budget inside it comes back as `Err`, any other panic goes on.
+thread_local! {
+    /// The budget a context on this thread spent, since [`catch_budget`] last looked.
+    static SPENT: Cell<Option<usize>> = const { Cell::new(None) };
+}
+
+/// True (and cleared) when a context on this thread spent its node budget since the last
+/// look: for a thread of a derivation's own, which reports it as its caller's
+/// [`catch_budget`] would.
+pub fn take_spent() -> Option<NodeBudgetSpent> {
+    SPENT.with(|s| s.take()).map(|limit| NodeBudgetSpent { limit })
+}
+
+/// Runs `f`; a node budget spent inside it (on this thread) comes back as `Err`. A spent
+/// budget does not unwind: every new node is one placeholder from then on, so `f` runs to its
+/// end cheaply and its result is dropped. A panic inside `f` after the budget was spent (a
+/// stage that met the placeholder where it expected a number) is reported as the budget too.
 pub fn catch_budget<R>(f: impl FnOnce() -> R) -> Result<R, NodeBudgetSpent> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
-        Ok(r) => Ok(r),
-        Err(payload) => match payload.downcast_ref::<NodeBudgetSpent>() {
-            Some(spent) => Err(*spent),
-            None => std::panic::resume_unwind(payload),
-        },
+    let before = take_spent();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    let spent = take_spent();
+    if let Some(b) = before {
+        SPENT.with(|s| s.set(Some(b.limit)));
+    }
+    match (result, spent) {
+        (_, Some(spent)) => Err(spent),
+        (Ok(r), None) => Ok(r),
+        (Err(payload), None) => std::panic::resume_unwind(payload),
     }
 }
 
-/// A command line's budget: [`quiet_budget_panics`], and `--max-nodes` when given.
+/// A command line's budget: `--max-nodes` when given.
 pub fn budget_for_command_line(max_nodes: Option<u64>) {
-    quiet_budget_panics();
     if let Some(n) = max_nodes {
         set_max_nodes(usize::try_from(n).unwrap_or(usize::MAX));
     }
-}
-
-/// Leaves a spent node budget out of the panic messages (it is reported as an error by
-/// [`catch_budget`]'s caller); every other panic prints as before. For a program's `main`.
-pub fn quiet_budget_panics() {
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        if info.payload().downcast_ref::<NodeBudgetSpent>().is_none() {
-            previous(info);
-        }
-    }));
 }
 
 /// An interned symbol name (coordinate, velocity, parameter, time, ...), meaningful in the
@@ -178,6 +185,8 @@ struct Pool {
     names: Vec<String>,
     name_map: FxHashMap<String, Symbol>,
     diff_memo: FxHashMap<(Expr, Symbol), Expr>,
+    /// The node every request for a new node returns once the budget is spent.
+    spent: Option<u32>,
 }
 
 static NEXT_CONTEXT: AtomicU32 = AtomicU32::new(1);
@@ -195,6 +204,7 @@ impl Pool {
             names: Vec::new(),
             name_map: FxHashMap::default(),
             diff_memo: FxHashMap::default(),
+            spent: None,
         }
     }
 }
@@ -305,8 +315,24 @@ impl Pool {
             return Expr { id, cx: self.id };
         }
         if self.nodes.len() >= max_nodes() {
-            std::panic::panic_any(NodeBudgetSpent { limit: max_nodes() });
+            // Spent: no new node. Every request from now on gets one placeholder symbol, so the
+            // work goes on cheaply to its end, where the caller's [`catch_budget`] reports the
+            // budget (no unwinding: a library under `panic = "abort"` gets the error too).
+            SPENT.with(|s| s.set(Some(max_nodes())));
+            if let Some(id) = self.spent {
+                return Expr { id, cx: self.id };
+            }
+            let placeholder = self.symbol(&format!("{INTERNAL}node budget spent"));
+            let id = self.push(Node::Sym(placeholder));
+            self.spent = Some(id);
+            return Expr { id, cx: self.id };
         }
+        let id = self.push(node);
+        Expr { id, cx: self.id }
+    }
+
+    /// Stores a new node.
+    fn push(&mut self, node: Node) -> u32 {
         let (key, mask, size, depth) = self.summarize(&node);
         let id = self.nodes.len() as u32;
         let rc = Rc::new(node);
@@ -316,7 +342,7 @@ impl Pool {
         self.sizes.push(size);
         self.depths.push(depth);
         self.map.insert(rc, id);
-        Expr { id, cx: self.id }
+        id
     }
 
     /// Structural key (independent of creation order), free-symbol mask, tree size, depth.

@@ -572,7 +572,21 @@ fn run_settings_must_describe_a_run_that_fits_in_memory() {
 fn a_model_too_large_to_derive_ends_with_the_budget_error() {
     use generator::model::examples::n_link_pendulum_on_cart;
     let huge = n_link_pendulum_on_cart(200).build().unwrap();
+    // No unwinding on the way (a library under `panic = "abort"` gets the error too): a hook
+    // counts this thread's panics.
+    let here = std::thread::current().id();
+    let panics = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let counted = panics.clone();
+    let previous = std::sync::Arc::new(std::panic::take_hook());
+    let chained = previous.clone();
+    std::panic::set_hook(Box::new(move |info| {
+        if std::thread::current().id() == here || std::thread::current().name() == Some("emit") {
+            counted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        }
+        chained(info);
+    }));
     let e = generator::emit::generate(&huge, &generator::emit::Options::from_model(&huge)).unwrap_err();
+    assert_eq!(panics.load(std::sync::atomic::Ordering::SeqCst), 0, "the budget unwound");
     assert_eq!(e.kind, ErrorKind::Budget, "{e}");
     let text = e.to_string();
     assert!(text.contains("more than 1000000 expression nodes") && text.contains("--max-nodes"), "{text}");
