@@ -1,6 +1,7 @@
 //! Robots at their real size (the issue "Robots", item 3): each robot of example-robot-data read
-//! from its URDF, derived and made ready to evaluate in-process (the JIT), as `multibody compare
-//! robot.urdf` does; and its emitted module built by rustc. Each robot runs in a child process
+//! from its URDF, derived and made ready to evaluate in-process (the JIT), in all four
+//! formulations as `multibody compare robot.urdf` does, and in the one `multibody simulate
+//! robot.urdf` runs (the reduced method, derived alone); and its emitted module built by rustc. Each robot runs in a child process
 //! of its own (this program, re-invoked), so its CPU time and peak memory are its own. Writes
 //! `docs/robots/derive.json`; `docs/robots.md` quotes it.
 //!
@@ -35,6 +36,11 @@ struct Record {
     /// The emitted module's build by rustc (a library, as `--compiled` builds it).
     rustc_s: Option<f64>,
     code_bytes: usize,
+    /// The same for the one formulation `simulate` derives (the default one).
+    #[serde(default)]
+    simulate_cpu_s: f64,
+    #[serde(default)]
+    simulate_peak_mb: f64,
 }
 
 /// example-robot-data's robots folder: `--robots-dir`, else found in a Python environment.
@@ -61,11 +67,12 @@ fn usage() -> (f64, f64) {
 }
 
 /// The child: one robot, ready to evaluate, its figures as JSON on stdout.
-fn child(path: &Path, base: &str, rustc: bool) {
+fn child(path: &Path, base: &str, rustc: bool, one: bool) {
     use generator::model::urdf::{Base, UrdfOptions};
     let options = UrdfOptions { base: if base == "floating" { Base::Floating } else { Base::Fixed }, ..UrdfOptions::default() };
     let model = load::model_with(path, &options).unwrap();
-    let loaded = load::evaluate(&model, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap();
+    let only = one.then(|| load::default_formulation(&model));
+    let loaded = load::evaluate_only(&model, only, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap();
     // Ready: one right-hand side evaluated.
     let m = &loaded.model;
     let (q, qd) = m.initial.clone().unwrap();
@@ -73,8 +80,11 @@ fn child(path: &Path, base: &str, rustc: bool) {
     let mut dy = vec![0.0; y.len()];
     sys.rhs(0.0, &y, &mut dy).unwrap();
     let (cpu, peak) = usage();
-    let mut record =
-        Record { robot: String::new(), base: base.into(), coordinates: m.coordinates.len(), cpu_s: cpu, peak_mb: peak, rustc_s: None, code_bytes: 0 };
+    let mut record = Record { robot: String::new(), base: base.into(), coordinates: m.coordinates.len(), cpu_s: cpu, peak_mb: peak, ..Record::default() };
+    if one {
+        println!("{}", serde_json::to_string(&record).unwrap());
+        return;
+    }
     let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     record.code_bytes = generated.code.len();
     if rustc {
@@ -90,7 +100,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let value = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
     if let Some(path) = value("--child") {
-        child(Path::new(&path), &value("--base").unwrap(), !args.iter().any(|a| a == "--no-rustc"));
+        child(Path::new(&path), &value("--base").unwrap(), !args.iter().any(|a| a == "--no-rustc"), args.iter().any(|a| a == "--one"));
         return;
     }
     let folder = robots_folder(value("--robots-dir").map(PathBuf::from));
@@ -102,13 +112,17 @@ fn main() {
         if only.as_ref().is_some_and(|o| !o.iter().any(|n| n == name)) {
             continue;
         }
-        let mut runs: Vec<Record> = (0..RUNS)
+        // All four formulations, then (`--one`) the one `simulate` derives.
+        let mut runs: Vec<Record> = (0..2 * RUNS)
             .map(|k| {
                 let mut cmd = Command::new(std::env::current_exe().unwrap());
                 cmd.args(["--child", folder.join(file).to_str().unwrap(), "--base", base]);
                 // rustc once per robot: its time does not depend on the run.
                 if no_rustc || k > 0 {
                     cmd.arg("--no-rustc");
+                }
+                if k >= RUNS {
+                    cmd.arg("--one");
                 }
                 let o = cmd.output().unwrap();
                 assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
@@ -124,16 +138,20 @@ fn main() {
                 r
             })
             .collect();
+        let mut one = runs.split_off(RUNS);
         runs.sort_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
+        one.sort_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
         let mut record = runs[RUNS / 2].clone();
         record.peak_mb = runs.iter().map(|r| r.peak_mb).fold(0.0, f64::max);
         record.rustc_s = runs.iter().find_map(|r| r.rustc_s);
+        record.simulate_cpu_s = one[RUNS / 2].cpu_s;
+        record.simulate_peak_mb = one.iter().map(|r| r.peak_mb).fold(0.0, f64::max);
         records.push(record);
     }
     let json = serde_json::json!({
         "command": "cargo bench --bench robots",
         "cores": std::thread::available_parallelism().map_or(1, |n| n.get()),
-        "about": "each robot of example-robot-data from its URDF, loaded, derived and ready to evaluate in-process (JIT): CPU time (median of 3 fresh processes) and peak memory (the largest); the emitted module's build by rustc",
+        "about": "each robot of example-robot-data from its URDF, loaded, derived and ready to evaluate in-process (JIT): CPU time (median of 3 fresh processes) and peak memory (the largest), in all four formulations (cpu_s, peak_mb) and in the one simulate derives (simulate_cpu_s, simulate_peak_mb); the emitted module's build by rustc",
         "records": records,
     });
     std::fs::create_dir_all(out.parent().unwrap()).unwrap();

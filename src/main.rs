@@ -147,10 +147,11 @@ pub fn evaluated(
     more: &args::Names,
     exact: load::Jacobians,
     route: load::Route,
+    only: &dyn Fn(&generator::model::Model) -> Option<seam::FormulationKind>,
 ) -> Result<(seam::Model, generator::model::Model), CliError> {
     let model = load::model_with(argument, &values.robot.options())?.with_parameters(&values.param)?;
     args::check_names(&model, values, more)?;
-    let loaded = load::evaluate(&model, exact, route, &mut |path| {
+    let loaded = load::evaluate_only(&model, only(&model), exact, route, &mut |path| {
         eprintln!("compiling the model with rustc into {} (once per model and version)...", files::printable_path(path));
     })?;
     for line in &loaded.warnings {

@@ -60,8 +60,15 @@ fn series_controller(model: &seam::Model, given: &[(String, PathBuf)]) -> Result
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
+    // One formulation runs: only it is derived, emitted and compiled (where the model emits it;
+    // one it leaves out is refused below, naming those it has).
+    let asked = args.formulation.map(|f| f.0);
+    let only = |m: &generator::model::Model| match asked {
+        None => Some(load::default_formulation(m)),
+        Some(kind) => generator::emit::Options::from_model(m).formulations.iter().any(|f| f.kind() == kind).then_some(kind),
+    };
     let (model, source) =
-        crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
+        crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), load::Route::of(args.run.values.compiled), &only)?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => model.default_kind(),

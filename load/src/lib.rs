@@ -71,7 +71,42 @@ pub struct Loaded {
 /// assert_eq!(loaded.model.coordinates, ["theta1", "theta2", "x"]);
 /// ```
 pub fn evaluate(model: &generator::model::Model, exact: Jacobians, route: Route, on_compile: &mut dyn FnMut(&Path)) -> Result<Loaded, LoadError> {
-    let plain = generator::emit::Options::from_model(model);
+    evaluate_only(model, None, exact, route, on_compile)
+}
+
+/// The formulation a run of `model` uses when none is named: the paper's reduced method where
+/// the model emits it, else Kane's, else its first (as `seam::Model::default_kind` says of an
+/// evaluated model).
+///
+/// ```
+/// let model = load::model("cart_pendulum").unwrap();
+/// assert_eq!(load::default_formulation(&model), seam::FormulationKind::ReducedVolterra);
+/// ```
+pub fn default_formulation(model: &generator::model::Model) -> seam::FormulationKind {
+    let kinds: Vec<seam::FormulationKind> = generator::emit::Options::from_model(model).formulations.iter().map(|f| f.kind()).collect();
+    [seam::FormulationKind::ReducedVolterra, seam::FormulationKind::Kane].into_iter().find(|k| kinds.contains(k)).unwrap_or(kinds[0])
+}
+
+/// [`evaluate`], deriving only the formulation `only` where given: a run of one formulation
+/// (`simulate`) derives, emits and compiles a quarter of the work or less (the mechanics, which
+/// every formulation shares, are derived once either way).
+///
+/// ```
+/// let model = load::model("three_body").unwrap();
+/// let one = load::evaluate_only(&model, Some(seam::FormulationKind::Kane), load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap();
+/// assert_eq!(one.model.kinds(), [seam::FormulationKind::Kane]);
+/// ```
+pub fn evaluate_only(
+    model: &generator::model::Model,
+    only: Option<seam::FormulationKind>,
+    exact: Jacobians,
+    route: Route,
+    on_compile: &mut dyn FnMut(&Path),
+) -> Result<Loaded, LoadError> {
+    let mut plain = generator::emit::Options::from_model(model);
+    if let Some(kind) = only {
+        plain.formulations = vec![generator::emit::Formulation::of(kind)];
+    }
     let mut options = plain.clone();
     if let Jacobians::Exact { only, by_parameters } = exact {
         options.jacobian = true;
