@@ -20,6 +20,10 @@ self-contained HTML page that plays the motion in 3-D.
 from __future__ import annotations
 
 import functools
+import html as _html
+import os as _os
+import stat as _stat
+import tempfile as _tempfile
 import warnings as _warnings
 from collections.abc import Mapping
 from typing import NamedTuple, Optional
@@ -31,6 +35,7 @@ from ._multibody import METHODS, InternalError, ModelError, SimulationError, bui
 
 __all__ = [
     "Model",
+    "Animation",
     "ModelError",
     "SimulationError",
     "InternalError",
@@ -180,6 +185,21 @@ class Model:
     def __repr__(self):
         return repr(self._native)
 
+    def _repr_html_(self) -> str:
+        """A notebook's summary of the model: a table of its coordinates (ignorable ones
+        marked), parameters and formulations (its equations are ``_repr_latex_``)."""
+        e = _html.escape
+        ignorable = set(self.ignorable)
+        rows = [
+            ("model", e(self.name)),
+            ("file", e(self.file)),
+            ("coordinates", ", ".join(f"<b>{e(c)}</b> (ignorable)" if c in ignorable else e(c) for c in self.coordinates)),
+            ("parameters", ", ".join(f"{e(k)} = {v:g}" for k, v in self.params.items())),
+            ("formulations", ", ".join(e(f) for f in self.formulations)),
+        ]
+        body = "".join(f"<tr><th style='text-align:left'>{k}</th><td style='text-align:left'>{v}</td></tr>" for k, v in rows)
+        return f"<table>{body}</table>"
+
     def __reduce__(self):
         # As its text: a worker derives it once per process (`_restore` keeps it).
         return (_restore, (self._native.file, self._native.text))
@@ -238,12 +258,19 @@ class Model:
         atomically; the model file itself or any ``.ron`` file is refused unless ``force``."""
         self._native.generate_rust(path, force)
 
-    def animate(self, result, path) -> None:
+    def animate(self, result, path=None) -> Optional["Animation"]:
         """Writes a self-contained HTML page (no network needed to view it) that plays
         ``result``, what ``simulate`` returned (a DataFrame or a ``Trajectory``), in 3-D: each
         body as its equivalent inertia box, each frame as its axes, with a time slider,
         play/pause and the time shown. ``#t=1.5`` after the page's address opens it paused at
-        t = 1.5."""
+        t = 1.5. Without ``path``, returns the page as an :class:`Animation`, which a notebook
+        shows inline."""
+        if path is None:
+            with _tempfile.TemporaryDirectory() as folder:
+                page = _os.path.join(folder, f"{self.name}.html")
+                self.animate(result, page)
+                with open(page, encoding="utf-8") as f:
+                    return Animation(f.read())
         attrs = getattr(result, "attrs", None)
         meta = attrs if attrs is not None and "params" in attrs else vars(result)
         if meta.get("model") not in (None, self.name):
@@ -254,6 +281,44 @@ class Model:
         times = np.ascontiguousarray(np.asarray(result["t"], dtype=float))
         q = np.ascontiguousarray(np.column_stack([np.asarray(result[c], dtype=float) for c in self.coordinates]))
         self._native.animate(str(path), times, q, meta.get("formulation", ""), meta.get("params"))
+
+
+class Animation:
+    """An animation page (``Model.animate`` without a path): a notebook shows it inline, in an
+    isolated frame; ``save`` writes it.
+
+    >>> import multibody
+    >>> m = multibody.load("cart_pendulum")
+    >>> page = m.animate(m.simulate(t_end=0.2))
+    >>> page._repr_html_().startswith("<iframe")
+    True
+    """
+
+    def __init__(self, html: str):
+        self.html = html
+
+    def _repr_html_(self) -> str:
+        # The page's own scripts run in the frame, apart from the notebook's.
+        return f'<iframe srcdoc="{_html.escape(self.html, quote=True)}" style="width: 100%; height: 540px; border: 0" sandbox="allow-scripts"></iframe>'
+
+    def save(self, path) -> None:
+        """Writes the page to ``path`` atomically (through a temporary file beside it), replacing
+        a regular file there and refusing anything else (a directory, a link, a device)."""
+        if _os.path.lexists(path) and not _stat.S_ISREG(_os.lstat(path).st_mode):
+            raise FileExistsError(f"{path} exists and is not a regular file: give another name for the page")
+        folder = _os.path.dirname(_os.path.abspath(path))
+        fd, temporary = _tempfile.mkstemp(dir=folder, prefix=".animation-", suffix=".html")
+        try:
+            with _os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(self.html)
+            _os.replace(temporary, path)
+        except BaseException:
+            if _os.path.exists(temporary):
+                _os.unlink(temporary)
+            raise
+
+    def __repr__(self):
+        return f"<multibody.Animation: {len(self.html)} characters of HTML>"
 
 
 # Characters with a meaning in LaTeX's text mode, written as themselves.

@@ -100,3 +100,40 @@ def test_the_page_refuses_a_trajectory_of_another_model(tmp_path):
     other = multibody.load("three_body").simulate("kane", t_end=0.2, dt_out=0.1, frame=False)
     with pytest.raises(ValueError, match="the run is of model `three_body`, not of `cart_pendulum`"):
         m.animate(other, tmp_path / "x.html")
+
+
+def test_a_notebook_shows_the_animation_and_the_model(tmp_path):
+    """Without a path `animate` returns the page, which a notebook shows in a frame of its own
+    (the page's text escaped into `srcdoc`); `save` writes it and refuses what is not a file;
+    the model shows a summary table."""
+    import html
+
+    m = multibody.load("three_body")
+    run = m.simulate(t_end=0.5)
+    page = m.animate(run)
+    frame = page._repr_html_()
+    assert frame.startswith('<iframe srcdoc="') and frame.endswith("</iframe>")
+    inner = frame[len('<iframe srcdoc="') : frame.index('" style=')]
+    assert '"' not in inner and "<" not in inner, "the page is escaped into the attribute"
+    assert html.unescape(inner) == page.html
+    # The same page as one written to a file.
+    m.animate(run, tmp_path / "written.html")
+    assert (tmp_path / "written.html").read_text(encoding="utf-8") == page.html
+    page.save(tmp_path / "saved.html")
+    assert (tmp_path / "saved.html").read_text(encoding="utf-8") == page.html
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(FileExistsError):
+        page.save(tmp_path / "folder")
+    (tmp_path / "link").symlink_to(tmp_path / "saved.html")
+    with pytest.raises(FileExistsError):
+        page.save(tmp_path / "link")
+    assert (tmp_path / "saved.html").read_text(encoding="utf-8") == page.html
+    # The model's table: every coordinate, the ignorable ones marked, the formulations.
+    table = m._repr_html_()
+    assert table.startswith("<table>")
+    cells = dict(re.findall(r"<tr><th[^>]*>([^<]*)</th><td[^>]*>(.*?)</td></tr>", table))
+    expected = [f"<b>{c}</b> (ignorable)" if c in m.ignorable else c for c in m.coordinates]
+    assert cells["coordinates"].split(", ") == expected, cells["coordinates"]
+    assert m.ignorable, "scene 2 has ignorable coordinates to mark"
+    assert cells["formulations"].split(", ") == list(m.formulations)
+    assert cells["model"] == "three_body"
