@@ -9,6 +9,7 @@
 //! cargo bench -p generator --bench scaling                      # default sizes
 //! cargo bench -p generator --bench scaling -- --sympy           # SymPy's KanesMethod beside it
 //! cargo bench -p generator --bench scaling -- --pendulum 5,10,20,50 --floating 2,4,8,20 --planar 5,20 --compile-up-to 20 --out /tmp/x
+//! cargo bench -p generator --bench scaling -- --at-scale        # pendulum n = 100, 200, planar n = 50: docs/scaling/at_scale.json
 //! ```
 //!
 //! Each size runs in a child process (this program, re-invoked), so peak memory is its own and
@@ -176,6 +177,53 @@ fn simplifier_cell((work, over, reached): (u64, usize, bool)) -> String {
     format!("{:.2}, {over}{}", work as f64 / 1e6, if reached { " (work limit reached)" } else { "" })
 }
 
+/// The issue "Robots"' goals for chains at robot scale: `(model, n, fresh runs, CPU s, MB)`.
+const AT_SCALE: [(&str, usize, usize, f64, f64); 3] = [("pendulum", 100, 3, 10.0, 1000.0), ("pendulum", 200, 1, 60.0, 4000.0), ("planar", 50, 3, 3.0, f64::INFINITY)];
+
+/// `--at-scale`: each model of [`AT_SCALE`] generated (derive and emit, the default settings)
+/// in fresh processes, its CPU (both threads) and peak memory, or the error that stopped it;
+/// the median CPU, the spread of the runs (largest over smallest) and the largest peak, against
+/// the goals. Writes `path` (`docs/robots.md` quotes it).
+fn at_scale(path: &Path) {
+    let exe = std::env::current_exe().expect("this program's path");
+    let mut rows = Vec::new();
+    for (kind, n, runs, goal_cpu, goal_mb) in AT_SCALE {
+        let mut done: Vec<serde_json::Value> = (0..runs)
+            .map(|k| {
+                eprintln!("at scale: {kind} n = {n}, run {} of {runs} ...", k + 1);
+                let child = Command::new(&exe).args(["--at-scale-one", kind, &n.to_string()]).output().expect("the child runs");
+                assert!(child.status.success(), "{kind} n = {n}: {}", String::from_utf8_lossy(&child.stderr));
+                let r: serde_json::Value = serde_json::from_slice(&child.stdout).expect("the child's record");
+                eprintln!("at scale: {kind} n = {n}: {r}");
+                r
+            })
+            .collect();
+        let cpu = |r: &serde_json::Value| r["cpu_s"].as_f64().unwrap_or(f64::NAN);
+        done.sort_by(|a, b| cpu(a).total_cmp(&cpu(b)));
+        let median = cpu(&done[done.len() / 2]);
+        let peak = done.iter().map(|r| r["peak_mb"].as_f64().unwrap_or(f64::NAN)).fold(0.0, f64::max);
+        rows.push(serde_json::json!({
+            "model": kind,
+            "n": n,
+            "runs": done.len(),
+            "cpu_s": median,
+            "spread": cpu(&done[done.len() - 1]) / cpu(&done[0]),
+            "peak_mb": peak,
+            "error": done.iter().find_map(|r| r["error"].as_str().map(str::to_string)),
+            "goal_cpu_s": goal_cpu,
+            "goal_mb": if goal_mb.is_finite() { serde_json::json!(goal_mb) } else { serde_json::Value::Null },
+        }));
+    }
+    let json = serde_json::json!({
+        "command": "cargo bench -p generator --bench scaling -- --at-scale",
+        "about": "chains at robot scale (the issue Robots, item 3): derive and emit all four formulations with the default settings, in fresh processes; the median CPU (both threads), the spread of the runs (largest over smallest CPU) and the largest peak memory, or the error that stopped the generation",
+        "cores": std::thread::available_parallelism().map_or(1, |n| n.get()),
+        "records": rows,
+    });
+    std::fs::write(path, serde_json::to_string_pretty(&json).expect("plain data") + "\n").expect("the file is written");
+    eprintln!("wrote {}", path.display());
+}
+
 /// The models the benchmark scales, by their key.
 const KINDS: [&str; 3] = ["pendulum", "floating", "planar"];
 
@@ -308,6 +356,19 @@ fn main() {
     if args.first().map(String::as_str) == Some("--point") {
         // `--point KIND N`: as `--scene NAME point`, on a scaled model.
         println!("{}", model_point(&scaled_model(&args[1], args[2].parse().expect("--point KIND N"))));
+        return;
+    }
+    if args.first().map(String::as_str) == Some("--at-scale-one") {
+        let (kind, n) = (&args[1], args[2].parse().expect("--at-scale-one KIND N"));
+        let model = scaled_model(kind, n);
+        let out = generate(&model, &Options::from_model(&model));
+        let (cpu_s, peak_mb) = (cpu_seconds(), peak_mb());
+        let error = out.err().map(|e| e.to_string().lines().next().unwrap_or_default().to_string());
+        println!("{}", serde_json::json!({ "cpu_s": cpu_s, "peak_mb": peak_mb, "error": error }));
+        return;
+    }
+    if args.first().map(String::as_str) == Some("--at-scale") {
+        at_scale(&PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/scaling/at_scale.json")));
         return;
     }
     if args.first().map(String::as_str) == Some("--one") {

@@ -525,6 +525,33 @@ fn the_robot_figures_are_the_files() {
     verdict(f(&talos["simulate_peak_mb"]), 500.0, "MB");
     verdict(f(&talos["rustc_s"]), 30.0, "s of rustc");
 
+    // Chains at robot scale: the scaling benchmark's `--at-scale`.
+    let chains = json("docs/scaling/at_scale.json");
+    let rows = chains["records"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let mb = |v: &serde_json::Value| v.as_f64().map_or("-".to_string(), |x| format!("< {x:.0}"));
+            vec![
+                s(&r["model"]),
+                r["n"].to_string(),
+                r["runs"].to_string(),
+                format!("{:.1}", f(&r["cpu_s"])),
+                format!("{:.2}", f(&r["spread"])),
+                format!("{:.0}", f(&r["peak_mb"])),
+                format!("< {:.0}, {}", f(&r["goal_cpu_s"]), mb(&r["goal_mb"])),
+                r["error"].as_str().map_or("generated".to_string(), |e| e.replace('|', "/")),
+            ]
+        })
+        .collect();
+    quoted(&table(&["chain", "n", "fresh runs", "CPU s (median)", "spread", "peak MB", "goal (s, MB)", "outcome"], rows), "chains at scale");
+    for r in chains["records"].as_array().unwrap() {
+        let met = r["error"].is_null() && f(&r["cpu_s"]) < f(&r["goal_cpu_s"]) && r["goal_mb"].as_f64().is_none_or(|g| f(&r["peak_mb"]) < g);
+        let v = format!("{} n = {}: {}", s(&r["model"]), r["n"], if met { "met" } else { "missed" });
+        assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
+    }
+
     let calls = json("docs/robots/per_call.json");
     let rows: Vec<Vec<String>> = calls["rows"]
         .as_array()
