@@ -178,7 +178,8 @@ fn simplifier_cell((work, over, reached): (u64, usize, bool)) -> String {
 }
 
 /// The issue "Robots"' goals for chains at robot scale: `(model, n, fresh runs, CPU s, MB)`.
-const AT_SCALE: [(&str, usize, usize, f64, f64); 3] = [("pendulum", 100, 3, 10.0, 1000.0), ("pendulum", 200, 1, 60.0, 4000.0), ("planar", 50, 3, 3.0, f64::INFINITY)];
+const AT_SCALE: [(&str, usize, usize, f64, f64); 3] =
+    [("pendulum", 100, 3, 10.0, 1000.0), ("pendulum", 200, 1, 60.0, 4000.0), ("planar", 50, 3, 3.0, f64::INFINITY)];
 
 /// `--at-scale`: each model of [`AT_SCALE`] generated (derive and emit, the default settings)
 /// in fresh processes, its CPU (both threads) and peak memory, or the error that stopped it;

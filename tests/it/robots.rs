@@ -326,3 +326,53 @@ fn the_space_manipulator_keeps_its_momentum_under_control() {
         }
     }
 }
+
+/// A star: a hub with three branches of two tilted joints each, every body moved by at most a
+/// third of the rates. Derived for Kane's and the reduced forms alone, its mechanics keep `M`
+/// and `N` as built (`mechanics::derive_for`): the right-hand sides are the same as with every
+/// formulation derived (and `M`, `N` simplified), at random states, to round-off.
+#[test]
+fn a_short_branched_tree_derived_for_kane_alone_runs_the_same() {
+    let mut xml = String::from(
+        r#"<robot name="star"><link name="hub"><inertial><mass value="5"/><inertia ixx="0.3" iyy="0.4" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>"#,
+    );
+    for k in 0..3 {
+        let turn = 2.0 * std::f64::consts::PI * k as f64 / 3.0;
+        xml += &format!(
+            r#"<link name="a{k}"><inertial><origin xyz="0.1 0 0"/><mass value="1.{k}"/><inertia ixx="0.01" iyy="0.02" izz="0.025" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
+               <link name="b{k}"><inertial><origin xyz="0.08 0.01 0"/><mass value="0.{k}7"/><inertia ixx="0.004" iyy="0.006" izz="0.007" ixy="0" ixz="0.0005" iyz="0"/></inertial></link>
+               <joint name="hip{k}" type="revolute"><parent link="hub"/><child link="a{k}"/><origin xyz="0.2 0 0" rpy="0 0.{k} {turn}"/><axis xyz="0 0.6 0.8"/></joint>
+               <joint name="knee{k}" type="continuous"><parent link="a{k}"/><child link="b{k}"/><origin xyz="0.2 0 0"/><axis xyz="0 1 0"/></joint>"#
+        );
+    }
+    xml += "</robot>";
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("star.urdf");
+    std::fs::write(&path, &xml).unwrap();
+    let model = generator::model::source_with(&path, &UrdfOptions::default()).unwrap().model().unwrap();
+    assert_eq!(model.m(), 6);
+    // The path is taken: `M` as built is not the simplified one.
+    let (built, settled) = (generator::formulation::mechanics::derive_for(&model, false), generator::formulation::mechanics::derive(&model));
+    let size = |m: &generator::symbolic::Matrix| (0..6).flat_map(|i| (0..6).map(move |j| (i, j))).map(|(i, j)| m.get(i, j).tree_size() as u64).sum::<u64>();
+    assert_ne!(size(&built.mass), size(&settled.mass), "M kept as built on the star");
+    let all = load::evaluate(&model, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap().model;
+    let mut rng = generator::symbolic::zero::SplitMix(7);
+    for kind in [FormulationKind::Kane, FormulationKind::ReducedVolterra] {
+        let alone = load::evaluate_only(&model, Some(kind), load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap().model;
+        assert_eq!(alone.kinds(), [kind]);
+        for _ in 0..5 {
+            let q: Vec<f64> = (0..6).map(|_| rng.uniform(-1.5, 1.5)).collect();
+            let qd: Vec<f64> = (0..6).map(|_| rng.uniform(-2.0, 2.0)).collect();
+            let (a, ya) = System::start(&all, kind, all.default_params.clone(), &q, &qd).unwrap();
+            let (b, yb) = System::start(&alone, kind, alone.default_params.clone(), &q, &qd).unwrap();
+            assert_eq!(ya.len(), yb.len());
+            let (mut da, mut db) = (vec![0.0; ya.len()], vec![0.0; yb.len()]);
+            a.rhs(0.0, &ya, &mut da).unwrap();
+            b.rhs(0.0, &yb, &mut db).unwrap();
+            let scale = da.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+            for (x, y) in da.iter().zip(&db) {
+                assert!((x - y).abs() < 1e-12 * scale, "{kind}: {x} against {y}");
+            }
+        }
+    }
+}

@@ -351,6 +351,13 @@ fn drift_chain(model: &Model) -> TimeChain {
 
 /// Derives the shared mechanics of a model.
 pub fn derive(model: &Model) -> Mechanics {
+    derive_for(model, true)
+}
+
+/// [`derive`], for formulations of which `classical` says whether Lagrange's or Maggi's form
+/// is among them (they solve with `M` and `N` themselves; Kane's and the reduced forms on a
+/// tree take their rates from the recursions).
+pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
     let tidy = Tidy::new(derivation_limits(model.m()));
     let chain = model.position_chain();
     let drift = drift_chain(model);
@@ -364,6 +371,9 @@ pub fn derive(model: &Model) -> Mechanics {
     let mut inertial_terms: Vec<Vec<Expr>> = vec![Vec::new(); m];
     let mut t0_terms = Vec::new();
     let mut kinetic_terms = Vec::new();
+    // The most rates moving one body: a chain's last link is moved by all of them, a robot's
+    // hand by its own branch's joints and the base's.
+    let mut deepest = 0;
     for body in &model.bodies {
         let frame = &model.frames[body.frame];
         // The centre of mass's velocity in the body's components and in the world's.
@@ -399,6 +409,7 @@ pub fn derive(model: &Model) -> Mechanics {
         };
         let col = |mat: &Matrix, j: usize| [mat.get(0, j), mat.get(1, j), mat.get(2, j)];
         let moving: Vec<usize> = (0..m).filter(|&j| (0..3).any(|k| !bm.get(k, j).is_zero() || !dm.get(k, j).is_zero())).collect();
+        deepest = deepest.max(moving.len());
         let i_d: Vec<Option<[Expr; 3]>> = (0..m).map(|j| body.inertia.as_ref().map(|inertia| mat_vec(inertia, &col(&dm, j)))).collect();
         for (x, &i) in moving.iter().enumerate() {
             let (bi, di) = (col(&bm, i), col(&dm, i));
@@ -426,15 +437,25 @@ pub fn derive(model: &Model) -> Mechanics {
         }
         bodies.push(BodyVelocity { v, in_body, omega, b: bm, c, d: dm, e, accel, alpha, v_both: (v_body, v_world) });
     }
+    // Where neither Lagrange's nor Maggi's form is derived, on a tree of short branches (a
+    // humanoid: no body moved by more than half the rates), the entries of `M` and `N` are left
+    // as built: simplifying them took two thirds of the humanoid's mechanics stage and 40 % of
+    // its memory when only the reduced form was asked for, and changed its operations by about
+    // 1 %. Lagrange's and Maggi's forms, which solve with them, took longer with them as built
+    // (the humanoid's formulations after the mechanics: 4.4 s against 0.7 s); so did a
+    // chain, where each entry sums products of the angles of every link beyond both joints
+    // (the 20-link floating chain: 13 times as long).
+    let as_built = !classical && 2 * deepest <= m;
+    let settle = |e: Expr| if as_built { e } else { tidy.of(e) };
     let mut mass = Matrix::zeros(m, m);
     for i in 0..m {
         for j in i..m {
-            let s = tidy.of(Expr::sum(std::mem::take(&mut mass_terms[i * m + j])));
+            let s = settle(Expr::sum(std::mem::take(&mut mass_terms[i * m + j])));
             mass.set(i, j, s);
             mass.set(j, i, s);
         }
     }
-    let n: Vec<Expr> = n_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect();
+    let n: Vec<Expr> = n_terms.into_iter().map(|t| settle(Expr::sum(t))).collect();
     let inertial_built: Vec<Expr> = inertial_terms.into_iter().map(Expr::sum).collect();
     let t0 = tidy.of(Expr::sum(t0_terms));
     // Expanded, T is the larger form on long chains (`n^3 / 6` terms on the n-link pendulum):

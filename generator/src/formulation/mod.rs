@@ -190,7 +190,8 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     let mut clock = Instant::now();
     // Time in the formulations' own work, summed over the places it runs.
     let mut formulations = Duration::ZERO;
-    let mech = mechanics::derive(model);
+    let classical = request.formulations.iter().any(|f| matches!(f, FormulationDef::Lagrange | FormulationDef::Maggi));
+    let mech = mechanics::derive_for(model, classical);
     every_coordinate_has_inertia(model, &mech)?;
     times.push(("mechanics", clock.elapsed()));
     // Time in the stages' hands (where they hand the results to another thread, packing them,
