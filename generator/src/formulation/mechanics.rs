@@ -440,8 +440,8 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
     // Where neither Lagrange's nor Maggi's form is derived, on a tree of short branches (a
     // humanoid: no body moved by more than half the rates), the entries of `M` and `N` are left
     // as built: simplifying them took two thirds of the humanoid's mechanics stage and 40 % of
-    // its memory when only the reduced form was asked for, and changed its operations by about
-    // 1 %. Lagrange's and Maggi's forms, which solve with them, took longer with them as built
+    // its memory when only the reduced form was asked for, and changed its operations by under
+    // 2 %. Lagrange's and Maggi's forms, which solve with them, took longer with them as built
     // (the humanoid's formulations after the mechanics: 4.4 s against 0.7 s); so did a
     // chain, where each entry sums products of the angles of every link beyond both joints
     // (the 20-link floating chain: 13 times as long).
