@@ -360,7 +360,11 @@ fn replace(shown: &Path, target: &Path, bytes: &[u8], keep: Option<std::fs::Perm
         _ => PathBuf::from("."),
     };
     let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let prefix: String = format!(".{name}.").chars().filter(|c| !c.is_control()).take(64).collect();
+    // `.NAME.PID.`: a writer killed before its rename (kill -9) leaves its temporary file, which
+    // the next write of the same output removes once no process has that id.
+    let stem: String = format!(".{name}.").chars().filter(|c| !c.is_control()).take(56).collect();
+    remove_stale_temporaries(&dir, &stem);
+    let prefix = format!("{stem}{}.", std::process::id());
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".tmp");
     // The result keeps the target's permissions; a new file gets what `File::create` gives
@@ -375,6 +379,37 @@ fn replace(shown: &Path, target: &Path, bytes: &[u8], keep: Option<std::fs::Perm
     tmp.write_all(bytes).and_then(|()| tmp.as_file().sync_all()).map_err(io(shown, "write"))?;
     tmp.persist(target).map_err(|e| FileError::Io { path: shown.to_path_buf(), action: "replace", source: e.error })?;
     Ok(Written::Replaced)
+}
+
+/// Removes the temporary files `STEM PID . RANDOM .tmp` in `dir` that writers killed before
+/// their rename left: regular files owned by this user whose process is gone. (Linux: a
+/// process is known by `/proc/PID`; elsewhere nothing is removed.)
+fn remove_stale_temporaries(dir: &Path, stem: &str) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        let me = own_uid();
+        for entry in entries.flatten() {
+            let file = entry.file_name();
+            let Some(rest) = file.to_str().and_then(|f| f.strip_prefix(stem)).and_then(|r| r.strip_suffix(".tmp")) else { continue };
+            let Some(pid) = rest.split_once('.').and_then(|(pid, _)| pid.parse::<u32>().ok()) else { continue };
+            let gone = !Path::new(&format!("/proc/{pid}")).exists();
+            let ours = std::fs::symlink_metadata(entry.path()).is_ok_and(|m| m.file_type().is_file() && Some(m.uid()) == me);
+            if gone && ours {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (dir, stem);
+}
+
+/// This process's user id, from `/proc/self` (the owner of a process's own entry).
+#[cfg(target_os = "linux")]
+fn own_uid() -> Option<u32> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata("/proc/self").ok().map(|m| m.uid())
 }
 
 /// The mode `File::create` asks for; the kernel applies the umask when the file is created.
@@ -428,6 +463,29 @@ mod tests {
         assert!(blocked.join("inner").is_dir());
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
         assert!(leftovers(dir.path()).is_empty(), "{:?}", leftovers(dir.path()));
+    }
+
+    /// A writer killed between its temporary file and the rename (kill -9) left `.NAME.PID.*.tmp`
+    /// behind: the next write of NAME removes it once that process is gone, and leaves a live
+    /// writer's, another output's and a file not of this pattern alone.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_killed_writer_s_temporary_file_is_removed_by_the_next_write() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.csv");
+        // A process id no process has: above the kernel's largest (`pid_max` is at most 2^22).
+        let dead = 4_194_305u32;
+        let stale = dir.path().join(format!(".run.csv.{dead}.a1b2c3.tmp"));
+        let live = dir.path().join(format!(".run.csv.{}.d4e5f6.tmp", std::process::id()));
+        let other = dir.path().join(format!(".plot.svg.{dead}.a1b2c3.tmp"));
+        let unrelated = dir.path().join(".run.csv.notapid.tmp");
+        for f in [&stale, &live, &other, &unrelated] {
+            std::fs::write(f, b"partial").unwrap();
+        }
+        write_atomic(&path, b"rows").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "rows");
+        assert!(!stale.exists(), "the dead writer's temporary file is gone");
+        assert!(live.exists() && other.exists() && unrelated.exists(), "{:?}", leftovers(dir.path()));
     }
 
     #[cfg(unix)]
