@@ -84,7 +84,7 @@ pub fn evaluate(model: &generator::model::Model, exact: Jacobians, route: Route,
 /// ```
 pub fn default_formulation(model: &generator::model::Model) -> seam::FormulationKind {
     let kinds: Vec<seam::FormulationKind> = generator::emit::Options::from_model(model).formulations.iter().map(|f| f.kind()).collect();
-    [seam::FormulationKind::ReducedVolterra, seam::FormulationKind::Kane].into_iter().find(|k| kinds.contains(k)).unwrap_or(kinds[0])
+    seam::FormulationKind::default_among(&kinds)
 }
 
 /// [`evaluate`], deriving only the formulation `only` where given: a run of one formulation

@@ -65,24 +65,22 @@ impl Peers {
 
     /// The `pin` wheel's prefix (headers and libraries), installed once.
     pub fn pinocchio_prefix(&self) -> PathBuf {
-        let ready = || self.prefix().filter(|p| p.join("include/pinocchio/algorithm/aba.hpp").exists() && p.join("include/eigen3").exists());
-        if let Some(p) = ready() {
-            return p;
-        }
-        eprintln!("pinocchio: pip install {PIN} {EIGEN} ...");
-        run(Command::new(&self.python).args(["-m", "pip", "install", "--quiet", PIN, EIGEN]), "pip install");
-        ready().expect("the pin wheel installs its headers and Eigen's")
+        self.installed(|| self.prefix().filter(|p| p.join("include/pinocchio/algorithm/aba.hpp").exists() && p.join("include/eigen3").exists()), &[PIN, EIGEN])
     }
 
     /// `example-robot-data`'s robots folder, installed once.
     pub fn robots_folder(&self) -> PathBuf {
-        let ready = || self.prefix().map(|p| p.join("share/example-robot-data/robots")).filter(|p| p.is_dir());
+        self.installed(|| self.prefix().map(|p| p.join("share/example-robot-data/robots")).filter(|p| p.is_dir()), &[PIN, ROBOTS])
+    }
+
+    /// What `ready` finds, after `pip install packages` where it finds nothing.
+    fn installed(&self, ready: impl Fn() -> Option<PathBuf>, packages: &[&str]) -> PathBuf {
         if let Some(p) = ready() {
             return p;
         }
-        eprintln!("pinocchio: pip install {ROBOTS} ...");
-        run(Command::new(&self.python).args(["-m", "pip", "install", "--quiet", PIN, ROBOTS]), "pip install");
-        ready().expect("example-robot-data installs its robots")
+        eprintln!("pinocchio: pip install {} ...", packages.join(" "));
+        run(Command::new(&self.python).args(["-m", "pip", "install", "--quiet"]).args(packages), "pip install");
+        ready().unwrap_or_else(|| panic!("pip install {} did not install what the benchmark needs", packages.join(" ")))
     }
 
     /// `aba.cpp` built against the wheel, once per change of the source.

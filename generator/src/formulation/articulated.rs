@@ -283,8 +283,7 @@ pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Artic
 
 /// [`reduce`] on the tree `t` of Kane's form `kane`.
 pub(super) fn reduce_on(t: &Tree, model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Articulated, reduced: &Volterra) -> Option<Articulated> {
-    use crate::symbolic::limits::Limits;
-    use crate::symbolic::matrix::{SolveOptions, solve};
+    use crate::symbolic::matrix::solve;
     use std::collections::{HashMap, HashSet};
     let super::volterra::SchurMap { map, rates, .. } = super::volterra::schur_map(model, mech, &reduced.ignorable, &model.quasi_reduced, kane)?;
     let axes = axes(t, mech);
@@ -333,13 +332,7 @@ pub(super) fn reduce_on(t: &Tree, model: &Model, mech: &Mechanics, kane: &Volter
         let (axis, k) = &ignorable_axes[a];
         rhs.set(a, 0, reduced.g[a].expr() - *k * axis.motion.power(&momentum[axis.node]));
     }
-    let opts = SolveOptions {
-        constants: model.constant_symbols(),
-        limits: Limits { max_terms: 2_000, max_work: 400_000 },
-        determinant: false,
-        normalize: false,
-        reference: Some(model.initial_env()),
-    };
+    let opts = super::volterra::momenta_solve_options(model);
     let u_i = solve(&m_ii, &rhs, &opts).ok()?;
     let mut sigma: HashMap<Symbol, Expr> = map.iter().zip(&reduced.u).map(|(&r, u)| (kane.u[r], u.expr())).collect();
     for (b, &r) in rates.iter().enumerate() {

@@ -263,8 +263,7 @@ pub(super) fn on_tree(t: &Tree, kane: &Volterra) -> Option<Recursion> {
 /// everything else is read from the recursion. `None` where the reduced form is not Kane's
 /// Schur complement.
 pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_rec: &Recursion, reduced: &Volterra) -> Option<Recursion> {
-    use crate::symbolic::limits::Limits;
-    use crate::symbolic::matrix::{SolveOptions, solve};
+    use crate::symbolic::matrix::solve;
     let super::volterra::SchurMap { map, rates, .. } = super::volterra::schur_map(model, mech, &reduced.ignorable, &model.quasi_reduced, kane)?;
     let (m, s, n_u) = (mech.m, rates.len(), map.len());
     let mut prog = Program { definitions: Vec::new(), prefix: "red" };
@@ -287,13 +286,7 @@ pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_rec: &Recur
             m_ii.set(a, b, dense.get(rates[a], rates[b]));
         }
     }
-    let opts = SolveOptions {
-        constants: model.constant_symbols(),
-        limits: Limits { max_terms: 2_000, max_work: 400_000 },
-        determinant: false,
-        normalize: false,
-        reference: Some(model.initial_env()),
-    };
+    let opts = super::volterra::momenta_solve_options(model);
     // u_I = M_II^-1 (G - n - M_IN u_N), n the momenta at u = 0.
     let mut rhs = Matrix::zeros(s, 1);
     for (a, &j) in reduced.ignorable.iter().enumerate() {

@@ -185,6 +185,19 @@ pub fn schur_map(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[
 /// `(M_NN - M_NI M_II^-1 M_IN) u_N' = L_N - M_NI M_II^-1 L_I`: p - s equations, exactly the
 /// reduced Volterra equations for `u_N` (the same `M_NI`, since `K_I = M_II` when `u_N` does
 /// not involve `q_I'`), at the cost of Kane's assembly and an s x s elimination.
+/// The options of the `s x s` solve for the ignorable rates from their momenta
+/// (`M_II v_I = G - ...`), the same in the Schur route, the composite recursion's and the
+/// articulated-body recursion's: a small system, checked at the model's initial state.
+pub(super) fn momenta_solve_options(model: &Model) -> SolveOptions {
+    SolveOptions {
+        constants: model.constant_symbols(),
+        limits: Limits { max_terms: 2_000, max_work: 400_000 },
+        determinant: false,
+        normalize: false,
+        reference: Some(model.initial_env()),
+    }
+}
+
 pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Option<Volterra> {
     let tidy = &mech.tidy;
     let (m, s) = (mech.m, ignorable.len());
@@ -208,13 +221,7 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         let coupled = Expr::sum(map.iter().zip(&u).map(|(&r, uk)| mk.get(rates[a], r) * uk.expr()));
         rhs.set(a, 0, tidy.combination(g[a].expr() - n - coupled, m));
     }
-    let opts = SolveOptions {
-        constants: model.constant_symbols(),
-        limits: Limits { max_terms: 2_000, max_work: 400_000 },
-        determinant: false,
-        normalize: false,
-        reference: Some(model.initial_env()),
-    };
+    let opts = momenta_solve_options(model);
     let v_i = solve(&m_ii, &rhs, &opts).ok()?;
     // Kane's quasi-velocities in the reduced ones: u_N renamed, v_I from the momenta.
     let mut sigma: HashMap<Symbol, Expr> = HashMap::new();

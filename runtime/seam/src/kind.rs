@@ -25,6 +25,17 @@ pub enum FormulationKind {
 }
 
 impl FormulationKind {
+    /// The formulation a run uses when none is named, among `kinds` (a model's): the paper's
+    /// reduced method where it is there, else Kane's, else the first.
+    ///
+    /// ```
+    /// use seam::FormulationKind::*;
+    /// assert_eq!(seam::FormulationKind::default_among(&[Lagrange, Kane]), Kane);
+    /// ```
+    pub fn default_among(kinds: &[FormulationKind]) -> FormulationKind {
+        [FormulationKind::ReducedVolterra, FormulationKind::Kane].into_iter().find(|k| kinds.contains(k)).unwrap_or(kinds[0])
+    }
+
     /// All four, in the paper's order.
     pub const ALL: [FormulationKind; 4] = [FormulationKind::Lagrange, FormulationKind::Maggi, FormulationKind::Kane, FormulationKind::ReducedVolterra];
 

@@ -229,7 +229,7 @@ impl Model {
     /// The formulation a run uses when none is named: the paper's reduced method where the
     /// model has it, else Kane's, else its first.
     pub fn default_kind(&self) -> FormulationKind {
-        [FormulationKind::ReducedVolterra, FormulationKind::Kane].into_iter().find(|k| self.formulation(*k).is_some()).unwrap_or(self.formulations[0].kind)
+        FormulationKind::default_among(&self.kinds())
     }
 
     /// The kinds the model has, in its order.
