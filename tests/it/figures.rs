@@ -1,7 +1,8 @@
-//! The README's figures cannot drift: every table and number it quotes from a measurement is
-//! checked here against the file the measurement writes, and the files' reproducible numbers
-//! against what a run gives now.
+//! The README's and the docs' figures cannot drift: every table and number they quote from a
+//! measurement is checked here against the file the measurement writes, and the files'
+//! reproducible numbers against what a run gives now.
 //!
+//! - the first build: `docs/benchmarks/first_build.json` (`docs/benchmarks/first_build.sh`);
 //! - the scene tables: `docs/comparisons/<scene>.json`, written by
 //!   `cargo run --release -p generated --example compare -- <scene> --repeats 11` (scenes 2
 //!   and 3 in quaternions: the tables and ratios of `docs/attitude.md`);
@@ -30,8 +31,36 @@ fn records(scene: &str) -> Vec<Record> {
     serde_json::from_str(&read(&format!("docs/comparisons/{scene}.json"))).unwrap()
 }
 
-fn assert_quoted(readme: &str, figure: &str, source: &str) {
-    assert!(readme.contains(figure), "the README does not quote `{figure}` from {source}");
+fn assert_quoted(text: &str, figure: &str, source: &str) {
+    assert!(text.contains(figure), "the page does not quote `{figure}` from {source}");
+}
+
+/// Seconds as the README writes a wait: "2 min 58 s", or "45 s".
+fn minutes(seconds: f64) -> String {
+    let s = seconds.round() as u64;
+    if s < 60 { format!("{s} s") } else { format!("{} min {} s", s / 60, s % 60) }
+}
+
+/// The README's first-build times are the file the script writes from a fresh clone.
+#[test]
+fn the_first_build_figures_are_the_script_file() {
+    let file = json("docs/benchmarks/first_build.json");
+    let readme = read("README.md");
+    for command in ["main_job", "tests"] {
+        let written = file[command].as_str().unwrap();
+        assert!(readme.contains(&format!("\n{written}\n")), "the README's commands are not the timed `{written}`");
+    }
+    let (main, tests) = (file["main_job_seconds"].as_f64().unwrap(), file["tests_seconds"].as_f64().unwrap());
+    let said = format!("the first command takes {}, the first build included, then the tests {}", minutes(main), minutes(tests));
+    assert_quoted(&readme, &said, "docs/benchmarks/first_build.json");
+    assert_quoted(&readme, &format!("{} cores", file["cores"]), "docs/benchmarks/first_build.json");
+}
+
+#[test]
+fn durations_read_as_minutes() {
+    assert_eq!(minutes(178.4), "2 min 58 s");
+    assert_eq!(minutes(45.0), "45 s");
+    assert_eq!(minutes(909.6), "15 min 10 s");
 }
 
 /// Scenes 2 and 3 in quaternions: their tables are in docs/attitude.md.
@@ -62,11 +91,14 @@ fn the_attitude_figures_are_the_files() {
 
 #[test]
 fn the_scene_tables_are_the_comparison_files() {
-    let readme = read("README.md");
+    let page = read("docs/formulations.md");
     for scene in SCENES {
         let table = table_of(&records(scene));
-        assert!(readme.contains(&table), "the README's table of {scene} is not docs/comparisons/{scene}.json:\n{table}");
+        assert!(page.contains(&table), "docs/formulations.md's table of {scene} is not docs/comparisons/{scene}.json:\n{table}");
     }
+    // The README shows scene 2's.
+    let table = table_of(&records("three_body"));
+    assert!(read("README.md").contains(&table), "the README's table of three_body is not docs/comparisons/three_body.json:\n{table}");
 }
 
 /// Everything in a comparison file but the times is what the committed module gives now: the
@@ -109,19 +141,19 @@ fn the_comparison_files_hold_what_a_run_gives_now() {
 #[test]
 fn the_in_process_figures_are_the_benchmark_file() {
     let readme = read("README.md");
+    let tool = read("docs/tool.md");
     let eval = json("docs/benchmarks/eval.json");
     let ms = eval["scene2_file_to_table_seconds"].as_f64().unwrap() * 1e3;
     assert_quoted(&readme, &format!("comparison table takes {ms:.0} ms"), "docs/benchmarks/eval.json");
+    assert_quoted(&tool, &format!("comparison table takes {ms:.0} ms"), "docs/benchmarks/eval.json");
     let range = |field: &str| {
         let ratios: Vec<f64> = eval["rhs"].as_array().unwrap().iter().map(|r| r[field].as_f64().unwrap()).collect();
         ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)))
     };
     let ((jl, jh), (il, ih), (nl, nh)) = (range("jit_ratio"), range("ratio"), range("native_ratio"));
-    assert_quoted(&readme, &format!("call costs {jl:.1} to {jh:.1} times the compiled module's"), "docs/benchmarks/eval.json");
-    assert_quoted(&readme, &format!("a call costs {jl:.1} to {jh:.1} times the compiled module's with the JIT"), "docs/benchmarks/eval.json");
-    assert_quoted(&readme, &format!("without the JIT: {il:.1} to {ih:.1} times"), "docs/benchmarks/eval.json");
-    assert_quoted(&readme, &format!("with `--compiled`, a call costs {nl:.2} to {nh:.2} times the compiled module's"), "docs/benchmarks/eval.json");
-    assert_quoted(&readme, &format!("{nl:.2} to {nh:.2} with `--compiled`"), "docs/benchmarks/eval.json");
+    assert_quoted(&tool, &format!("call costs {jl:.1} to {jh:.1} times the compiled module's"), "docs/benchmarks/eval.json");
+    assert_quoted(&tool, &format!("without the JIT: {il:.1} to {ih:.1} times"), "docs/benchmarks/eval.json");
+    assert_quoted(&tool, &format!("with `--compiled`, a call costs {nl:.2} to {nh:.2} times the compiled module's"), "docs/benchmarks/eval.json");
     // docs/benchmarks.md's table is the file's, row for row.
     let docs = read("docs/benchmarks.md");
     for r in eval["rhs"].as_array().unwrap() {
@@ -135,7 +167,7 @@ fn the_in_process_figures_are_the_benchmark_file() {
 
 #[test]
 fn the_scaling_figures_are_the_benchmark_files() {
-    let readme = read("README.md");
+    let readme = read("docs/benchmarks.md");
     let ours = json("docs/scaling/ours.json");
     let sympy = json("docs/scaling/sympy.json");
     let row =
@@ -177,6 +209,13 @@ fn the_scaling_figures_are_the_benchmark_files() {
     };
     let pendulum = sympy_seconds("SymPy's `KanesMethod` on the same model", 20);
     assert_quoted(&readme, &format!("SymPy's Kane with cse: {pendulum:.1} s"), "docs/scaling.md");
+    // The README's headline: the same two figures.
+    let door = read("README.md");
+    assert_quoted(
+        &door,
+        &format!("derives and emits all four formulations\n  in {:.2} s, where SymPy's `KanesMethod` with cse takes {pendulum:.1} s", seconds(&p20)),
+        "docs/scaling",
+    );
     let floating = scaling.rsplit("SymPy's `KanesMethod` on the same model").next().unwrap();
     let line = floating.lines().find(|l| l.starts_with("| 8 |")).unwrap();
     let seconds: f64 = line.split('|').nth(2).unwrap().trim().parse().unwrap();
@@ -248,7 +287,7 @@ fn the_goals_quote_the_pinocchio_file() {
         let cell = |k: usize| row[k].as_str().unwrap().to_string();
         let ratios = format!("{} (Kane), {} (reduced)", cell(5), cell(6));
         assert!(goals.contains(&ratios), "docs/goals.md does not quote `{ratios}` ({}) from docs/benchmarks/pinocchio.json", cell(0));
-        if cell(0).starts_with("spatial chain, 20 links") || cell(0).starts_with("pendulum on a cart, 20") {
+        if cell(0).starts_with("pendulum on a cart, 20") {
             let quoted = format!("{} / {}", cell(5), cell(6));
             assert!(read("README.md").contains(&quoted), "README.md does not quote `{quoted}` ({})", cell(0));
         }
@@ -290,13 +329,9 @@ fn the_python_figures_are_the_benchmark_file() {
     let speedup = format!("{:.0} times", number(&runs["speedup_all_cores"]));
     let readme = read("README.md");
     let page = read("docs/python.md");
-    for (text, source) in [(&readme, "README.md"), (&page, "docs/python.md")] {
-        assert_quoted(text, &format!("takes {total}"), source);
-        assert_quoted(text, &format!("{} runs/s", per_second("solve_ivp")), source);
-    }
-    assert_quoted(&readme, &format!("runs {} runs/s", per_second("all_cores")), "README.md");
-    assert_quoted(&readme, &format!("({} on one thread)", per_second("one_thread")), "README.md");
-    assert_quoted(&readme, &format!("{speedup} a Python loop"), "README.md");
+    assert_quoted(&readme, &format!("takes {total}"), "README.md");
+    assert_quoted(&page, &format!("takes {total}"), "docs/python.md");
+    assert_quoted(&page, &format!("{} runs/s", per_second("solve_ivp")), "docs/python.md");
     assert_quoted(&page, &format!("runs {} runs/s on every core and {} on one thread", per_second("all_cores"), per_second("one_thread")), "docs/python.md");
     assert_quoted(&page, &format!("{speedup} fewer than the ensemble"), "docs/python.md");
     // The loop and the ensemble ran the same runs.
@@ -400,8 +435,8 @@ fn the_goals_quote_the_scaling_rows() {
         let word = if verdict.starts_with("met") { "met" } else { "missed" };
         assert!(goals.contains(&format!("{measured}: {word}")), "docs/goals.md does not say `{measured}: {word}` as docs/scaling.md does");
     }
-    // The README's status row quotes the range of the two SymPy rows' ratios.
-    let readme = read("README.md");
+    // The status page quotes the range of the two SymPy rows' ratios.
+    let readme = read("docs/status.md");
     for (row, what) in [
         ("| derivation CPU, SymPy's `KanesMethod` / ours, each paper scene, the same work", "on the same work"),
         ("| SymPy's `KanesMethod` / our whole generation, each paper scene", "against our whole generation"),
@@ -606,6 +641,13 @@ fn the_robot_figures_are_the_files() {
         calls["rows"].as_array().unwrap().iter().partition(|r| f(&r["kane_jit_over_compiled"]).max(f(&r["reduced_jit_over_compiled"])) <= 2.0);
     let v = format!("The JIT within twice the compiled module: met on {}; missed on {}.", names(within), names(beyond));
     assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
+    // The README's headline: the range of the better of the two over the robots.
+    let best = |r: &serde_json::Value| f(&r["kane_over_aba"]).min(f(&r["reduced_over_aba"]));
+    let by_best = |a: &&serde_json::Value, b: &&serde_json::Value| best(a).total_cmp(&best(b));
+    let rows = calls["rows"].as_array().unwrap();
+    let (low, high) = (rows.iter().min_by(by_best).unwrap(), rows.iter().max_by(by_best).unwrap());
+    let range = format!("from {:.2} ({}) to {:.2} ({}) of it", best(low), s(&low["robot"]), best(high), s(&high["robot"]));
+    assert_quoted(&read("README.md"), &range, "docs/robots/per_call.json");
 
     let arm = json("docs/robots/space_manipulator.json");
     let rows = arm["records"]

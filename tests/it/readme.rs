@@ -60,3 +60,50 @@ fn a_tracked_target_would_be_found() {
         Command::new("git").args(["check-ignore", "-q", "--no-index", "--", "cart_pendulum.rs"]).current_dir(env!("CARGO_MANIFEST_DIR")).status().unwrap();
     assert!(!ignored.success());
 }
+
+/// The relative links of a markdown page: `[text](target)`, without `http` and without the
+/// `#anchor` part.
+fn relative_links(page: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = page;
+    while let Some(i) = rest.find("](") {
+        rest = &rest[i + 2..];
+        let Some(end) = rest.find(')') else { break };
+        let target = &rest[..end];
+        if !target.starts_with("http") && !target.starts_with('#') && !target.contains(' ') {
+            out.push(target.split('#').next().unwrap().to_string());
+        }
+    }
+    out
+}
+
+/// Every page a reader reaches from the README (the README, ARCHITECTURE.md and `docs/*.md`)
+/// links only to files the checkout holds: the pages were split out of the README, and a link
+/// left pointing at the old place is a dead end for a reader.
+#[test]
+fn the_pages_link_to_files_that_exist() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut pages = vec![root.join("README.md"), root.join("ARCHITECTURE.md")];
+    for entry in std::fs::read_dir(root.join("docs")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "md") {
+            pages.push(path);
+        }
+    }
+    let mut checked = 0;
+    for page in &pages {
+        let text = std::fs::read_to_string(page).unwrap();
+        for link in relative_links(&text) {
+            let target = page.parent().unwrap().join(&link);
+            assert!(target.exists(), "{} links to `{link}`, which does not exist", page.strip_prefix(root).unwrap().display());
+            checked += 1;
+        }
+    }
+    assert!(checked >= 30, "{checked} links checked");
+}
+
+#[test]
+fn links_are_read_from_markdown() {
+    let links = relative_links("see [a](docs/a.md#x), [b](https://x.y), ![c](plots/c.svg) and [d](#here)");
+    assert_eq!(links, ["docs/a.md", "plots/c.svg"]);
+}

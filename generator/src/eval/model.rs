@@ -268,10 +268,10 @@ fn solve_ldl(plan: &LdlPlan, kernel: &dyn Kernel, matrix: &[f64], force: &mut [f
 /// `solve_spd` of emitted modules on a row-major `n x n` matrix (overwritten by `L` below the
 /// diagonal), `b` overwritten by the solution: `L D L^T` in the natural order, the operations
 /// of [`LdlPlan::solve`] on a dense plan in the same order, over the rows as slices (no index
-/// tables; and faster than the plan's straight-line code compiled by the JIT: with it, the
-/// 20-link pendulum's in-process Lagrange call, a 21 x 21 matrix, took 1.83 times the compiled
-/// module's, now 1.45, in `cargo bench -p generator --bench scaling`). `scratch` holds `L D`
-/// and the reciprocals of `D`.
+/// tables; and faster than the plan's straight-line code compiled by the JIT on the 20-link
+/// pendulum's in-process Lagrange call, a 21 x 21 matrix, in `cargo bench -p generator --bench
+/// scaling`: the figures are in docs/benchmarks.md). `scratch` holds `L D` and the reciprocals
+/// of `D`.
 fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], scratch: &mut Vec<f64>) -> Result<(), usize> {
     let scale = (0..n).fold(0.0f64, |s, i| s.max(a[i * n + i].abs()));
     scratch.clear();

@@ -438,9 +438,9 @@ pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
         let (line, col) = (e.span.start.line, e.span.start.col);
         let code = e.code.to_string();
         let help = if code.contains("Unexpected field") || code.contains("unknown field") {
-            "remove the field or fix its spelling; the fields each item takes are documented in README.md".to_string()
+            "remove the field or fix its spelling; the fields each item takes are documented in docs/model-format.md".to_string()
         } else if code.contains("missing field") || code.contains("Missing") {
-            "add the missing field (see the model format in README.md)".to_string()
+            "add the missing field (see docs/model-format.md)".to_string()
         } else {
             "fix the RON syntax at this place (strings in double quotes, items separated by commas, balanced brackets)".to_string()
         };
