@@ -9,7 +9,11 @@ pub mod kinematics;
 pub mod model;
 pub mod formulation;
 pub mod inspect;
+/// The `generate` and `inspect` command lines (clap), shared by the `generator` binary and the
+/// `multibody` tool: only with the `cli` feature, so that a build script compiles no clap.
+#[cfg(feature = "cli")]
 pub mod command;
+pub mod overwrite;
 pub mod emit;
 pub mod eval;
 pub mod pose;

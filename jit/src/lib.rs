@@ -6,10 +6,14 @@
 //! compiled module's, without the interpreter's dispatch.
 //!
 //! ```
-//! use generator::emit::tape::{Slots, Tape};
-//! use generator::eval::kernel::{Backend, Kernel};
-//! let stmts: Vec<syn::Stmt> = vec![syn::parse_quote!(let x = state[0];), syn::parse_quote!(let x0 = f64::sin(x);)];
-//! let tape = Tape::compile(&stmts, &[syn::parse_quote!(2.0 * x0 - f64::powi(x, 3))], &Slots::new(&[("state", 1)])).unwrap();
+//! use tape::{Backend, Instr, Kernel, Tape, Unary};
+//! // 2 sin(x) - x^3
+//! let tape = Tape::write(|w| {
+//!     let x = w.input(0);
+//!     let (sin, cube, two) = (w.instr(Instr::Call(Unary::Sin, x)), w.instr(Instr::Powi(x, 3)), w.constant(2.0));
+//!     let twice = w.instr(Instr::Mul(two, sin));
+//!     vec![w.instr(Instr::Sub(twice, cube))]
+//! });
 //! let jit = jit::Jit::default();
 //! let kernel = jit.kernel(tape);
 //! let mut out = [0.0];
@@ -23,8 +27,7 @@ use cranelift_codegen::settings::{self, Configurable};
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{Linkage, Module};
-use generator::emit::tape::{Instr, Tape, Unary};
-use generator::eval::kernel::{Backend, Kernel};
+use tape::{Backend, Instr, Kernel, Tape, Unary};
 
 /// The cranelift backend: each tape compiled to machine code, or left to the interpreter when
 /// this machine's code cannot be generated (the kernel then is the tape itself, and
@@ -173,7 +176,7 @@ pub fn function_length(instructions: usize) -> usize {
 /// instruction.
 ///
 /// ```
-/// use generator::emit::tape::Instr;
+/// use tape::Instr;
 /// // Two inputs, no constants, three instructions cut into functions of two: the third
 /// // instruction reads the first one's result (register 2) from the scratch buffer.
 /// let split = jit::Split::new(2, 0, &[Instr::Add(0, 1), Instr::Mul(2, 1), Instr::Sub(2, 3)], 2);
@@ -477,7 +480,7 @@ mod tests {
             syn::parse_quote!(let c = f64::powi(x, 7) - f64::powi(y, -3) + f64::powf(x, y);),
         ];
         let outputs: Vec<syn::Expr> = vec![syn::parse_quote!(a * b + c), syn::parse_quote!(-a / c), syn::parse_quote!(t + 2.5)];
-        let tape = Tape::compile(&stmts, &outputs, &Slots::new(&[("t", 1), ("state", 2)])).unwrap();
+        let tape = generator::emit::tape::compile(&stmts, &outputs, &Slots::new(&[("t", 1), ("state", 2)])).unwrap();
         let compiled = compile(&tape).expect("this machine's code generator is available");
         for inputs in [[0.3, 0.7, 1.9], [1.0, -2.5, 0.25], [0.0, 0.0, -1.0]] {
             let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
@@ -505,7 +508,7 @@ mod tests {
         }
         let mut outputs: Vec<syn::Expr> = (count - 40..count).map(|k| syn::parse_str(&format!("v{k} + v{}", k / 3)).unwrap()).collect();
         outputs.extend([syn::parse_quote!(v5 * v3), syn::parse_quote!(v1), syn::parse_quote!(2.5), syn::parse_quote!(v5 * v3)]);
-        let tape = Tape::compile(&stmts, &outputs, &Slots::new(&[("state", 2)])).unwrap();
+        let tape = generator::emit::tape::compile(&stmts, &outputs, &Slots::new(&[("state", 2)])).unwrap();
         let (inputs, constants, instrs, _) = tape.parts();
         let split = Split::new(inputs, constants.len(), instrs, function_length(instrs.len()));
         assert!(split.functions().len() >= 3, "{} instructions in {} functions", instrs.len(), split.functions().len());

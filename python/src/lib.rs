@@ -510,7 +510,7 @@ impl Model {
     #[pyo3(signature = (path, force=false))]
     fn generate_rust(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<()> {
         guarded(|| {
-            use generator::command::{Overwrite, overwrites_a_model};
+            use generator::overwrite::{Overwrite, overwrites_a_model};
             let shown = files::printable_path(&path);
             match overwrites_a_model(std::path::Path::new(&self.source.file), &path).filter(|o| !force || *o == Overwrite::ModelItself) {
                 None => {}

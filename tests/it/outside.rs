@@ -1,6 +1,7 @@
 //! The example crate outside the workspace (`examples/outside`, its own Cargo project that
 //! depends on the generator and the runtime by path): it builds, its tests pass, it prints its
-//! model's comparison table, and it compiles none of the project's committed modules.
+//! model's comparison table, and it compiles none of the project's committed modules, and
+//! neither clap nor mimalloc (the generator binary's).
 //!
 //! The nested cargo commands share the workspace's target directory (cargo releases its lock
 //! before the tests run), so the generator, the runtime and their dependencies, already built
@@ -28,6 +29,11 @@ fn the_example_outside_the_workspace_builds_tests_runs_and_uses_no_committed_mod
     assert!(tree.lines().any(|l| l.starts_with("runtime v")) && tree.lines().any(|l| l.starts_with("generator v")), "{tree}");
     assert!(tree.lines().any(|l| l.starts_with("seam v")), "{tree}");
     assert!(!tree.lines().any(|l| l.starts_with("generated v")), "the committed modules are not a dependency:\n{tree}");
+    // A build script compiles the library only: the generator binary's command line and
+    // allocator stay with the binary.
+    for binary_only in ["clap v", "mimalloc v"] {
+        assert!(!tree.lines().any(|l| l.starts_with(binary_only)), "a build.rs user compiles {binary_only}:\n{tree}");
+    }
 
     let test = cargo(&["test", "--release"]);
     let log = String::from_utf8_lossy(&test.stdout);
@@ -40,4 +46,24 @@ fn the_example_outside_the_workspace_builds_tests_runs_and_uses_no_committed_mod
     for row in ["| lagrange | 5 | 2 |", "| kane | 5 | 2 |", "| reduced_volterra | 5 | 2 |"] {
         assert!(table.contains(row), "{row} in\n{table}");
     }
+}
+
+/// The JIT depends on the tapes and cranelift only: not on the generator (the symbolic core,
+/// syn, miette, the URDF reader), whose tapes it compiles. `cargo tree` of the package, normal
+/// edges, counts the crates it builds.
+#[test]
+fn the_jit_depends_on_the_tapes_and_cranelift_only() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
+        .args(["tree", "-p", "jit", "--edges", "normal", "--prefix", "none"])
+        .current_dir(root)
+        .output()
+        .expect("cargo runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let tree = String::from_utf8_lossy(&out.stdout);
+    let crates: std::collections::BTreeSet<&str> = tree.lines().map(|l| l.trim_end_matches(" (*)")).filter(|l| !l.is_empty()).collect();
+    let ours: Vec<&&str> = crates.iter().filter(|l| l.contains(" (/")).collect();
+    assert_eq!(ours.len(), 2, "jit and tape only of this workspace: {ours:?}");
+    assert!(ours.iter().any(|l| l.starts_with("tape v")), "{ours:?}");
+    assert!(crates.len() <= 40, "jit builds {} crates:\n{tree}", crates.len());
 }

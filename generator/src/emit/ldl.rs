@@ -25,7 +25,7 @@
 
 use super::ops::OpCount;
 use super::splice::Splices;
-use super::tape::{Instr, Tape, TapeWriter};
+use super::tape::{Instr, Tape, Writer};
 use crate::formulation::Equations;
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::quote;
@@ -312,7 +312,7 @@ impl LdlPlan {
             let (mut l, mut u) = (vec![0u32; m], vec![0u32; m]);
             let (mut inv, mut pivots) = (Vec::with_capacity(n), Vec::with_capacity(n));
             let one = w.constant(1.0);
-            let minus_product = |w: &mut TapeWriter, acc: u32, x: u32, y: u32| {
+            let minus_product = |w: &mut Writer, acc: u32, x: u32, y: u32| {
                 let p = w.instr(Instr::Mul(x, y));
                 w.instr(Instr::Sub(acc, p))
             };

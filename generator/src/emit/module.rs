@@ -834,7 +834,7 @@ impl Emitter<'_> {
     /// `[t | params | q | qdot]` (functions of the coordinates and rates), as
     /// [`crate::eval::model`] packs them. A split body's helpers are read in call order.
     fn tape(&self, b: &Body, args: &[Arg]) -> Result<super::tape::Tape, super::tape::TapeError> {
-        use super::tape::{Slots, Tape};
+        use super::tape::{Slots, compile};
         let m = self.model.m();
         let np = if self.options.parameters == Parameters::Baked { 0 } else { self.model.parameters.len() };
         let layout: Vec<(&str, usize)> = if args.iter().any(|a| a.name == "state") {
@@ -858,7 +858,7 @@ impl Emitter<'_> {
                 stmts.extend(f.block.stmts.iter().cloned());
             }
         }
-        Tape::compile(&stmts, &b.outputs, &slots)
+        compile(&stmts, &b.outputs, &slots)
     }
 
     /// True when the formulations get `parameter_jacobian`: asked for, and the parameters
