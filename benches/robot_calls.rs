@@ -254,6 +254,8 @@ fn main() {
         let options = UrdfOptions { base: if floating { Base::Floating } else { Base::Fixed }, ..UrdfOptions::default() };
         let model = load::model_with(&urdf, &options).expect("the robot loads");
         let jit = load::evaluate(&model, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).expect("the robot derives").model;
+        // The long tapes' best code (compiled in the background) before anything is timed.
+        jit::settle();
         let checked = check(&aba, &saved, &jit, floating, name);
         let check_text = checked.map_or("not here: mimic joints (docs/robots/pinocchio_check.py)".to_string(), |e| format!("{e:.0e}"));
         eprintln!("robot calls: {name}: Pinocchio's model against ours: {check_text}");

@@ -35,6 +35,7 @@ fn main() {
         let m = generator::model::load(format!("{root}/models/{name}.ron")).unwrap();
         let evaluated = generator::eval::evaluate(&m).unwrap();
         let jitted = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
+        jit::settle();
         let generated = generator::emit::generate(&m, &generator::emit::Options { tapes: true, ..generator::emit::Options::from_model(&m) }).unwrap();
         let library = native::build(&generated.code, cache.path(), &mut |_| {}).unwrap();
         let built = library.model(generator::eval::model::Evaluated::model(generated.program.unwrap())).unwrap();

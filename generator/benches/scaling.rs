@@ -264,6 +264,8 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         // one timing of each drifted by up to a third apart on this machine.
         let jit = jit::Jit::default();
         let evaluated = generator::eval::evaluate_with_backend(&model, &Options::from_model(&model), &jit).expect("the benchmark models evaluate").0;
+        // The long tapes' best code (compiled in the background) before anything is timed.
+        jit::settle();
         for _ in 0..CALL_ROUNDS {
             keep_best(&mut record.ns_per_call, timing::run(&exe).1);
             keep_best(&mut record.jit_ns_per_call, jit_ns_per_call(&evaluated));

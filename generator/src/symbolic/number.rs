@@ -27,11 +27,44 @@ use std::fmt;
 pub struct Rat(Repr);
 
 /// `Small(n, d)`: `d > 0`, `gcd(|n|, d) = 1`, `n != i64::MIN`. `Big` only for values that do
-/// not fit `Small`, so equal values have equal representations (derived `Eq` and `Hash`).
-#[derive(Clone, PartialEq, Eq, Hash)]
+/// not fit `Small`, in lowest terms with a positive denominator, so equal values have equal
+/// representations: equality and the hash compare the numerator and the denominator as they are.
+/// (`BigRational`'s own `Eq` and `Hash` accept unreduced values, so they compare and hash through
+/// a continued-fraction expansion, a big-integer division per step: on a humanoid's URDF, whose
+/// 15-digit decimals make big rationals, that was a tenth of the derivation.)
+#[derive(Clone)]
 enum Repr {
     Small(i64, i64),
     Big(Box<BigRational>),
+}
+
+impl PartialEq for Repr {
+    fn eq(&self, other: &Repr) -> bool {
+        match (self, other) {
+            (Repr::Small(n1, d1), Repr::Small(n2, d2)) => n1 == n2 && d1 == d2,
+            (Repr::Big(a), Repr::Big(b)) => a.numer() == b.numer() && a.denom() == b.denom(),
+            _ => false,
+        }
+    }
+}
+
+impl Eq for Repr {}
+
+impl std::hash::Hash for Repr {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        match self {
+            Repr::Small(n, d) => {
+                state.write_u8(0);
+                n.hash(state);
+                d.hash(state);
+            }
+            Repr::Big(b) => {
+                state.write_u8(1);
+                b.numer().hash(state);
+                b.denom().hash(state);
+            }
+        }
+    }
 }
 
 /// Binary gcd (no division: several times faster than Euclid's on 64-bit words).

@@ -214,4 +214,32 @@ proptest! {
         prop_assert_eq!(Rat::from_big((&x + &y).to_big()), &x + &y);
         prop_assert_eq!(x.to_string(), bx.to_string());
     }
+
+    /// Equality and the hash read a big rational's numerator and denominator as they are: sound
+    /// because every route to a value leaves it in lowest terms (products of three 63-bit
+    /// values are big; divided back, they are small again).
+    #[test]
+    fn equal_big_rationals_are_equal_and_hash_alike(a in arb_rat(), b in arb_rat(), c in arb_rat()) {
+        use generator::symbolic::number::Rat;
+        use num_bigint::BigInt;
+        use num_rational::BigRational;
+        use std::hash::{Hash, Hasher};
+        let hash = |r: &Rat| {
+            let mut h = std::hash::DefaultHasher::new();
+            r.hash(&mut h);
+            h.finish()
+        };
+        let big = |(n, d): (i64, i64)| Rat::from_big(BigRational::new(BigInt::from(n), BigInt::from(d)));
+        let (x, y, z) = (big(a), big(b), big(c));
+        let xyz = &(&x * &y) * &z;
+        let zyx = &(&z * &y) * &x;
+        prop_assert_eq!(&xyz, &zyx);
+        prop_assert_eq!(hash(&xyz), hash(&zyx));
+        prop_assert_eq!(xyz == x, xyz.to_big() == x.to_big());
+        if y != Rat::zero() && z != Rat::zero() {
+            let back = &(&xyz / &z) / &y;
+            prop_assert_eq!(&back, &x);
+            prop_assert_eq!(hash(&back), hash(&x));
+        }
+    }
 }
