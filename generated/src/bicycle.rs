@@ -259,91 +259,6 @@ impl Params {
 }
 ///Why an emitted function could not produce a value (the seam's error type, shared by every module).
 pub use ::seam::Failure;
-///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn solve_dense<const N: usize>(
-    a: &mut [[f64; N]; N],
-    b: &mut [f64; N],
-) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for row in a.iter() {
-        for x in row.iter() {
-            scale = scale.max(x.abs());
-        }
-    }
-    for c in 0..N {
-        let mut p = c;
-        for r in c + 1..N {
-            if a[r][c].abs() > a[p][c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..N {
-            let f = a[r][c] / a[c][c];
-            for k in c + 1..N {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    for r in (0..N).rev() {
-        let mut s = b[r];
-        for k in r + 1..N {
-            s -= a[r][k] * b[k];
-        }
-        b[r] = s / a[r][r];
-    }
-    Ok(())
-}
-///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them.
-#[allow(dead_code)]
-fn solve_spd<const N: usize>(
-    a: &mut [[f64; N]; N],
-    b: &mut [f64; N],
-) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for i in 0..N {
-        scale = scale.max(a[i][i].abs());
-    }
-    let mut inv = [0.0f64; N];
-    let mut u = [[0.0f64; N]; N];
-    for j in 0..N {
-        let mut d = a[j][j];
-        for k in 0..j {
-            d -= a[j][k] * u[j][k];
-        }
-        if !(d > PIVOT_TOLERANCE * scale) {
-            return Err(j);
-        }
-        inv[j] = 1.0 / d;
-        for i in j + 1..N {
-            let mut s = a[i][j];
-            for k in 0..j {
-                s -= a[i][k] * u[j][k];
-            }
-            u[i][j] = s;
-            a[i][j] = s * inv[j];
-        }
-    }
-    for i in 0..N {
-        for k in 0..i {
-            b[i] -= a[i][k] * b[k];
-        }
-    }
-    for i in 0..N {
-        b[i] *= inv[i];
-    }
-    for i in (0..N).rev() {
-        for k in i + 1..N {
-            b[i] -= a[k][i] * b[k];
-        }
-    }
-    Ok(())
-}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -1569,7 +1484,7 @@ pub mod lagrange {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+        if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "constraint matrix [M a^T; a 0]".into(),

@@ -259,95 +259,6 @@ impl Params {
 }
 ///Why an emitted function could not produce a value (the seam's error type, shared by every module).
 pub use ::seam::Failure;
-///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn solve_dense<const N: usize>(
-    a: &mut [[f64; N]; N],
-    b: &mut [f64; N],
-) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for row in a.iter() {
-        for x in row.iter() {
-            scale = scale.max(x.abs());
-        }
-    }
-    for c in 0..N {
-        let mut p = c;
-        for r in c + 1..N {
-            if a[r][c].abs() > a[p][c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..N {
-            let f = a[r][c] / a[c][c];
-            for k in c + 1..N {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    for r in (0..N).rev() {
-        let mut s = b[r];
-        for k in r + 1..N {
-            s -= a[r][k] * b[k];
-        }
-        b[r] = s / a[r][r];
-    }
-    Ok(())
-}
-///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
-    let mut scale = 0.0f64;
-    for row in a.iter() {
-        for x in row.iter() {
-            scale = scale.max(x.abs());
-        }
-    }
-    let mut pivots = [0usize; N];
-    for c in 0..N {
-        let mut p = c;
-        for r in c + 1..N {
-            if a[r][c].abs() > a[p][c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        pivots[c] = p;
-        a.swap(c, p);
-        for r in c + 1..N {
-            let f = a[r][c] / a[c][c];
-            a[r][c] = f;
-            for k in c + 1..N {
-                a[r][k] -= f * a[c][k];
-            }
-        }
-    }
-    Ok(pivots)
-}
-///Solves `a x = b` in place with the factors of `lu_factor`.
-fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
-    for c in 0..N {
-        b.swap(c, pivots[c]);
-    }
-    for c in 0..N {
-        for r in c + 1..N {
-            b[r] -= a[r][c] * b[c];
-        }
-    }
-    for r in (0..N).rev() {
-        let mut s = b[r];
-        for k in r + 1..N {
-            s -= a[r][k] * b[k];
-        }
-        b[r] = s / a[r][r];
-    }
-}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -1573,7 +1484,7 @@ pub mod lagrange {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+        if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "constraint matrix [M a^T; a 0]".into(),
@@ -6202,7 +6113,7 @@ pub mod lagrange {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -6212,7 +6123,7 @@ pub mod lagrange {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; STATES]; STATES];
         for j in 0..8 {
             dstate[j] = qdot[j];
@@ -6232,7 +6143,7 @@ pub mod lagrange {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..8 {
                 jac[8 + j][k] = dx[j];
             }

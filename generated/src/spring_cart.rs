@@ -99,100 +99,6 @@ impl Params {
 }
 ///Why an emitted function could not produce a value (the seam's error type, shared by every module).
 pub use ::seam::Failure;
-///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them.
-#[allow(dead_code)]
-fn solve_spd<const N: usize>(
-    a: &mut [[f64; N]; N],
-    b: &mut [f64; N],
-) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for i in 0..N {
-        scale = scale.max(a[i][i].abs());
-    }
-    let mut inv = [0.0f64; N];
-    let mut u = [[0.0f64; N]; N];
-    for j in 0..N {
-        let mut d = a[j][j];
-        for k in 0..j {
-            d -= a[j][k] * u[j][k];
-        }
-        if !(d > PIVOT_TOLERANCE * scale) {
-            return Err(j);
-        }
-        inv[j] = 1.0 / d;
-        for i in j + 1..N {
-            let mut s = a[i][j];
-            for k in 0..j {
-                s -= a[i][k] * u[j][k];
-            }
-            u[i][j] = s;
-            a[i][j] = s * inv[j];
-        }
-    }
-    for i in 0..N {
-        for k in 0..i {
-            b[i] -= a[i][k] * b[k];
-        }
-    }
-    for i in 0..N {
-        b[i] *= inv[i];
-    }
-    for i in (0..N).rev() {
-        for k in i + 1..N {
-            b[i] -= a[k][i] * b[k];
-        }
-    }
-    Ok(())
-}
-///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
-    let mut scale = 0.0f64;
-    for row in a.iter() {
-        for x in row.iter() {
-            scale = scale.max(x.abs());
-        }
-    }
-    let mut pivots = [0usize; N];
-    for c in 0..N {
-        let mut p = c;
-        for r in c + 1..N {
-            if a[r][c].abs() > a[p][c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        pivots[c] = p;
-        a.swap(c, p);
-        for r in c + 1..N {
-            let f = a[r][c] / a[c][c];
-            a[r][c] = f;
-            for k in c + 1..N {
-                a[r][k] -= f * a[c][k];
-            }
-        }
-    }
-    Ok(pivots)
-}
-///Solves `a x = b` in place with the factors of `lu_factor`.
-fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
-    for c in 0..N {
-        b.swap(c, pivots[c]);
-    }
-    for c in 0..N {
-        for r in c + 1..N {
-            b[r] -= a[r][c] * b[c];
-        }
-    }
-    for r in (0..N).rev() {
-        let mut s = b[r];
-        for k in r + 1..N {
-            s -= a[r][k] * b[k];
-        }
-        b[r] = s / a[r][r];
-    }
-}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -597,7 +503,7 @@ pub mod lagrange {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -607,7 +513,7 @@ pub mod lagrange {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; STATES]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -631,7 +537,7 @@ pub mod lagrange {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 jac[2 + j][k] = dx[j];
             }
@@ -786,7 +692,7 @@ pub mod lagrange {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -796,7 +702,7 @@ pub mod lagrange {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; 7]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -820,7 +726,7 @@ pub mod lagrange {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 jac[2 + j][k] = dx[j];
             }
@@ -1284,7 +1190,7 @@ pub mod maggi {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -1294,7 +1200,7 @@ pub mod maggi {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; STATES]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -1322,7 +1228,7 @@ pub mod maggi {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 let mut s = d_c[k][j];
                 for i in 0..2 {
@@ -1509,7 +1415,7 @@ pub mod maggi {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -1519,7 +1425,7 @@ pub mod maggi {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; 7]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -1547,7 +1453,7 @@ pub mod maggi {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 let mut s = d_c[k][j];
                 for i in 0..2 {
@@ -1982,7 +1888,7 @@ pub mod kane {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -1992,7 +1898,7 @@ pub mod kane {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; STATES]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -2016,7 +1922,7 @@ pub mod kane {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 jac[2 + j][k] = dx[j];
             }
@@ -2171,7 +2077,7 @@ pub mod kane {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -2181,7 +2087,7 @@ pub mod kane {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; 7]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -2205,7 +2111,7 @@ pub mod kane {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 jac[2 + j][k] = dx[j];
             }
@@ -2636,7 +2542,7 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -2646,7 +2552,7 @@ pub mod reduced_volterra {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; STATES]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -2670,7 +2576,7 @@ pub mod reduced_volterra {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 jac[2 + j][k] = dx[j];
             }
@@ -2824,7 +2730,7 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let pivots = match lu_factor(&mut matrix) {
+        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
                 return Err(Failure::Singular {
@@ -2834,7 +2740,7 @@ pub mod reduced_volterra {
                 });
             }
         };
-        lu_solve(&matrix, &pivots, &mut x);
+        ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
         *jac = [[0.0; 7]; STATES];
         for j in 0..2 {
             dstate[j] = qdot[j];
@@ -2858,7 +2764,7 @@ pub mod reduced_volterra {
                 }
                 dx[i] = s;
             }
-            lu_solve(&matrix, &pivots, &mut dx);
+            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
             for j in 0..2 {
                 jac[2 + j][k] = dx[j];
             }

@@ -53,7 +53,7 @@ pub enum Error {
 }
 
 /// The `seam` crate's sources, built into every library (`lib.rs` first).
-pub const SEAM_SOURCES: [(&str, &str); 7] = [
+pub const SEAM_SOURCES: [(&str, &str); 8] = [
     ("lib.rs", include_str!("../../runtime/seam/src/lib.rs")),
     ("compiled.rs", include_str!("../../runtime/seam/src/compiled.rs")),
     ("event.rs", include_str!("../../runtime/seam/src/event.rs")),
@@ -61,6 +61,7 @@ pub const SEAM_SOURCES: [(&str, &str); 7] = [
     ("grid.rs", include_str!("../../runtime/seam/src/grid.rs")),
     ("kind.rs", include_str!("../../runtime/seam/src/kind.rs")),
     ("model.rs", include_str!("../../runtime/seam/src/model.rs")),
+    ("solve.rs", include_str!("../../runtime/seam/src/solve.rs")),
 ];
 
 /// The library's fixed crate root, and the ABI it shares with this crate.

@@ -511,10 +511,11 @@ impl Emitter<'_> {
                 }
             }
         };
+        let seam = &self.seam;
         let (solve_stmts, solve_item) = match (plan.sparse(), &plan) {
             (Some(sparse), _) => (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.splices, self.options.fma)),
-            (None, Solve::Ldl(_)) => (solve_with(quote!(solve_spd(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
-            (None, Solve::Lu(_)) => (solve_with(quote!(solve_dense(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
+            (None, Solve::Ldl(_)) => (solve_with(quote!(#seam::solve::solve_spd_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
+            (None, Solve::Lu(_)) => (solve_with(quote!(#seam::solve::solve_dense_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
             (None, Solve::Articulated { .. }) => (quote!(let (qdot, force) = (a.qdot, a.force);), TokenStream::new()),
         };
         let matrix_fn = if plan.reads_matrix() {

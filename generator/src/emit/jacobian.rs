@@ -43,6 +43,7 @@ impl Emitter<'_> {
     /// `jacobian` (`jac[i][k] = d dstate_i / d state_k`) or `parameter_jacobian`
     /// (`jac[i][k] = d dstate_i / d params_k`), each with the right-hand side `dstate`.
     pub(super) fn jacobian_fn(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr], wrt: Wrt) -> Result<TokenStream, ModelError> {
+        let seam = self.seam.clone();
         let name = f.name();
         let work = self.work;
         let n_states = f.states(work);
@@ -253,11 +254,11 @@ impl Emitter<'_> {
                         return Err(Failure::Singular { t, condition: condition.into(), value });
                     }
                 }
-                let pivots = match lu_factor(&mut matrix) {
+                let pivots = match #seam::solve::lu_factor_array(&mut matrix) {
                     Ok(p) => p,
                     Err(column) => return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 }),
                 };
-                lu_solve(&matrix, &pivots, &mut x);
+                #seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
                 *jac = [[0.0; #columns]; STATES];
                 for j in 0..#nq_l {
                     dstate[j] = qdot[j];
@@ -276,7 +277,7 @@ impl Emitter<'_> {
                         }
                         dx[i] = s;
                     }
-                    lu_solve(&matrix, &pivots, &mut dx);
+                    #seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
                     #speed_columns
                     #power_column
                 }

@@ -307,21 +307,8 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     let mut head = vec![em.header(&shared)];
     head.push(em.params());
     head.push(super::seam::failure_import(&em.seam));
-    if !options.formulations.is_empty() {
-        // Each solver where a formulation may use it: LU for Lagrange's with constraints,
-        // LDL^T for the others' (unless every matrix has its own sparse `solve_ldl`).
-        let kinds: Vec<seam::FormulationKind> = options.formulations.iter().map(|f| f.kind()).collect();
-        let lagrange_indefinite = mech.r > 0;
-        if kinds.iter().any(|k| !k.solves_positive_definite()) && lagrange_indefinite {
-            head.push(super::solvers::solve_dense());
-        }
-        if kinds.iter().any(|k| k.solves_positive_definite() || !lagrange_indefinite) {
-            head.push(super::solvers::solve_spd());
-        }
-        if options.jacobian || em.emits_parameter_jacobian() {
-            head.push(super::solvers::lu_items());
-        }
-    }
+    // The dense solves are `seam::solve`'s, called by the formulations: written once, not
+    // carried by every module.
     for f in &options.functions {
         head.extend(em.shared_function(*f, &shared)?);
     }

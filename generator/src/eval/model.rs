@@ -12,7 +12,6 @@ use std::sync::Arc;
 
 /// The tolerances of emitted modules (`generator::emit::module`), read from one place.
 use crate::emit::module::{CONSTRAINT_TOLERANCE, SINGULAR_TOLERANCE};
-use crate::emit::solvers::PIVOT_TOLERANCE;
 
 /// The shared functions of a program (energy, work rate, momenta, residuals).
 pub struct Evaluated {
@@ -265,120 +264,21 @@ fn solve_ldl(plan: &LdlPlan, kernel: &dyn Kernel, matrix: &[f64], force: &mut [f
     })
 }
 
-/// `solve_spd` of emitted modules on a row-major `n x n` matrix (overwritten by `L` below the
-/// diagonal), `b` overwritten by the solution: `L D L^T` in the natural order, the operations
-/// of [`LdlPlan::solve`] on a dense plan in the same order, over the rows as slices (no index
-/// tables; and faster than the plan's straight-line code compiled by the JIT on the 20-link
-/// pendulum's in-process Lagrange call, a 21 x 21 matrix, in `cargo bench -p generator --bench
-/// scaling`: the figures are in docs/benchmarks.md). `scratch` holds `L D` and the reciprocals
-/// of `D`.
+/// `seam::solve::solve_spd` with its scratch in `scratch`: `L D` and the reciprocals of `D`.
+/// (Looped over the rows as slices, it is faster than the plan's straight-line code compiled by
+/// the JIT on the 20-link pendulum's in-process Lagrange call, a 21 x 21 matrix, in `cargo bench
+/// -p generator --bench scaling`: the figures are in docs/benchmarks.md.)
 fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], scratch: &mut Vec<f64>) -> Result<(), usize> {
-    let scale = (0..n).fold(0.0f64, |s, i| s.max(a[i * n + i].abs()));
     scratch.clear();
     scratch.resize(n * n + n, 0.0);
     let (u, inv) = scratch.split_at_mut(n * n);
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for (x, y) in a[j * n..j * n + j].iter().zip(&u[j * n..j * n + j]) {
-            d -= x * y;
-        }
-        if !(d > PIVOT_TOLERANCE * scale) {
-            return Err(j);
-        }
-        inv[j] = 1.0 / d;
-        let (u_above, u_below) = u.split_at_mut((j + 1) * n);
-        let uj = &u_above[j * n..j * n + j];
-        for (ai, ui) in a[(j + 1) * n..].chunks_exact_mut(n).zip(u_below.chunks_exact_mut(n)) {
-            let mut s = ai[j];
-            for (x, y) in ai[..j].iter().zip(uj) {
-                s -= x * y;
-            }
-            ui[j] = s;
-            ai[j] = s * inv[j];
-        }
-    }
-    for i in 0..n {
-        let (done, rest) = b.split_at_mut(i);
-        for (x, y) in a[i * n..i * n + i].iter().zip(done.iter()) {
-            rest[0] -= x * y;
-        }
-    }
-    for (x, r) in b.iter_mut().zip(inv.iter()) {
-        *x *= r;
-    }
-    for i in (0..n).rev() {
-        let (head, solved) = b.split_at_mut(i + 1);
-        for (k, y) in solved.iter().enumerate() {
-            head[i] -= a[(i + 1 + k) * n + i] * y;
-        }
-    }
-    Ok(())
+    seam::solve::solve_spd(n, a, b, u, inv)
 }
 
-/// `solve_dense` of emitted modules: Gaussian elimination with partial pivoting on a row-major
-/// `n x n` matrix, `b` overwritten by the solution; `Err(column)` when a pivot is below
-/// `PIVOT_TOLERANCE` times the largest entry. It is [`lu_factor`] then [`lu_solve`]: the same
-/// operations in the same order (the row swaps applied to `b` first, then the same
-/// eliminations by column), so the same numbers as the module's one-pass elimination.
+/// `seam::solve::solve_dense`, its pivots in `pivots`.
 pub(crate) fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut Vec<usize>) -> Result<(), usize> {
     pivots.resize(n, 0);
-    lu_factor(n, a, pivots)?;
-    lu_solve(n, a, pivots, b);
-    Ok(())
-}
-
-/// `lu_factor` of emitted modules: `P a = L U` in place on a row-major `n x n` matrix (partial
-/// pivoting, `L` unit lower below the diagonal), the row taken at each step into `pivots`;
-/// `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn lu_factor(n: usize, a: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for x in a.iter() {
-        scale = scale.max(x.abs());
-    }
-    for c in 0..n {
-        let mut p = c;
-        for r in c + 1..n {
-            if a[r * n + c].abs() > a[p * n + c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p * n + c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        pivots[c] = p;
-        if p != c {
-            for k in 0..n {
-                a.swap(c * n + k, p * n + k);
-            }
-        }
-        for r in c + 1..n {
-            let f = a[r * n + c] / a[c * n + c];
-            a[r * n + c] = f;
-            for k in c + 1..n {
-                a[r * n + k] -= f * a[c * n + k];
-            }
-        }
-    }
-    Ok(())
-}
-
-/// `lu_solve` of emitted modules: `a x = b` in place with the factors of [`lu_factor`].
-fn lu_solve(n: usize, a: &[f64], pivots: &[usize], b: &mut [f64]) {
-    for c in 0..n {
-        b.swap(c, pivots[c]);
-    }
-    for c in 0..n {
-        for r in c + 1..n {
-            b[r] -= a[r * n + c] * b[c];
-        }
-    }
-    for r in (0..n).rev() {
-        let mut s = b[r];
-        for k in r + 1..n {
-            s -= a[r * n + k] * b[k];
-        }
-        b[r] = s / a[r * n + r];
-    }
+    seam::solve::solve_dense(n, a, b, pivots)
 }
 
 impl EvaluatedForm {
@@ -541,10 +441,10 @@ impl EvaluatedForm {
                     x.extend_from_slice(&value[f_at..f_at + n]);
                     pivots.resize(n, 0);
                     dx.resize(n, 0.0);
-                    if let Err(column) = lu_factor(n, matrix, pivots) {
+                    if let Err(column) = seam::solve::lu_factor(n, matrix, pivots) {
                         return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
                     }
-                    lu_solve(n, matrix, pivots, x);
+                    seam::solve::lu_solve(n, matrix, pivots, x);
                     jac.fill(0.0);
                     dstate[..nq].copy_from_slice(&value[..nq]);
                     let (w, c) = (&value[w_at..c_at], &value[c_at..p_at]);
@@ -580,7 +480,7 @@ impl EvaluatedForm {
                             }
                             dx[i] = sum;
                         }
-                        lu_solve(n, matrix, pivots, dx);
+                        seam::solve::lu_solve(n, matrix, pivots, dx);
                         if s.post.is_some() {
                             let (dw, dc) = (&d[w_at..c_at], &d[c_at..p_at]);
                             for j in 0..rw {

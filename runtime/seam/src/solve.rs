@@ -1,0 +1,231 @@
+//! The dense linear solves every model uses, written once: emitted modules call them on their
+//! fixed-size arrays (the `*_array` forms, no allocation), the in-process evaluator on row-major
+//! slices. Both run the same operations in the same order, so a module and its evaluation give
+//! the same numbers.
+//!
+//! - [`solve_dense`]: Gaussian elimination with partial pivoting (Lagrange's equations with
+//!   constraints: an indefinite matrix), as [`lu_factor`] then [`lu_solve`];
+//! - [`solve_spd`]: `L D L^T` without pivoting, one reciprocal per pivot, for a symmetric
+//!   positive definite matrix with no structural zero to skip (a formulation whose matrix has
+//!   some gets its own unrolled plan from the generator);
+//! - [`lu_factor`] and [`lu_solve`]: the factors kept for many right-hand sides (the exact
+//!   Jacobians).
+//!
+//! Each returns `Err(column)` where a pivot is not above [`PIVOT_TOLERANCE`] times the matrix's
+//! scale (for `L D L^T`, not positive: the matrix is singular or not positive definite).
+//!
+//! ```
+//! // 4 x + y = 1, x + 3 y = 2
+//! let mut a = [[4.0, 1.0], [1.0, 3.0]];
+//! let mut b = [1.0, 2.0];
+//! seam::solve::solve_spd_array(&mut a, &mut b).unwrap();
+//! assert!((b[0] - 1.0 / 11.0).abs() < 1e-15 && (b[1] - 7.0 / 11.0).abs() < 1e-15);
+//! let mut singular = [[1.0, 2.0], [2.0, 4.0]];
+//! assert_eq!(seam::solve::solve_dense_array(&mut singular, &mut [1.0, 1.0]), Err(1));
+//! ```
+
+/// Relative size below which a pivot counts as zero.
+pub const PIVOT_TOLERANCE: f64 = 1e-13;
+
+/// `a x = b` in place, `a` row-major `n x n` (overwritten by its factors), by Gaussian
+/// elimination with partial pivoting; `pivots` (length `n`) receives the row taken at each step.
+#[inline]
+pub fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
+    lu_factor(n, a, pivots)?;
+    lu_solve(n, a, pivots, b);
+    Ok(())
+}
+
+/// `P a = L U` in place on a row-major `n x n` matrix (partial pivoting, `L` unit lower below the
+/// diagonal), the row taken at each step into `pivots`.
+#[inline]
+pub fn lu_factor(n: usize, a: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
+    let mut scale = 0.0f64;
+    for x in a[..n * n].iter() {
+        scale = scale.max(x.abs());
+    }
+    for c in 0..n {
+        let mut p = c;
+        for r in c + 1..n {
+            if a[r * n + c].abs() > a[p * n + c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p * n + c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        if p != c {
+            for k in 0..n {
+                a.swap(c * n + k, p * n + k);
+            }
+        }
+        for r in c + 1..n {
+            let f = a[r * n + c] / a[c * n + c];
+            a[r * n + c] = f;
+            for k in c + 1..n {
+                a[r * n + k] -= f * a[c * n + k];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `a x = b` in place with the factors of [`lu_factor`].
+#[inline]
+pub fn lu_solve(n: usize, a: &[f64], pivots: &[usize], b: &mut [f64]) {
+    for c in 0..n {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..n {
+        for r in c + 1..n {
+            b[r] -= a[r * n + c] * b[c];
+        }
+    }
+    for r in (0..n).rev() {
+        let mut s = b[r];
+        for k in r + 1..n {
+            s -= a[r * n + k] * b[k];
+        }
+        b[r] = s / a[r * n + r];
+    }
+}
+
+/// `a x = b` in place for a symmetric positive definite row-major `n x n` matrix `a` (both
+/// triangles given; `L` written below its diagonal), by `L D L^T` in the natural order.
+/// `u` (at least `n * n`) holds `L D`, each entry before its division by the pivot; `inv` (at
+/// least `n`) the reciprocals of `D`.
+#[inline]
+pub fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], u: &mut [f64], inv: &mut [f64]) -> Result<(), usize> {
+    let scale = (0..n).fold(0.0f64, |s, i| s.max(a[i * n + i].abs()));
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for (x, y) in a[j * n..j * n + j].iter().zip(&u[j * n..j * n + j]) {
+            d -= x * y;
+        }
+        if !(d > PIVOT_TOLERANCE * scale) {
+            return Err(j);
+        }
+        inv[j] = 1.0 / d;
+        let (u_above, u_below) = u[..n * n].split_at_mut((j + 1) * n);
+        let uj = &u_above[j * n..j * n + j];
+        for (ai, ui) in a[(j + 1) * n..n * n].chunks_exact_mut(n).zip(u_below.chunks_exact_mut(n)) {
+            let mut s = ai[j];
+            for (x, y) in ai[..j].iter().zip(uj) {
+                s -= x * y;
+            }
+            ui[j] = s;
+            ai[j] = s * inv[j];
+        }
+    }
+    for i in 0..n {
+        let (done, rest) = b.split_at_mut(i);
+        for (x, y) in a[i * n..i * n + i].iter().zip(done.iter()) {
+            rest[0] -= x * y;
+        }
+    }
+    for (x, r) in b[..n].iter_mut().zip(inv.iter()) {
+        *x *= r;
+    }
+    for i in (0..n).rev() {
+        let (head, solved) = b[..n].split_at_mut(i + 1);
+        for (k, y) in solved.iter().enumerate() {
+            head[i] -= a[(i + 1 + k) * n + i] * y;
+        }
+    }
+    Ok(())
+}
+
+/// [`solve_dense`] on an emitted module's array.
+#[inline]
+pub fn solve_dense_array<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
+    let mut pivots = [0usize; N];
+    solve_dense(N, a.as_flattened_mut(), b, &mut pivots)
+}
+
+/// [`solve_spd`] on an emitted module's array (its scratch on the stack).
+#[inline]
+pub fn solve_spd_array<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
+    let mut u = [[0.0f64; N]; N];
+    let mut inv = [0.0f64; N];
+    solve_spd(N, a.as_flattened_mut(), b, u.as_flattened_mut(), &mut inv)
+}
+
+/// [`lu_factor`] on an emitted module's array: the row taken at each step.
+#[inline]
+pub fn lu_factor_array<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut pivots = [0usize; N];
+    lu_factor(N, a.as_flattened_mut(), &mut pivots)?;
+    Ok(pivots)
+}
+
+/// [`lu_solve`] on an emitted module's array.
+#[inline]
+pub fn lu_solve_array<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    lu_solve(N, a.as_flattened(), pivots, b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A symmetric positive definite matrix of size `n` (diagonally dominant), and a right-hand
+    /// side.
+    fn system(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                a[i * n + j] = if i == j { 2.0 * n as f64 } else { 1.0 / (1.0 + (i + j) as f64) };
+            }
+        }
+        (a, (0..n).map(|i| 1.0 + i as f64 * 0.25).collect())
+    }
+
+    fn residual(n: usize, a: &[f64], x: &[f64], b: &[f64]) -> f64 {
+        (0..n).map(|i| ((0..n).map(|j| a[i * n + j] * x[j]).sum::<f64>() - b[i]).abs()).fold(0.0, f64::max)
+    }
+
+    /// Every solve solves, and the array forms give the slice forms' numbers to the bit.
+    #[test]
+    fn the_solves_solve_and_the_array_forms_are_the_slice_forms() {
+        const N: usize = 7;
+        let (a, b) = system(N);
+        let array = |flat: &[f64]| -> [[f64; N]; N] { std::array::from_fn(|i| std::array::from_fn(|j| flat[i * N + j])) };
+        let rhs: [f64; N] = std::array::from_fn(|i| b[i]);
+        // L D L^T.
+        let (mut a1, mut x1, mut u, mut inv) = (a.clone(), b.clone(), vec![0.0; N * N], vec![0.0; N]);
+        solve_spd(N, &mut a1, &mut x1, &mut u, &mut inv).unwrap();
+        assert!(residual(N, &a, &x1, &b) < 1e-14);
+        let (mut a2, mut x2) = (array(&a), rhs);
+        solve_spd_array(&mut a2, &mut x2).unwrap();
+        assert_eq!(x1.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), x2.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+        // Elimination, and the factors reused.
+        let (mut a3, mut x3, mut pivots) = (a.clone(), b.clone(), vec![0; N]);
+        solve_dense(N, &mut a3, &mut x3, &mut pivots).unwrap();
+        assert!(residual(N, &a, &x3, &b) < 1e-14);
+        let (mut a4, mut x4) = (array(&a), rhs);
+        solve_dense_array(&mut a4, &mut x4).unwrap();
+        assert_eq!(x3, x4.to_vec());
+        let mut a5 = array(&a);
+        let p = lu_factor_array(&mut a5).unwrap();
+        let mut x5 = rhs;
+        lu_solve_array(&a5, &p, &mut x5);
+        assert_eq!(x5, x4);
+    }
+
+    /// A pivot at the tolerance stops the solve at its column; `L D L^T` also refuses a matrix
+    /// that is not positive definite; elimination pivots past a zero.
+    #[test]
+    fn singular_and_indefinite_matrices_name_their_column() {
+        let mut singular = [[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [1.0, 0.0, 1.0]];
+        assert_eq!(solve_dense_array(&mut singular, &mut [1.0, 1.0, 1.0]), Err(2));
+        let mut indefinite = [[1.0, 2.0], [2.0, 1.0]];
+        assert_eq!(solve_spd_array(&mut indefinite, &mut [1.0, 1.0]), Err(1));
+        // A zero on the diagonal: elimination swaps rows, L D L^T cannot.
+        let mut swap = [[0.0, 1.0], [1.0, 0.0]];
+        let mut b = [2.0, 3.0];
+        solve_dense_array(&mut swap, &mut b).unwrap();
+        assert_eq!(b, [3.0, 2.0]);
+        assert_eq!(solve_spd_array(&mut [[0.0, 1.0], [1.0, 0.0]], &mut [2.0, 3.0]), Err(0));
+    }
+}
