@@ -6,6 +6,7 @@ use super::kernel::{Backend, Interpreter, Kernel};
 use super::{FormShape, Program};
 use crate::emit::ldl::{LdlPlan, Solve};
 use crate::emit::tape::Tape;
+use seam::solve::Rows;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
 use std::borrow::Cow;
 use std::sync::Arc;
@@ -272,13 +273,13 @@ fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], scratch: &mut Vec<f64>) -> 
     scratch.clear();
     scratch.resize(n * n + n, 0.0);
     let (u, inv) = scratch.split_at_mut(n * n);
-    seam::solve::solve_spd(n, a, b, u, inv)
+    seam::solve::solve_spd(&mut Rows::new(n, a), b, &mut Rows::new(n, u), inv)
 }
 
 /// `seam::solve::solve_dense`, its pivots in `pivots`.
 pub(crate) fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut Vec<usize>) -> Result<(), usize> {
     pivots.resize(n, 0);
-    seam::solve::solve_dense(n, a, b, pivots)
+    seam::solve::solve_dense(&mut Rows::new(n, a), b, pivots)
 }
 
 impl EvaluatedForm {
@@ -441,10 +442,10 @@ impl EvaluatedForm {
                     x.extend_from_slice(&value[f_at..f_at + n]);
                     pivots.resize(n, 0);
                     dx.resize(n, 0.0);
-                    if let Err(column) = seam::solve::lu_factor(n, matrix, pivots) {
+                    if let Err(column) = seam::solve::lu_factor(&mut Rows::new(n, matrix), pivots) {
                         return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
                     }
-                    seam::solve::lu_solve(n, matrix, pivots, x);
+                    seam::solve::lu_solve(&Rows::new(n, matrix), pivots, x);
                     jac.fill(0.0);
                     dstate[..nq].copy_from_slice(&value[..nq]);
                     let (w, c) = (&value[w_at..c_at], &value[c_at..p_at]);
@@ -480,7 +481,7 @@ impl EvaluatedForm {
                             }
                             dx[i] = sum;
                         }
-                        seam::solve::lu_solve(n, matrix, pivots, dx);
+                        seam::solve::lu_solve(&Rows::new(n, matrix), pivots, dx);
                         if s.post.is_some() {
                             let (dw, dc) = (&d[w_at..c_at], &d[c_at..p_at]);
                             for j in 0..rw {

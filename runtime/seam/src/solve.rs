@@ -1,7 +1,7 @@
 //! The dense linear solves every model uses, written once: emitted modules call them on their
 //! fixed-size arrays (the `*_array` forms, no allocation), the in-process evaluator on row-major
-//! slices. Both run the same operations in the same order, so a module and its evaluation give
-//! the same numbers.
+//! slices ([`Rows`]): one generic routine each, over [`Square`]. Both run the same operations
+//! in the same order, so a module and its evaluation give the same numbers.
 //!
 //! - [`solve_dense`]: Gaussian elimination with partial pivoting (Lagrange's equations with
 //!   constraints: an indefinite matrix), as [`lu_factor`] then [`lu_solve`];
@@ -27,44 +27,136 @@
 /// Relative size below which a pivot counts as zero.
 pub const PIVOT_TOLERANCE: f64 = 1e-13;
 
-/// `a x = b` in place, `a` row-major `n x n` (overwritten by its factors), by Gaussian
-/// elimination with partial pivoting; `pivots` (length `n`) receives the row taken at each step.
+/// A square matrix the solves work on in place: an emitted module's `[[f64; N]; N]` (its size
+/// known to the compiler, so the loops are as the module's own were) or [`Rows`], a row-major
+/// slice of any size (the evaluator's).
+pub trait Square {
+    /// The number of rows (and columns).
+    fn size(&self) -> usize;
+    /// Entry `(r, c)`.
+    fn at(&self, r: usize, c: usize) -> f64;
+    /// Entry `(r, c)`, to write.
+    fn at_mut(&mut self, r: usize, c: usize) -> &mut f64;
+    /// Exchanges rows `r` and `s`.
+    fn swap_rows(&mut self, r: usize, s: usize);
+    /// Row `r`, its entries in order (dot products walk them without index checks).
+    fn row(&self, r: usize) -> &[f64];
+}
+
+impl<const N: usize> Square for [[f64; N]; N] {
+    #[inline(always)]
+    fn size(&self) -> usize {
+        N
+    }
+    #[inline(always)]
+    fn at(&self, r: usize, c: usize) -> f64 {
+        self[r][c]
+    }
+    #[inline(always)]
+    fn at_mut(&mut self, r: usize, c: usize) -> &mut f64 {
+        &mut self[r][c]
+    }
+    #[inline(always)]
+    fn swap_rows(&mut self, r: usize, s: usize) {
+        self.swap(r, s)
+    }
+    #[inline(always)]
+    fn row(&self, r: usize) -> &[f64] {
+        &self[r]
+    }
+}
+
+/// A row-major `n x n` matrix in a slice.
+///
+/// ```
+/// use seam::solve::{Rows, Square};
+/// let mut data = [1.0, 2.0, 3.0, 4.0];
+/// let mut m = Rows::new(2, &mut data);
+/// m.swap_rows(0, 1);
+/// assert_eq!((m.at(0, 0), m.at(1, 1)), (3.0, 2.0));
+/// ```
+pub struct Rows<'a> {
+    n: usize,
+    data: &'a mut [f64],
+}
+
+impl<'a> Rows<'a> {
+    /// The first `n * n` entries of `data`, row by row.
+    ///
+    /// # Panics
+    ///
+    /// Where `data` is shorter than `n * n`.
+    pub fn new(n: usize, data: &'a mut [f64]) -> Rows<'a> {
+        Rows { n, data: &mut data[..n * n] }
+    }
+}
+
+impl Square for Rows<'_> {
+    #[inline(always)]
+    fn size(&self) -> usize {
+        self.n
+    }
+    #[inline(always)]
+    fn at(&self, r: usize, c: usize) -> f64 {
+        self.data[r * self.n + c]
+    }
+    #[inline(always)]
+    fn at_mut(&mut self, r: usize, c: usize) -> &mut f64 {
+        &mut self.data[r * self.n + c]
+    }
+    #[inline(always)]
+    fn swap_rows(&mut self, r: usize, s: usize) {
+        if r != s {
+            for k in 0..self.n {
+                self.data.swap(r * self.n + k, s * self.n + k);
+            }
+        }
+    }
+    #[inline(always)]
+    fn row(&self, r: usize) -> &[f64] {
+        &self.data[r * self.n..(r + 1) * self.n]
+    }
+}
+
+/// `a x = b` in place (`a` overwritten by its factors) by Gaussian elimination with partial
+/// pivoting: [`lu_factor`] then [`lu_solve`], the same operations in the same order as one pass
+/// that eliminates `b` with `a`. `pivots` (at least the size) receives the row taken at each step.
 #[inline]
-pub fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
-    lu_factor(n, a, pivots)?;
-    lu_solve(n, a, pivots, b);
+pub fn solve_dense<M: Square>(a: &mut M, b: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
+    lu_factor(a, pivots)?;
+    lu_solve(a, pivots, b);
     Ok(())
 }
 
-/// `P a = L U` in place on a row-major `n x n` matrix (partial pivoting, `L` unit lower below the
-/// diagonal), the row taken at each step into `pivots`.
+/// `P a = L U` in place (partial pivoting, `L` unit lower below the diagonal), the row taken at
+/// each step into `pivots`.
 #[inline]
-pub fn lu_factor(n: usize, a: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
+pub fn lu_factor<M: Square>(a: &mut M, pivots: &mut [usize]) -> Result<(), usize> {
+    let n = a.size();
     let mut scale = 0.0f64;
-    for x in a[..n * n].iter() {
-        scale = scale.max(x.abs());
+    for r in 0..n {
+        for c in 0..n {
+            scale = scale.max(a.at(r, c).abs());
+        }
     }
     for c in 0..n {
         let mut p = c;
         for r in c + 1..n {
-            if a[r * n + c].abs() > a[p * n + c].abs() {
+            if a.at(r, c).abs() > a.at(p, c).abs() {
                 p = r;
             }
         }
-        if !(a[p * n + c].abs() > PIVOT_TOLERANCE * scale) {
+        if !(a.at(p, c).abs() > PIVOT_TOLERANCE * scale) {
             return Err(c);
         }
         pivots[c] = p;
-        if p != c {
-            for k in 0..n {
-                a.swap(c * n + k, p * n + k);
-            }
-        }
+        a.swap_rows(c, p);
         for r in c + 1..n {
-            let f = a[r * n + c] / a[c * n + c];
-            a[r * n + c] = f;
+            let f = a.at(r, c) / a.at(c, c);
+            *a.at_mut(r, c) = f;
             for k in c + 1..n {
-                a[r * n + k] -= f * a[c * n + k];
+                let x = a.at(c, k);
+                *a.at_mut(r, k) -= f * x;
             }
         }
     }
@@ -73,64 +165,68 @@ pub fn lu_factor(n: usize, a: &mut [f64], pivots: &mut [usize]) -> Result<(), us
 
 /// `a x = b` in place with the factors of [`lu_factor`].
 #[inline]
-pub fn lu_solve(n: usize, a: &[f64], pivots: &[usize], b: &mut [f64]) {
+pub fn lu_solve<M: Square>(a: &M, pivots: &[usize], b: &mut [f64]) {
+    let n = a.size();
+    let b = &mut b[..n];
     for c in 0..n {
         b.swap(c, pivots[c]);
     }
     for c in 0..n {
         for r in c + 1..n {
-            b[r] -= a[r * n + c] * b[c];
+            b[r] -= a.at(r, c) * b[c];
         }
     }
     for r in (0..n).rev() {
         let mut s = b[r];
         for k in r + 1..n {
-            s -= a[r * n + k] * b[k];
+            s -= a.at(r, k) * b[k];
         }
-        b[r] = s / a[r * n + r];
+        b[r] = s / a.at(r, r);
     }
 }
 
-/// `a x = b` in place for a symmetric positive definite row-major `n x n` matrix `a` (both
-/// triangles given; `L` written below its diagonal), by `L D L^T` in the natural order.
-/// `u` (at least `n * n`) holds `L D`, each entry before its division by the pivot; `inv` (at
-/// least `n`) the reciprocals of `D`.
+/// `a x = b` in place for a symmetric positive definite `a` (both triangles given; `L` written
+/// below its diagonal), by `L D L^T` in the natural order. `u` (the same size) holds `L D`, each
+/// entry before its division by the pivot; `inv` (at least the size) the reciprocals of `D`.
 #[inline]
-pub fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], u: &mut [f64], inv: &mut [f64]) -> Result<(), usize> {
-    let scale = (0..n).fold(0.0f64, |s, i| s.max(a[i * n + i].abs()));
+pub fn solve_spd<M: Square>(a: &mut M, b: &mut [f64], u: &mut M, inv: &mut [f64]) -> Result<(), usize> {
+    let n = a.size();
+    let (b, inv) = (&mut b[..n], &mut inv[..n]);
+    let mut scale = 0.0f64;
+    for i in 0..n {
+        scale = scale.max(a.at(i, i).abs());
+    }
+    // The dot products walk the rows as slices (in the order of `k`, as indexed loops would).
     for j in 0..n {
-        let mut d = a[j * n + j];
-        for (x, y) in a[j * n..j * n + j].iter().zip(&u[j * n..j * n + j]) {
+        let mut d = a.at(j, j);
+        for (x, y) in a.row(j)[..j].iter().zip(&u.row(j)[..j]) {
             d -= x * y;
         }
         if !(d > PIVOT_TOLERANCE * scale) {
             return Err(j);
         }
         inv[j] = 1.0 / d;
-        let (u_above, u_below) = u[..n * n].split_at_mut((j + 1) * n);
-        let uj = &u_above[j * n..j * n + j];
-        for (ai, ui) in a[(j + 1) * n..n * n].chunks_exact_mut(n).zip(u_below.chunks_exact_mut(n)) {
-            let mut s = ai[j];
-            for (x, y) in ai[..j].iter().zip(uj) {
+        for i in j + 1..n {
+            let mut s = a.at(i, j);
+            for (x, y) in a.row(i)[..j].iter().zip(&u.row(j)[..j]) {
                 s -= x * y;
             }
-            ui[j] = s;
-            ai[j] = s * inv[j];
+            *u.at_mut(i, j) = s;
+            *a.at_mut(i, j) = s * inv[j];
         }
     }
     for i in 0..n {
         let (done, rest) = b.split_at_mut(i);
-        for (x, y) in a[i * n..i * n + i].iter().zip(done.iter()) {
+        for (x, y) in a.row(i)[..i].iter().zip(done.iter()) {
             rest[0] -= x * y;
         }
     }
-    for (x, r) in b[..n].iter_mut().zip(inv.iter()) {
-        *x *= r;
+    for i in 0..n {
+        b[i] *= inv[i];
     }
     for i in (0..n).rev() {
-        let (head, solved) = b[..n].split_at_mut(i + 1);
-        for (k, y) in solved.iter().enumerate() {
-            head[i] -= a[(i + 1 + k) * n + i] * y;
+        for k in i + 1..n {
+            b[i] -= a.at(k, i) * b[k];
         }
     }
     Ok(())
@@ -140,7 +236,7 @@ pub fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], u: &mut [f64], inv: &mu
 #[inline]
 pub fn solve_dense_array<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
     let mut pivots = [0usize; N];
-    solve_dense(N, a.as_flattened_mut(), b, &mut pivots)
+    solve_dense(a, b, &mut pivots)
 }
 
 /// [`solve_spd`] on an emitted module's array (its scratch on the stack).
@@ -148,21 +244,21 @@ pub fn solve_dense_array<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]
 pub fn solve_spd_array<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
     let mut u = [[0.0f64; N]; N];
     let mut inv = [0.0f64; N];
-    solve_spd(N, a.as_flattened_mut(), b, u.as_flattened_mut(), &mut inv)
+    solve_spd(a, b, &mut u, &mut inv)
 }
 
 /// [`lu_factor`] on an emitted module's array: the row taken at each step.
 #[inline]
 pub fn lu_factor_array<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
     let mut pivots = [0usize; N];
-    lu_factor(N, a.as_flattened_mut(), &mut pivots)?;
+    lu_factor(a, &mut pivots)?;
     Ok(pivots)
 }
 
 /// [`lu_solve`] on an emitted module's array.
 #[inline]
 pub fn lu_solve_array<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
-    lu_solve(N, a.as_flattened(), pivots, b)
+    lu_solve(a, pivots, b)
 }
 
 #[cfg(test)]
@@ -194,14 +290,14 @@ mod tests {
         let rhs: [f64; N] = std::array::from_fn(|i| b[i]);
         // L D L^T.
         let (mut a1, mut x1, mut u, mut inv) = (a.clone(), b.clone(), vec![0.0; N * N], vec![0.0; N]);
-        solve_spd(N, &mut a1, &mut x1, &mut u, &mut inv).unwrap();
+        solve_spd(&mut Rows::new(N, &mut a1), &mut x1, &mut Rows::new(N, &mut u), &mut inv).unwrap();
         assert!(residual(N, &a, &x1, &b) < 1e-14);
         let (mut a2, mut x2) = (array(&a), rhs);
         solve_spd_array(&mut a2, &mut x2).unwrap();
         assert_eq!(x1.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), x2.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
         // Elimination, and the factors reused.
         let (mut a3, mut x3, mut pivots) = (a.clone(), b.clone(), vec![0; N]);
-        solve_dense(N, &mut a3, &mut x3, &mut pivots).unwrap();
+        solve_dense(&mut Rows::new(N, &mut a3), &mut x3, &mut pivots).unwrap();
         assert!(residual(N, &a, &x3, &b) < 1e-14);
         let (mut a4, mut x4) = (array(&a), rhs);
         solve_dense_array(&mut a4, &mut x4).unwrap();
