@@ -14,7 +14,8 @@ True
 `Model.simulate` integrates one formulation (a pandas DataFrame when pandas is installed),
 `multibody.ensemble` runs many members on every core with the GIL released,
 `multibody.distributed.ensemble` spreads one over a Dask cluster, and `Model.animate` writes a
-self-contained HTML page that plays the motion in 3-D.
+self-contained HTML page that plays the motion in 3-D; `multibody.plot(run)` draws a run with
+matplotlib.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import numpy as np
 
 from . import _multibody
 from ._multibody import METHODS, InternalError, ModelError, SimulationError, built_in
+from .plotting import plot
 
 __all__ = [
     "Model",
@@ -46,6 +48,7 @@ __all__ = [
     "ensemble",
     "built_in",
     "pendulum_on_cart",
+    "plot",
     "floating_chain",
     "METHODS",
 ]
@@ -116,6 +119,11 @@ class Trajectory(Mapping):
 
     def __len__(self):
         return len(self.columns)
+
+    def plot(self, coordinates=None, *, title=None):
+        """The run drawn with matplotlib (``multibody.plot``): the coordinates, the invariants'
+        errors on logarithmic axes and the conserved momenta; returns the ``Figure``."""
+        return plot(self, coordinates, title=title)
 
     @property
     def t(self) -> np.ndarray:
