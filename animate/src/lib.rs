@@ -118,10 +118,14 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
         "formulation": motion.formulation,
         "times": motion.times,
         "frames": poser.frame_names,
+        // Each frame's parent (the world is 0; the world itself has none): the page draws the
+        // links between them.
+        "parents": model.frames.iter().map(|f| f.joint.as_ref().map(|j| j.parent)).collect::<Vec<_>>(),
         "bodies": bodies,
         "poses": poses,
         "centers": if moving { serde_json::json!(centers) } else { serde_json::Value::Null },
         "up": up,
+        "gravity": poser.gravity,
     });
     // JSON inside a script element: `</` would end it, so it is written `<\/` (the same string).
     let json = serde_json::to_string(&data).expect("plain data").replace("</", "<\\/");

@@ -137,3 +137,60 @@ def test_a_notebook_shows_the_animation_and_the_model(tmp_path):
     assert m.ignorable, "scene 2 has ignorable coordinates to mark"
     assert cells["formulations"].split(", ") == list(m.formulations)
     assert cells["model"] == "three_body"
+
+
+def coverage(image):
+    """The share of the picture's pixels that draw the system: a body's colour or a rod's grey
+    (the white background and the light ground grid excluded)."""
+    w, h = image.size
+    drawn = total = 0
+    for y in range(0, h, 2):
+        for x in range(0, w, 2):
+            r, g, b = image.getpixel((x, y))[:3]
+            _, s, v = colorsys.rgb_to_hsv(r / 255, g / 255, b / 255)
+            total += 1
+            drawn += s > 0.35 or v < 0.45
+    return drawn / total
+
+
+@pytest.mark.parametrize("name", ["pendulum_on_cart_10", "three_body"])
+def test_the_bodies_fill_a_fair_part_of_the_view(tmp_path, name):
+    from PIL import Image
+
+    m = multibody.pendulum_on_cart(10) if name == "pendulum_on_cart_10" else multibody.load(name)
+    run = m.simulate(m.formulations[-1], t_end=3.0, dt_out=0.05, frame=False)
+    path = tmp_path / f"{name}.html"
+    m.animate(run, path)
+    shots = []
+    for t in [0.5, 2.5]:
+        url = path.as_uri() + f"#t={t}&size=800x520"
+        state = page_state(tmp_path, url)
+        # Every body is in the view.
+        assert all(0 < x < 800 and 0 < y < 520 for x, y in state["screen"]), state["screen"]
+        shot = tmp_path / f"{name}_{t}.png"
+        chromium(tmp_path, f"--screenshot={shot}", url)
+        image = Image.open(shot).convert("RGB").crop((0, 60, 800, 560))
+        assert coverage(image) >= 0.04, (name, t, coverage(image))
+        shots.append(image)
+    # The system moved between the two times, and so did the picture.
+    assert shots[0].tobytes() != shots[1].tobytes()
+
+
+def test_the_camera_follows_a_travelling_system(tmp_path):
+    m = multibody.load("bicycle")
+    run = m.simulate("kane", t_end=3.0, dt_out=0.05, frame=False)
+    path = tmp_path / "bicycle.html"
+    m.animate(run, path)
+    # The bicycle rides away further than its size: the camera follows its centre by default,
+    # and the bodies stay in the middle of the view.
+    middles = []
+    for t in [0.5, 2.5]:
+        state = page_state(tmp_path, path.as_uri() + f"#t={t}&size=800x520")
+        assert state["follow"] is True
+        xs = [p[0] for p in state["screen"]]
+        middles.append(sum(xs) / len(xs))
+        assert 200 < middles[-1] < 600, middles
+    assert np.linalg.norm(np.subtract(state["middle"], page_state(tmp_path, path.as_uri() + "#t=0.5&size=800x520")["middle"])) > 1.0
+    # Asked not to follow, the view stays put and the bicycle leaves the middle.
+    fixed = [page_state(tmp_path, path.as_uri() + f"#t={t}&size=800x520&follow=0") for t in [0.5, 2.5]]
+    assert fixed[0]["follow"] is False and fixed[0]["middle"] == fixed[1]["middle"]
