@@ -341,6 +341,28 @@ impl QuasiVelocityDef {
     }
 }
 
+/// How the robot's root link is held.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub enum Base {
+    /// Fixed to the world (an arm on a table).
+    #[default]
+    Fixed,
+    /// Free: three translations and a unit quaternion (a humanoid, a quadruped, a satellite).
+    Floating,
+}
+
+/// What the joints' `limit`s become.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub enum LimitAction {
+    /// Nothing in the equations: `inspect` lists them.
+    #[default]
+    Report,
+    /// Events that record each crossing of a limit.
+    Record,
+    /// Events that stop the run at the first limit reached.
+    Stop,
+}
+
 /// A URDF a model starts from: `urdf: Urdf(file: "robot.urdf", base: Floating)`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Urdf")]
@@ -348,12 +370,12 @@ pub struct UrdfInclude {
     /// The URDF's path, relative to the model file.
     pub file: String,
     #[serde(default)]
-    pub base: crate::model::urdf::Base,
+    pub base: Base,
     /// Gravity in world components (default `["0", "0", "-9.81"]`; zeros for none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gravity: Option<[f64; 3]>,
     #[serde(default)]
-    pub limits: crate::model::urdf::LimitAction,
+    pub limits: LimitAction,
 }
 
 /// Ignorable coordinates: found automatically, or declared (and verified).

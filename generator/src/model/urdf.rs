@@ -78,27 +78,9 @@ pub fn world_rotation(coordinates: &[String], q: &[f64], axis: [f64; 3]) -> Opti
     Some(xi)
 }
 
-/// How the robot's root link is held.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-pub enum Base {
-    /// Fixed to the world (an arm on a table).
-    #[default]
-    Fixed,
-    /// Free: three translations and a unit quaternion (a humanoid, a quadruped, a satellite).
-    Floating,
-}
-
-/// What the joints' `limit`s become.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-pub enum LimitAction {
-    /// Nothing in the equations: `inspect` lists them.
-    #[default]
-    Report,
-    /// Events that record each crossing of a limit.
-    Record,
-    /// Events that stop the run at the first limit reached.
-    Stop,
-}
+// The base and the limits are words of the model format (a RON model that includes a URDF
+// names them too): they live with its schema.
+pub use super::schema::{Base, LimitAction};
 
 /// How a URDF becomes a model.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
