@@ -1474,15 +1474,7 @@ pub mod lagrange {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1507,12 +1499,7 @@ pub mod lagrange {
         dstate[13] = force[5];
         dstate[14] = force[6];
         dstate[15] = force[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1891,11 +1878,8 @@ pub mod lagrange {
             thF_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1934,11 +1918,7 @@ pub mod lagrange {
             delta_dot,
             thF_dot,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -6104,15 +6084,7 @@ pub mod lagrange {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -6148,22 +6120,8 @@ pub mod lagrange {
                 jac[8 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

@@ -262,15 +262,7 @@ pub mod lagrange {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -283,12 +275,7 @@ pub mod lagrange {
         dstate[1] = qdot[1];
         dstate[2] = force[0];
         dstate[3] = force[1];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -351,11 +338,8 @@ pub mod lagrange {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot];
         let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -370,11 +354,7 @@ pub mod lagrange {
         let y_dot = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -441,15 +421,7 @@ pub mod lagrange {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -485,22 +457,8 @@ pub mod lagrange {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -559,15 +517,7 @@ pub mod lagrange {
             d_force,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -603,22 +553,8 @@ pub mod lagrange {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 4 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -809,15 +745,7 @@ pub mod maggi {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -831,12 +759,7 @@ pub mod maggi {
         dstate[1] = qdot[1];
         dstate[2] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
         dstate[3] = w[1][0] * force[0] + w[1][1] * force[1] + c[1];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -882,11 +805,8 @@ pub mod maggi {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot];
         let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -901,11 +821,7 @@ pub mod maggi {
         let y_dot = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -992,15 +908,7 @@ pub mod maggi {
             d_c,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1044,22 +952,8 @@ pub mod maggi {
                 jac[2 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -1135,15 +1029,7 @@ pub mod maggi {
             d_c,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1187,22 +1073,8 @@ pub mod maggi {
                 jac[2 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 4 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1378,15 +1250,7 @@ pub mod kane {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1399,12 +1263,7 @@ pub mod kane {
         dstate[1] = qdot[1];
         dstate[2] = force[0];
         dstate[3] = force[1];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1450,11 +1309,8 @@ pub mod kane {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot];
         let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1469,11 +1325,7 @@ pub mod kane {
         let u2 = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [u1, u2];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1540,15 +1392,7 @@ pub mod kane {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1584,22 +1428,8 @@ pub mod kane {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -1658,15 +1488,7 @@ pub mod kane {
             d_force,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1702,22 +1524,8 @@ pub mod kane {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 4 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1885,15 +1693,7 @@ pub mod reduced_volterra {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1905,12 +1705,7 @@ pub mod reduced_volterra {
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1956,11 +1751,8 @@ pub mod reduced_volterra {
         }
         let state: [f64; STATES] = [q[0], q[1], y_dot];
         let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1976,11 +1768,7 @@ pub mod reduced_volterra {
         let G_x = g_i[0];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [G_x / m, u1];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -2042,15 +1830,7 @@ pub mod reduced_volterra {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2086,22 +1866,8 @@ pub mod reduced_volterra {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -2157,15 +1923,7 @@ pub mod reduced_volterra {
             d_force,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2201,22 +1959,8 @@ pub mod reduced_volterra {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 4 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

@@ -238,15 +238,7 @@ pub mod lagrange {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
             return Err(Failure::Singular {
@@ -265,12 +257,7 @@ pub mod lagrange {
         dstate[6] = force[2];
         dstate[7] = force[3];
         dstate[8] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -354,11 +341,8 @@ pub mod lagrange {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -375,11 +359,7 @@ pub mod lagrange {
         let phi_dot = state[7];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
         let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot, psi_dot, phi_dot];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -552,15 +532,7 @@ pub mod lagrange {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -600,22 +572,8 @@ pub mod lagrange {
                 jac[4 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -727,15 +685,7 @@ pub mod lagrange {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -775,22 +725,8 @@ pub mod lagrange {
                 jac[4 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 3 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1001,15 +937,7 @@ pub mod maggi {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1029,12 +957,7 @@ pub mod maggi {
         dstate[6] = w[2][0] * force[0] + w[2][1] * force[1] + c[2];
         dstate[7] = w[3][0] * force[0] + w[3][1] * force[1] + c[3];
         dstate[8] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1101,11 +1024,8 @@ pub mod maggi {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1122,11 +1042,7 @@ pub mod maggi {
         let phi_dot = state[7];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
         let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot, psi_dot, phi_dot];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1264,15 +1180,7 @@ pub mod maggi {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1320,22 +1228,8 @@ pub mod maggi {
                 jac[4 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -1431,15 +1325,7 @@ pub mod maggi {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1487,22 +1373,8 @@ pub mod maggi {
                 jac[4 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 3 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1684,15 +1556,7 @@ pub mod kane {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1709,12 +1573,7 @@ pub mod kane {
         dstate[4] = force[0];
         dstate[5] = force[1];
         dstate[6] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1771,11 +1630,8 @@ pub mod kane {
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], q[3], psi_dot, phi_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1798,11 +1654,7 @@ pub mod kane {
             u1,
             u2,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1902,15 +1754,7 @@ pub mod kane {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1950,22 +1794,8 @@ pub mod kane {
                 jac[4 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -2041,15 +1871,7 @@ pub mod kane {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2089,22 +1911,8 @@ pub mod kane {
                 jac[4 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 3 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -2282,15 +2090,7 @@ pub mod reduced_volterra {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -2306,12 +2106,7 @@ pub mod reduced_volterra {
         dstate[3] = qdot[3];
         dstate[4] = force[0];
         dstate[5] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -2368,11 +2163,8 @@ pub mod reduced_volterra {
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], q[3], phi_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -2396,11 +2188,7 @@ pub mod reduced_volterra {
             4.0 * G_psi / (md * R * R),
             u1,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -2484,15 +2272,7 @@ pub mod reduced_volterra {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2532,22 +2312,8 @@ pub mod reduced_volterra {
                 jac[4 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -2620,15 +2386,7 @@ pub mod reduced_volterra {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2668,22 +2426,8 @@ pub mod reduced_volterra {
                 jac[4 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 3 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

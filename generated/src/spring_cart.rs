@@ -273,15 +273,7 @@ pub mod lagrange {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -296,12 +288,7 @@ pub mod lagrange {
         dstate[2] = force[0];
         dstate[3] = force[1];
         dstate[4] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -363,11 +350,8 @@ pub mod lagrange {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -382,11 +366,7 @@ pub mod lagrange {
         let th_dot = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [x_dot, th_dot];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -494,15 +474,7 @@ pub mod lagrange {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -542,22 +514,8 @@ pub mod lagrange {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -683,15 +641,7 @@ pub mod lagrange {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -731,22 +681,8 @@ pub mod lagrange {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 7 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -959,15 +895,7 @@ pub mod maggi {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -983,12 +911,7 @@ pub mod maggi {
         dstate[2] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
         dstate[3] = w[1][0] * force[0] + w[1][1] * force[1] + c[1];
         dstate[4] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1033,11 +956,8 @@ pub mod maggi {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1052,11 +972,7 @@ pub mod maggi {
         let th_dot = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [x_dot, th_dot];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1181,15 +1097,7 @@ pub mod maggi {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1237,22 +1145,8 @@ pub mod maggi {
                 jac[2 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -1406,15 +1300,7 @@ pub mod maggi {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1462,22 +1348,8 @@ pub mod maggi {
                 jac[2 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 7 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1675,15 +1547,7 @@ pub mod kane {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1698,12 +1562,7 @@ pub mod kane {
         dstate[2] = force[0];
         dstate[3] = force[1];
         dstate[4] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1748,11 +1607,8 @@ pub mod kane {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -1767,11 +1623,7 @@ pub mod kane {
         let u2 = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [u1, u2];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1879,15 +1731,7 @@ pub mod kane {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -1927,22 +1771,8 @@ pub mod kane {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -2068,15 +1898,7 @@ pub mod kane {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2116,22 +1938,8 @@ pub mod kane {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 7 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -2329,15 +2137,7 @@ pub mod reduced_volterra {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -2352,12 +2152,7 @@ pub mod reduced_volterra {
         dstate[2] = force[0];
         dstate[3] = force[1];
         dstate[4] = power;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -2402,11 +2197,8 @@ pub mod reduced_volterra {
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
@@ -2421,11 +2213,7 @@ pub mod reduced_volterra {
         let u2 = state[3];
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
         let qdot: [f64; NUM_COORDINATES] = [u1, u2];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -2533,15 +2321,7 @@ pub mod reduced_volterra {
             d_power,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2581,22 +2361,8 @@ pub mod reduced_volterra {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -2721,15 +2487,7 @@ pub mod reduced_volterra {
             d_power,
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -2769,22 +2527,8 @@ pub mod reduced_volterra {
                 jac[2 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * 7 + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

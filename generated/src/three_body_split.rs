@@ -1034,15 +1034,7 @@ pub mod lagrange {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -1067,12 +1059,7 @@ pub mod lagrange {
         dstate[13] = force[5];
         dstate[14] = force[6];
         dstate[15] = force[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1189,11 +1176,8 @@ pub mod lagrange {
                     * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
                         + v[13] * v[29]) + Z_dot * v[38],
         ];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     #[allow(non_snake_case)]
@@ -1311,11 +1295,7 @@ pub mod lagrange {
             Y_dot,
             Z_dot,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -3341,15 +3321,7 @@ pub mod lagrange {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -3385,22 +3357,8 @@ pub mod lagrange {
                 jac[8 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -4205,15 +4163,7 @@ pub mod maggi {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -4255,12 +4205,7 @@ pub mod maggi {
         dstate[15] = w[7][0] * force[0] + w[7][1] * force[1] + w[7][2] * force[2]
             + w[7][3] * force[3] + w[7][4] * force[4] + w[7][5] * force[5]
             + w[7][6] * force[6] + w[7][7] * force[7] + c[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -4360,11 +4305,8 @@ pub mod maggi {
                     * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
                         + v[13] * v[29]) + Z_dot * v[38],
         ];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     #[allow(non_snake_case)]
@@ -4491,11 +4433,7 @@ pub mod maggi {
             Y_dot,
             Z_dot,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -7183,15 +7121,7 @@ pub mod maggi {
             d_c,
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -7235,22 +7165,8 @@ pub mod maggi {
                 jac[8 + j][k] = s;
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -7833,15 +7749,7 @@ pub mod kane {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -7866,12 +7774,7 @@ pub mod kane {
         dstate[13] = force[5];
         dstate[14] = force[6];
         dstate[15] = force[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -7973,11 +7876,8 @@ pub mod kane {
                     * (v[1] * phi_dot * (v[30] * v[4] - v[29] * v[2]) + v[28] * v[32]
                         + v[31] * v[34]) + Z_dot * v[36],
         ];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     #[allow(non_snake_case)]
@@ -8107,11 +8007,7 @@ pub mod kane {
             u7,
             u8,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -9174,15 +9070,7 @@ pub mod kane {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -9218,22 +9106,8 @@ pub mod kane {
                 jac[8 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -9814,15 +9688,7 @@ pub mod reduced_volterra {
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
@@ -9844,12 +9710,7 @@ pub mod reduced_volterra {
         dstate[10] = force[2];
         dstate[11] = force[3];
         dstate[12] = force[4];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -9948,11 +9809,8 @@ pub mod reduced_volterra {
                     * (v[1] * phi_dot * (v[30] * v[4] - v[29] * v[2]) + v[28] * v[32]
                         + v[31] * v[34]) + Z_dot * v[36],
         ];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &state)?;
+        ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
     }
     #[allow(non_snake_case)]
@@ -10115,11 +9973,7 @@ pub mod reduced_volterra {
                         * (v[39] * v[30] + v[41] * v[27]
                             + v[0] * u1 * (v[28] * v[2] - v[29] * v[1]))),
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
+        ::seam::check::finite(t, &qdot)?;
         Ok((q, qdot))
     }
     #[allow(non_snake_case)]
@@ -11353,15 +11207,7 @@ pub mod reduced_volterra {
             g_i,
         );
         let mut x = force;
-        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-            if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(Failure::Singular {
-                    t,
-                    condition: condition.into(),
-                    value,
-                });
-            }
-        }
+        ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
         let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
             Ok(p) => p,
             Err(column) => {
@@ -11397,22 +11243,8 @@ pub mod reduced_volterra {
                 jac[8 + j][k] = dx[j];
             }
         }
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Failure::NonFinite { t, index });
-            }
-        }
-        for (row, values) in jac.iter().enumerate() {
-            for (column, value) in values.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite {
-                        t,
-                        index: STATES + row * STATES + column,
-                    });
-                }
-            }
-        }
-        Ok(())
+        ::seam::check::finite(t, dstate)?;
+        ::seam::check::finite_after(t, STATES, jac.as_flattened())
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

@@ -53,8 +53,9 @@ pub enum Error {
 }
 
 /// The `seam` crate's sources, built into every library (`lib.rs` first).
-pub const SEAM_SOURCES: [(&str, &str); 8] = [
+pub const SEAM_SOURCES: [(&str, &str); 9] = [
     ("lib.rs", include_str!("../../runtime/seam/src/lib.rs")),
+    ("check.rs", include_str!("../../runtime/seam/src/check.rs")),
     ("compiled.rs", include_str!("../../runtime/seam/src/compiled.rs")),
     ("event.rs", include_str!("../../runtime/seam/src/event.rs")),
     ("failure.rs", include_str!("../../runtime/seam/src/failure.rs")),

@@ -511,7 +511,7 @@ impl Emitter<'_> {
                 }
             }
         };
-        let seam = &self.seam;
+        let seam = self.seam.clone();
         let (solve_stmts, solve_item) = match (plan.sparse(), &plan) {
             (Some(sparse), _) => (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.splices, self.options.fma)),
             (None, Solve::Ldl(_)) => (solve_with(quote!(#seam::solve::solve_spd_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
@@ -560,23 +560,15 @@ impl Emitter<'_> {
             #[doc = "Checks the singular factors, solves, and writes the state's rates."]
             #[allow(clippy::all)]
             fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
-                for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
-                    if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(Failure::Singular { t, condition: condition.into(), value });
-                    }
-                }
+                #seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
                 #solve_stmts
                 #unpack_post
                 #unpack_power
                 #(dstate[#qd_idx] = qdot[#qd_idx];)*
                 #(dstate[#s_idx] = #speed_values;)*
                 #power_stmt
-                for (index, value) in dstate.iter().enumerate() {
-                    if !value.is_finite() {
-                        return Err(Failure::NonFinite { t, index });
-                    }
-                }
-                Ok(())
+                #seam::check::finite(t, dstate)
+
             }
             #rhs_doc
             pub fn rhs(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -617,7 +609,7 @@ impl Emitter<'_> {
         let helpers = &b.helpers;
         let used: BTreeSet<usize> = b.used_args.iter().copied().chain([0, 1, 2]).collect();
         let fn_args = arg_list(&args, &used);
-
+        let seam = &self.seam;
         Ok(quote! {
             #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
             #[allow(non_snake_case, clippy::all)]
@@ -633,11 +625,8 @@ impl Emitter<'_> {
                 }
                 let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
                 let g_i: [f64; NUM_IGNORABLE] = [#(#g_out),*];
-                for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-                    if !value.is_finite() {
-                        return Err(Failure::NonFinite { t, index });
-                    }
-                }
+                #seam::check::finite(t, &state)?;
+                #seam::check::finite_after(t, STATES, &g_i)?;
                 Ok((state, g_i))
             }
             #helpers
@@ -679,6 +668,7 @@ impl Emitter<'_> {
         let stmts = &b.stmts;
         let helpers = &b.helpers;
         let fn_args = arg_list(&args, &b.used_args.iter().copied().chain([0, 1]).collect());
+        let seam = &self.seam;
         Ok(quote! {
             #[doc = "Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0."]
             #[allow(non_snake_case, clippy::all)]
@@ -687,11 +677,7 @@ impl Emitter<'_> {
                 #(#check_stmts)*
                 let q: [f64; NUM_COORDINATES] = [#(#q_items),*];
                 let qdot: [f64; NUM_COORDINATES] = [#(#qd),*];
-                for (index, value) in qdot.iter().enumerate() {
-                    if !value.is_finite() {
-                        return Err(Failure::NonFinite { t, index });
-                    }
-                }
+                #seam::check::finite(t, &qdot)?;
                 Ok((q, qdot))
             }
             #helpers

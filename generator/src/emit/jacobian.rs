@@ -249,11 +249,7 @@ impl Emitter<'_> {
             pub fn #function_i(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], jac: &mut [[f64; #columns]; STATES]) -> Result<(), Failure> {
                 let #structure_i { #(#field_names),* } = #assemble_i(t, state, params, g_i);
                 let mut x = force;
-                for (condition, value) in CONDITIONS.into_iter().zip(checks) {
-                    if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(Failure::Singular { t, condition: condition.into(), value });
-                    }
-                }
+                #seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
                 let pivots = match #seam::solve::lu_factor_array(&mut matrix) {
                     Ok(p) => p,
                     Err(column) => return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 }),
@@ -281,19 +277,8 @@ impl Emitter<'_> {
                     #speed_columns
                     #power_column
                 }
-                for (index, value) in dstate.iter().enumerate() {
-                    if !value.is_finite() {
-                        return Err(Failure::NonFinite { t, index });
-                    }
-                }
-                for (row, values) in jac.iter().enumerate() {
-                    for (column, value) in values.iter().enumerate() {
-                        if !value.is_finite() {
-                            return Err(Failure::NonFinite { t, index: STATES + row * #columns + column });
-                        }
-                    }
-                }
-                Ok(())
+                #seam::check::finite(t, dstate)?;
+                #seam::check::finite_after(t, STATES, jac.as_flattened())
             }
         })
     }

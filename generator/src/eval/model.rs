@@ -339,11 +339,7 @@ impl EvaluatedForm {
                         force[self.m + i] -= 2.0 * alpha * residuals[i] + beta * beta * positions[i];
                     }
                 }
-                for (condition, &value) in s.conditions.iter().zip(checks) {
-                    if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
-                    }
-                }
+                seam::check::nonsingular(t, &s.conditions, checks, SINGULAR_TOLERANCE)?;
                 // The module's own solve: `solve_spd` or its `solve_ldl`, both a plan's twin.
                 let solved = match &s.solve {
                     // As the module: its unrolled `solve_ldl` (`Solve::sparse`), else the looped
@@ -382,12 +378,7 @@ impl EvaluatedForm {
                     let last = dstate.len() - 1;
                     dstate[last] = power_weights.iter().zip(force.iter()).fold(p, |acc, (w, x)| acc + w * x);
                 }
-                for (index, value) in dstate.iter().enumerate() {
-                    if !value.is_finite() {
-                        return Err(Failure::NonFinite { t, index });
-                    }
-                }
-                Ok(())
+                seam::check::finite(t, dstate)
             })
         })
     }
@@ -427,11 +418,7 @@ impl EvaluatedForm {
             let derivative = |k: usize| at(block + conditions.len() + k * block);
             // The parts of one block.
             let (m_at, f_at, w_at, c_at, p_at) = (nq, nq + n * n, nq + n * n + n, nq + n * n + n + rw * cw, nq + n * n + n + rw * cw + rw);
-            for (condition, &v) in conditions.iter().zip(checks) {
-                if !(v.abs() > SINGULAR_TOLERANCE) {
-                    return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value: v });
-                }
-            }
+            seam::check::nonsingular(t, &conditions, checks, SINGULAR_TOLERANCE)?;
             SOLVE.with(|solve| {
                 COLUMN.with(|column| {
                     let (matrix, x, pivots) = &mut *solve.borrow_mut();
@@ -506,17 +493,8 @@ impl EvaluatedForm {
                             jac[last * columns + k] = sum;
                         }
                     }
-                    for (index, value) in dstate.iter().enumerate() {
-                        if !value.is_finite() {
-                            return Err(Failure::NonFinite { t, index });
-                        }
-                    }
-                    for (index, value) in jac.iter().enumerate() {
-                        if !value.is_finite() {
-                            return Err(Failure::NonFinite { t, index: dstate.len() + index });
-                        }
-                    }
-                    Ok(())
+                    seam::check::finite(t, dstate)?;
+                    seam::check::finite_after(t, dstate.len(), jac)
                 })
             })
         })
@@ -576,12 +554,8 @@ impl FormulationFunctions for EvaluatedForm {
                 state[s.kept.len() + s.speeds] = 0.0;
             }
             g_i.copy_from_slice(g);
-            for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite { t, index });
-                }
-            }
-            Ok(())
+            seam::check::finite(t, state)?;
+            seam::check::finite_after(t, state.len(), g_i)
         })
     }
 
@@ -592,22 +566,13 @@ impl FormulationFunctions for EvaluatedForm {
         let s = &self.shape;
         run(&*self.velocities, t, params, g_i, state, |o| {
             let (qd, checks) = o.split_at(self.m);
-            for (condition, &value) in s.conditions.iter().zip(checks) {
-                if !(value.abs() > SINGULAR_TOLERANCE) {
-                    return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
-                }
-            }
+            seam::check::nonsingular(t, &s.conditions, checks, SINGULAR_TOLERANCE)?;
             q.fill(0.0);
             for (k, &j) in s.kept.iter().enumerate() {
                 q[j] = state[k];
             }
             qdot.copy_from_slice(qd);
-            for (index, value) in qdot.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite { t, index });
-                }
-            }
-            Ok(())
+            seam::check::finite(t, qdot)
         })
     }
 

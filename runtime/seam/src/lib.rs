@@ -22,6 +22,7 @@ mod failure;
 mod grid;
 mod kind;
 mod model;
+pub mod check;
 pub mod solve;
 
 pub use compiled::{InitialFn, JacobianFn, MarginFn, MatrixFn, PointFn, RhsFn, StabilizedFn, StaticFormulation, StaticModel, VelocitiesFn};
