@@ -418,7 +418,7 @@ impl EvaluatedForm {
             let derivative = |k: usize| at(block + conditions.len() + k * block);
             // The parts of one block.
             let (m_at, f_at, w_at, c_at, p_at) = (nq, nq + n * n, nq + n * n + n, nq + n * n + n + rw * cw, nq + n * n + n + rw * cw + rw);
-            seam::check::nonsingular(t, &conditions, checks, SINGULAR_TOLERANCE)?;
+            seam::check::nonsingular(t, conditions, checks, SINGULAR_TOLERANCE)?;
             SOLVE.with(|solve| {
                 COLUMN.with(|column| {
                     let (matrix, x, pivots) = &mut *solve.borrow_mut();
