@@ -152,9 +152,9 @@ mod upgrades {
                 let mut q = lock();
                 match q.jobs.pop_front() {
                     Some(job) => job,
+                    // Empty: the last job's end has already woken `settle`.
                     None => {
                         q.worker = false;
-                        DONE.notify_all();
                         return;
                     }
                 }
