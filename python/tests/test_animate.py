@@ -194,3 +194,16 @@ def test_the_camera_follows_a_travelling_system(tmp_path):
     # Asked not to follow, the view stays put and the bicycle leaves the middle.
     fixed = [page_state(tmp_path, path.as_uri() + f"#t={t}&size=800x520&follow=0") for t in [0.5, 2.5]]
     assert fixed[0]["follow"] is False and fixed[0]["middle"] == fixed[1]["middle"]
+
+
+def test_a_long_chain_s_bobs_do_not_overlap(tmp_path):
+    # Point masses a link apart: each is drawn as a cube of 0.9 of its link, where a twentieth of
+    # the view would make the 20-link chain's cubes overlap.
+    m = multibody.pendulum_on_cart(20)
+    run = m.simulate(m.formulations[-1], t_end=1.0, dt_out=0.1, frame=False)
+    path = tmp_path / "chain.html"
+    m.animate(run, path)
+    state = page_state(tmp_path, path.as_uri() + "#t=0.5&size=800x520")
+    assert math.isclose(state["typicalLink"], m.params["l1"], rel_tol=1e-6)
+    assert 2 * state["pointSize"] <= 0.9 * state["typicalLink"] * (1 + 1e-12)
+    assert 2 * state["pointSize"] < 0.1 * state["extent"], "smaller than a twentieth of the view"
