@@ -1,7 +1,8 @@
 //! Robots at their real size (the issue "Robots", item 3): each robot of example-robot-data read
 //! from its URDF, derived and made ready to evaluate in-process (the JIT), in all four
 //! formulations as `multibody compare robot.urdf` does, and in the one `multibody simulate
-//! robot.urdf` runs (the reduced method, derived alone); and its emitted module built by rustc. Each robot runs in a child process
+//! robot.urdf` runs (the reduced method, derived alone); and its emitted modules built by rustc
+//! (the four formulations, and the one `simulate --compiled` builds). Each robot runs in a child process
 //! of its own (this program, re-invoked), so its CPU time and peak memory are its own. Writes
 //! `docs/robots/derive.json`; `docs/robots.md` quotes it.
 //!
@@ -41,6 +42,11 @@ struct Record {
     simulate_cpu_s: f64,
     #[serde(default)]
     simulate_peak_mb: f64,
+    /// The module `simulate --compiled` builds (that formulation alone) by rustc.
+    #[serde(default)]
+    simulate_rustc_s: Option<f64>,
+    #[serde(default)]
+    simulate_code_bytes: usize,
 }
 
 /// example-robot-data's robots folder: `--robots-dir`, else found in a Python environment.
@@ -81,17 +87,22 @@ fn child(path: &Path, base: &str, rustc: bool, one: bool) {
     sys.rhs(0.0, &y, &mut dy).unwrap();
     let (cpu, peak) = usage();
     let mut record = Record { robot: String::new(), base: base.into(), coordinates: m.coordinates.len(), cpu_s: cpu, peak_mb: peak, ..Record::default() };
-    if one {
-        println!("{}", serde_json::to_string(&record).unwrap());
-        return;
+    // The module `--compiled` builds: the formulation `simulate` runs alone, or all four.
+    let mut options = generator::emit::Options::from_model(&model);
+    if let Some(kind) = only {
+        options.formulations = vec![generator::emit::Formulation::of(kind)];
     }
-    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
-    record.code_bytes = generated.code.len();
-    if rustc {
+    let generated = generator::emit::generate(&model, &options).unwrap();
+    let built = rustc.then(|| {
         let cache = tempfile::tempdir().unwrap();
         let start = Instant::now();
         native::build(&generated.code, cache.path(), &mut |_| {}).unwrap();
-        record.rustc_s = Some(start.elapsed().as_secs_f64());
+        start.elapsed().as_secs_f64()
+    });
+    if one {
+        (record.simulate_code_bytes, record.simulate_rustc_s) = (generated.code.len(), built);
+    } else {
+        (record.code_bytes, record.rustc_s) = (generated.code.len(), built);
     }
     println!("{}", serde_json::to_string(&record).unwrap());
 }
@@ -117,8 +128,8 @@ fn main() {
             .map(|k| {
                 let mut cmd = Command::new(std::env::current_exe().unwrap());
                 cmd.args(["--child", folder.join(file).to_str().unwrap(), "--base", base]);
-                // rustc once per robot: its time does not depend on the run.
-                if no_rustc || k > 0 {
+                // rustc once per robot and module: its time does not depend on the run.
+                if no_rustc || (k != 0 && k != RUNS) {
                     cmd.arg("--no-rustc");
                 }
                 if k >= RUNS {
@@ -133,7 +144,7 @@ fn main() {
                     k + 1,
                     r.cpu_s,
                     r.peak_mb,
-                    r.rustc_s.map_or(String::new(), |s| format!(", rustc {s:.1} s"))
+                    r.rustc_s.or(r.simulate_rustc_s).map_or(String::new(), |s| format!(", rustc {s:.1} s"))
                 );
                 r
             })
@@ -146,12 +157,14 @@ fn main() {
         record.rustc_s = runs.iter().find_map(|r| r.rustc_s);
         record.simulate_cpu_s = one[RUNS / 2].cpu_s;
         record.simulate_peak_mb = one.iter().map(|r| r.peak_mb).fold(0.0, f64::max);
+        record.simulate_rustc_s = one.iter().find_map(|r| r.simulate_rustc_s);
+        record.simulate_code_bytes = one.iter().map(|r| r.simulate_code_bytes).max().unwrap_or(0);
         records.push(record);
     }
     let json = serde_json::json!({
         "command": "cargo bench --bench robots",
         "cores": std::thread::available_parallelism().map_or(1, |n| n.get()),
-        "about": "each robot of example-robot-data from its URDF, loaded, derived and ready to evaluate in-process (JIT): CPU time (median of 3 fresh processes) and peak memory (the largest), in all four formulations (cpu_s, peak_mb) and in the one simulate derives (simulate_cpu_s, simulate_peak_mb); the emitted module's build by rustc",
+        "about": "each robot of example-robot-data from its URDF, loaded, derived and ready to evaluate in-process (JIT): CPU time (median of 3 fresh processes) and peak memory (the largest), in all four formulations (cpu_s, peak_mb) and in the one simulate derives (simulate_cpu_s, simulate_peak_mb); the emitted module's build by rustc, with the four formulations (rustc_s, code_bytes) and with the one simulate --compiled builds (simulate_rustc_s, simulate_code_bytes)",
         "records": records,
     });
     std::fs::create_dir_all(out.parent().unwrap()).unwrap();

@@ -12,6 +12,7 @@ mod commands;
 mod plot;
 mod report;
 mod simulate;
+mod watch;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -60,6 +61,9 @@ enum Command {
     /// The linear model x' = A x (+ B u) of a formulation about an operating point, its
     /// eigenvalues, or their sweep over a parameter or a rate.
     Linearize(commands::LinearizeArgs),
+    /// The live loop: runs the model as `simulate` does on every save of its file, and serves
+    /// the motion on 127.0.0.1 to a page that refreshes in place (errors shown, located).
+    Watch(watch::WatchArgs),
 }
 
 /// Why a command failed: the user's model (rendered with its excerpt), the run, or a file.
@@ -101,6 +105,12 @@ pub enum CliError {
     Given { given: String, source: runtime::system::SetupError },
     #[error("{file}:{line}: {message} (an input's time series is two columns `t,value` with increasing times)")]
     Series { file: String, line: usize, message: String },
+    #[error(
+        "`watch` follows a model file, and `{given}` is none: give the path of a RON or URDF file (the built-in models are the files of the repository's `models/` folder)"
+    )]
+    WatchNeedsFile { given: String },
+    #[error("cannot serve the page on 127.0.0.1:{port}: {reason} (give another --port, or none for one the system picks)")]
+    Serve { port: u16, reason: String },
 }
 
 fn main() -> ExitCode {
@@ -117,17 +127,23 @@ fn main() -> ExitCode {
         Command::Compare(args) => commands::compare(&args),
         Command::Sweep(args) => commands::sweep(&args),
         Command::Linearize(args) => commands::linearize(&args),
+        Command::Watch(args) => watch::watch(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(CliError::Model(e) | CliError::Load(load::LoadError::Model(e))) => {
-            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
-            ExitCode::FAILURE
-        }
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("{}", describe(&e, std::io::stderr().is_terminal()));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The error as the user reads it: a model's with its located excerpt (in colour on a
+/// terminal), any other as one line.
+pub fn describe(e: &CliError, color: bool) -> String {
+    match e {
+        CliError::Model(e) | CliError::Load(load::LoadError::Model(e)) => e.render(color),
+        e => format!("error: {e}"),
     }
 }
 

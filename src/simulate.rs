@@ -60,6 +60,15 @@ fn series_controller(model: &seam::Model, given: &[(String, PathBuf)]) -> Result
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
+    match run(args)? {
+        Some(e) => Err(CliError::Run(e)),
+        None => Ok(()),
+    }
+}
+
+/// [`simulate`], its outputs written, with the error that stopped the run early if one did
+/// (what came before it is written).
+pub fn run(args: &SimulateArgs) -> Result<Option<runtime::integrate::RunError>, CliError> {
     // One formulation runs: only it is derived, emitted and compiled (where the model emits it;
     // one it leaves out is refused below, naming those it has).
     let asked = args.formulation.map(|f| f.0);
@@ -192,12 +201,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         animate::write(page, &source, &reference.params, &animate::Motion { formulation: kind.name(), times: &solution.times, q: &q })?;
         text += &format!(", {}", files::printable_path(page));
     }
-    for p in plots {
-        text += &format!(", {}", files::printable_path(&p));
+    for p in &plots {
+        text += &format!(", {}", files::printable_path(p));
     }
     print(&(text + "\n"))?;
-    match failed {
-        Some(e) => Err(CliError::Run(e)),
-        None => Ok(()),
-    }
+    Ok(failed)
 }

@@ -132,6 +132,28 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
     Ok(TEMPLATE.replacen("/*DATA*/", &json, 1))
 }
 
+/// `page` (as [`page`] made it) made live for `multibody watch`: it asks `status?token=TOKEN`
+/// beside it for news (`{"run": N, "error": null or text}`), shows the error, and reloads on
+/// another run than `run`, keeping its camera and time. `None` for text that is not such a page.
+///
+/// ```
+/// let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
+/// let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+/// let q = vec![0.0; model.coordinates.len()];
+/// let page = animate::page(&model, &params, &animate::Motion { formulation: "kane", times: &[0.0], q: &q }).unwrap();
+/// let served = animate::live(&page, 3, "a1b2").unwrap();
+/// assert!(served.contains(r#"const live = {"run":3,"token":"a1b2"};"#));
+/// assert!(animate::live("<html></html>", 3, "a1b2").is_none());
+/// ```
+pub fn live(page: &str, run: u64, token: &str) -> Option<String> {
+    const PLACE: &str = "/*LIVE*/null";
+    if page.matches(PLACE).count() != 1 {
+        return None;
+    }
+    let json = serde_json::json!({ "run": run, "token": token }).to_string().replace("</", "<\\/");
+    Some(page.replacen(PLACE, &json, 1))
+}
+
 /// A float with the digits a drawing needs (single precision's shortest round trip).
 fn compact(x: f64) -> serde_json::Value {
     let short: f64 = format!("{}", x as f32).parse().expect("a float prints as a float");

@@ -323,7 +323,6 @@ pub mod lagrange {
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
-        let m = params.m;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -337,7 +336,7 @@ pub mod lagrange {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -790,7 +789,6 @@ pub mod maggi {
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
-        let m = params.m;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -804,7 +802,7 @@ pub mod maggi {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1294,7 +1292,6 @@ pub mod kane {
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
-        let m = params.m;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1308,7 +1305,7 @@ pub mod kane {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1734,9 +1731,7 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let x_dot = qdot[0];
         let y_dot = qdot[1];
-        let m = params.m;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1750,7 +1745,7 @@ pub mod reduced_volterra {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], y_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [x_dot * m];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

@@ -357,9 +357,6 @@ pub mod lagrange {
         let theta1_dot = qdot[0];
         let theta2_dot = qdot[1];
         let x_dot = qdot[2];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let l = params.l;
         let x0 = f64::cos(theta1 - theta2);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
@@ -390,12 +387,7 @@ pub mod lagrange {
             x_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            l
-                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
-                + (m2 + M + m1) * x_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1149,9 +1141,6 @@ pub mod maggi {
         let theta1_dot = qdot[0];
         let theta2_dot = qdot[1];
         let x_dot = qdot[2];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let l = params.l;
         let x0 = f64::cos(theta1 - theta2);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
@@ -1182,12 +1171,7 @@ pub mod maggi {
             x_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            l
-                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
-                + (m2 + M + m1) * x_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -2066,9 +2050,6 @@ pub mod kane {
         let theta1_dot = qdot[0];
         let theta2_dot = qdot[1];
         let x_dot = qdot[2];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let l = params.l;
         let x0 = f64::cos(theta1 - theta2);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
@@ -2098,12 +2079,7 @@ pub mod kane {
             x_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            l
-                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
-                + (m2 + M + m1) * x_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -2919,10 +2895,6 @@ pub mod reduced_volterra {
         let theta2 = q[1];
         let theta1_dot = qdot[0];
         let theta2_dot = qdot[1];
-        let x_dot = qdot[2];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let l = params.l;
         let x0 = f64::cos(theta1 - theta2);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
@@ -2945,12 +2917,7 @@ pub mod reduced_volterra {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], theta2_dot - theta1_dot, 0.0];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            l
-                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
-                + (m2 + M + m1) * x_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

@@ -285,7 +285,7 @@ pub mod lagrange {
         t: f64,
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
+        params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
@@ -312,10 +312,7 @@ pub mod lagrange {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot, theta2_dot, x_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
-                + 0.5 * (f64::cos(theta2) * theta2_dot),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -783,7 +780,7 @@ pub mod maggi {
         t: f64,
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
+        params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
@@ -810,10 +807,7 @@ pub mod maggi {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot, theta2_dot, x_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
-                + 0.5 * (f64::cos(theta2) * theta2_dot),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1355,7 +1349,7 @@ pub mod kane {
         t: f64,
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
+        params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
@@ -1382,10 +1376,7 @@ pub mod kane {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot - theta2_dot, x_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
-                + 0.5 * (f64::cos(theta2) * theta2_dot),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1904,13 +1895,12 @@ pub mod reduced_volterra {
         t: f64,
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
+        params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
         let theta1_dot = qdot[0];
         let theta2_dot = qdot[1];
-        let x_dot = qdot[2];
         let x0 = f64::cos(theta1 - theta2);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
@@ -1931,10 +1921,7 @@ pub mod reduced_volterra {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], theta2_dot - theta1_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
-                + 0.5 * (f64::cos(theta2) * theta2_dot),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

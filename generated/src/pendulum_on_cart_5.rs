@@ -620,32 +620,12 @@ pub mod lagrange {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let q1 = q[1];
-        let q2 = q[2];
-        let q3 = q[3];
-        let q4 = q[4];
-        let q5 = q[5];
         let q0_dot = qdot[0];
         let q1_dot = qdot[1];
         let q2_dot = qdot[2];
         let q3_dot = qdot[3];
         let q4_dot = qdot[4];
         let q5_dot = qdot[5];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let m3 = params.m3;
-        let m4 = params.m4;
-        let m5 = params.m5;
-        let l0 = params.l0;
-        let l1 = params.l1;
-        let l2 = params.l2;
-        let l3 = params.l3;
-        let l4 = params.l4;
-        let x0 = m4 + m5;
-        let x1 = x0 + m3;
-        let x2 = m2 + x1;
-        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -672,11 +652,7 @@ pub mod lagrange {
             q4_dot,
             q5_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
-                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
-                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1620,32 +1596,12 @@ pub mod maggi {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let q1 = q[1];
-        let q2 = q[2];
-        let q3 = q[3];
-        let q4 = q[4];
-        let q5 = q[5];
         let q0_dot = qdot[0];
         let q1_dot = qdot[1];
         let q2_dot = qdot[2];
         let q3_dot = qdot[3];
         let q4_dot = qdot[4];
         let q5_dot = qdot[5];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let m3 = params.m3;
-        let m4 = params.m4;
-        let m5 = params.m5;
-        let l0 = params.l0;
-        let l1 = params.l1;
-        let l2 = params.l2;
-        let l3 = params.l3;
-        let l4 = params.l4;
-        let x0 = m4 + m5;
-        let x1 = x0 + m3;
-        let x2 = m2 + x1;
-        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1672,11 +1628,7 @@ pub mod maggi {
             q4_dot,
             q5_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
-                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
-                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -2731,32 +2683,12 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let q1 = q[1];
-        let q2 = q[2];
-        let q3 = q[3];
-        let q4 = q[4];
-        let q5 = q[5];
         let q0_dot = qdot[0];
         let q1_dot = qdot[1];
         let q2_dot = qdot[2];
         let q3_dot = qdot[3];
         let q4_dot = qdot[4];
         let q5_dot = qdot[5];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let m3 = params.m3;
-        let m4 = params.m4;
-        let m5 = params.m5;
-        let l0 = params.l0;
-        let l1 = params.l1;
-        let l2 = params.l2;
-        let l3 = params.l3;
-        let l4 = params.l4;
-        let x0 = m4 + m5;
-        let x1 = x0 + m3;
-        let x2 = m2 + x1;
-        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2783,11 +2715,7 @@ pub mod kane {
             q4_dot,
             q5_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
-                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
-                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -3689,32 +3617,11 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let q1 = q[1];
-        let q2 = q[2];
-        let q3 = q[3];
-        let q4 = q[4];
-        let q5 = q[5];
-        let q0_dot = qdot[0];
         let q1_dot = qdot[1];
         let q2_dot = qdot[2];
         let q3_dot = qdot[3];
         let q4_dot = qdot[4];
         let q5_dot = qdot[5];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let m3 = params.m3;
-        let m4 = params.m4;
-        let m5 = params.m5;
-        let l0 = params.l0;
-        let l1 = params.l1;
-        let l2 = params.l2;
-        let l3 = params.l3;
-        let l4 = params.l4;
-        let x0 = m4 + m5;
-        let x1 = x0 + m3;
-        let x2 = m2 + x1;
-        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3740,11 +3647,7 @@ pub mod reduced_volterra {
             q4_dot,
             q5_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
-                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
-                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

@@ -308,7 +308,6 @@ pub mod lagrange {
         let y_dot = qdot[1];
         let psi_dot = qdot[2];
         let phi_dot = qdot[3];
-        let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
         let x1 = R * phi_dot;
@@ -340,7 +339,7 @@ pub mod lagrange {
             phi_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -991,7 +990,6 @@ pub mod maggi {
         let y_dot = qdot[1];
         let psi_dot = qdot[2];
         let phi_dot = qdot[3];
-        let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
         let x1 = R * phi_dot;
@@ -1023,7 +1021,7 @@ pub mod maggi {
             phi_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -1607,7 +1605,6 @@ pub mod kane {
         let y_dot = qdot[1];
         let psi_dot = qdot[2];
         let phi_dot = qdot[3];
-        let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
         let x1 = R * phi_dot;
@@ -1629,7 +1626,7 @@ pub mod kane {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], q[3], psi_dot, phi_dot, 0.0];
-        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -2138,9 +2135,7 @@ pub mod reduced_volterra {
         let psi = q[2];
         let x_dot = qdot[0];
         let y_dot = qdot[1];
-        let psi_dot = qdot[2];
         let phi_dot = qdot[3];
-        let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
         let x1 = R * phi_dot;
@@ -2162,7 +2157,7 @@ pub mod reduced_volterra {
             }
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], q[3], phi_dot, 0.0];
-        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

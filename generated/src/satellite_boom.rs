@@ -633,9 +633,6 @@ pub mod lagrange {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let rho = q[3];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -643,18 +640,6 @@ pub mod lagrange {
         let X_dot = qdot[4];
         let Y_dot = qdot[5];
         let Z_dot = qdot[6];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::cos(psi);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(theta);
-        let x3 = rho + 0.5 * l;
-        let x4 = theta_dot * x3;
-        let x5 = x2 * x4;
-        let x6 = f64::sin(psi);
-        let x7 = psi_dot * x3;
-        let x8 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -684,11 +669,7 @@ pub mod lagrange {
             Z_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (x0 * (x1 * rho_dot - x5) - x1 * x6 * x7) * m + x8 * X_dot,
-            x8 * Y_dot + m * (x1 * (rho_dot * x6 + x0 * x7) - x5 * x6),
-            Z_dot * x8 - (x1 * x4 + x2 * rho_dot) * m,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -2292,9 +2273,6 @@ pub mod maggi {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let rho = q[3];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -2302,18 +2280,6 @@ pub mod maggi {
         let X_dot = qdot[4];
         let Y_dot = qdot[5];
         let Z_dot = qdot[6];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::cos(psi);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(theta);
-        let x3 = rho + 0.5 * l;
-        let x4 = theta_dot * x3;
-        let x5 = x2 * x4;
-        let x6 = f64::sin(psi);
-        let x7 = psi_dot * x3;
-        let x8 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2343,11 +2309,7 @@ pub mod maggi {
             Z_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (x0 * (x1 * rho_dot - x5) - x1 * x6 * x7) * m + x8 * X_dot,
-            x8 * Y_dot + m * (x1 * (rho_dot * x6 + x0 * x7) - x5 * x6),
-            Z_dot * x8 - (x1 * x4 + x2 * rho_dot) * m,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -4385,10 +4347,8 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
         let theta = q[1];
         let phi = q[2];
-        let rho = q[3];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -4396,20 +4356,9 @@ pub mod kane {
         let X_dot = qdot[4];
         let Y_dot = qdot[5];
         let Z_dot = qdot[6];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = x1 * psi_dot;
-        let x3 = f64::sin(phi);
-        let x4 = f64::cos(phi);
-        let x5 = rho + 0.5 * l;
-        let x6 = f64::sin(psi);
-        let x7 = f64::cos(psi);
-        let x8 = theta_dot * x5;
-        let x9 = x0 * x8;
-        let x10 = m + mg;
+        let x0 = f64::cos(theta) * psi_dot;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4430,20 +4379,16 @@ pub mod kane {
             q[4],
             q[5],
             q[6],
-            phi_dot - x0 * psi_dot,
-            x2 * x3 + theta_dot * x4,
-            x2 * x4 - theta_dot * x3,
+            phi_dot - f64::sin(theta) * psi_dot,
+            x0 * x1 + theta_dot * x2,
+            x0 * x2 - theta_dot * x1,
             rho_dot,
             X_dot,
             Y_dot,
             Z_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            m * (x7 * (x1 * rho_dot - x9) - x2 * x5 * x6) + x10 * X_dot,
-            x10 * Y_dot + (x1 * (rho_dot * x6 + x7 * psi_dot * x5) - x9 * x6) * m,
-            Z_dot * x10 - (x1 * x8 + x0 * rho_dot) * m,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -5627,31 +5572,15 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
         let theta = q[1];
         let phi = q[2];
-        let rho = q[3];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
         let rho_dot = qdot[3];
-        let X_dot = qdot[4];
-        let Y_dot = qdot[5];
-        let Z_dot = qdot[6];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = x1 * psi_dot;
-        let x3 = f64::sin(phi);
-        let x4 = f64::cos(phi);
-        let x5 = rho + 0.5 * l;
-        let x6 = f64::sin(psi);
-        let x7 = f64::cos(psi);
-        let x8 = theta_dot * x5;
-        let x9 = x0 * x8;
-        let x10 = m + mg;
+        let x0 = f64::cos(theta) * psi_dot;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -5672,17 +5601,13 @@ pub mod reduced_volterra {
             q[4],
             q[5],
             q[6],
-            phi_dot - x0 * psi_dot,
-            x2 * x3 + theta_dot * x4,
-            x2 * x4 - theta_dot * x3,
+            phi_dot - f64::sin(theta) * psi_dot,
+            x0 * x1 + theta_dot * x2,
+            x0 * x2 - theta_dot * x1,
             rho_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            m * (x7 * (x1 * rho_dot - x9) - x2 * x5 * x6) + x10 * X_dot,
-            x10 * Y_dot + (x1 * (rho_dot * x6 + x7 * psi_dot * x5) - x9 * x6) * m,
-            Z_dot * x10 - (x1 * x8 + x0 * rho_dot) * m,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

@@ -651,7 +651,6 @@ pub mod lagrange {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let rho = q[4];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
@@ -660,35 +659,24 @@ pub mod lagrange {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = e1_dot * e1;
-        let x1 = e0_dot * e0;
-        let x2 = 2.0 * rho + l;
-        let x3 = e2_dot * e2;
-        let x4 = e3 * e3_dot;
-        let x5 = e0 * e0 + e1 * e1;
-        let x6 = e3 * e3;
-        let x7 = e2 * e2;
-        let x8 = m + mg;
-        let x9 = f64::abs(e2);
-        let x10 = f64::abs(e1);
-        let x11 = f64::abs(e0);
-        let x12 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
-                2.0 * x3 + 2.0 * x0 + 2.0 * x1 + 2.0 * x4,
-                2.0 * (f64::abs(e2_dot) * x9) + 2.0 * (x10 * f64::abs(e1_dot))
-                    + 2.0 * (x11 * f64::abs(e0_dot)) + 2.0 * (x12 * f64::abs(e3_dot)),
+                2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
+                    + 2.0 * (e3 * e3_dot),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x5 + x6 + x7 - 1.0,
-                x10 * x10 + x9 * x9 + x12 * x12 + x11 * x11 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -720,16 +708,7 @@ pub mod lagrange {
             Z_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            ((x0 + x1) * x2 - (x3 + x4) * x2 + rho_dot * (x5 - x6 - x7)) * m
-                + x8 * X_dot,
-            (rho_dot * (2.0 * (e3 * e0) + 2.0 * (e2 * e1))
-                + (e3 * e0_dot + e3_dot * e0 + e2_dot * e1 + e2 * e1_dot) * x2) * m
-                + x8 * Y_dot,
-            m
-                * ((e3 * e1_dot + e3_dot * e1) * x2 - (e2_dot * e0 + e0_dot * e2) * x2
-                    + (2.0 * (e3 * e1) - 2.0 * (e2 * e0)) * rho_dot) + Z_dot * x8,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -2487,7 +2466,6 @@ pub mod maggi {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let rho = q[4];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
@@ -2496,35 +2474,24 @@ pub mod maggi {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = e1_dot * e1;
-        let x1 = e0_dot * e0;
-        let x2 = 2.0 * rho + l;
-        let x3 = e2_dot * e2;
-        let x4 = e3 * e3_dot;
-        let x5 = e0 * e0 + e1 * e1;
-        let x6 = e3 * e3;
-        let x7 = e2 * e2;
-        let x8 = m + mg;
-        let x9 = f64::abs(e2);
-        let x10 = f64::abs(e1);
-        let x11 = f64::abs(e0);
-        let x12 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
-                2.0 * x3 + 2.0 * x0 + 2.0 * x1 + 2.0 * x4,
-                2.0 * (f64::abs(e2_dot) * x9) + 2.0 * (x10 * f64::abs(e1_dot))
-                    + 2.0 * (x11 * f64::abs(e0_dot)) + 2.0 * (x12 * f64::abs(e3_dot)),
+                2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
+                    + 2.0 * (e3 * e3_dot),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x5 + x6 + x7 - 1.0,
-                x10 * x10 + x9 * x9 + x12 * x12 + x11 * x11 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2556,16 +2523,7 @@ pub mod maggi {
             Z_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            ((x0 + x1) * x2 - (x3 + x4) * x2 + rho_dot * (x5 - x6 - x7)) * m
-                + x8 * X_dot,
-            (rho_dot * (2.0 * (e3 * e0) + 2.0 * (e2 * e1))
-                + (e3 * e0_dot + e3_dot * e0 + e2_dot * e1 + e2 * e1_dot) * x2) * m
-                + x8 * Y_dot,
-            m
-                * ((e3 * e1_dot + e3_dot * e1) * x2 - (e2_dot * e0 + e0_dot * e2) * x2
-                    + (2.0 * (e3 * e1) - 2.0 * (e2 * e0)) * rho_dot) + Z_dot * x8,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -4723,7 +4681,6 @@ pub mod kane {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let rho = q[4];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
@@ -4732,43 +4689,24 @@ pub mod kane {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = e3 * e1_dot;
-        let x1 = e2_dot * e0;
-        let x2 = e3_dot * e1;
-        let x3 = e0_dot * e2;
-        let x4 = e3 * e0_dot;
-        let x5 = e3_dot * e0;
-        let x6 = e2_dot * e1;
-        let x7 = e2 * e1_dot;
-        let x8 = e1_dot * e1;
-        let x9 = e0_dot * e0;
-        let x10 = 2.0 * rho + l;
-        let x11 = e2_dot * e2;
-        let x12 = e3 * e3_dot;
-        let x13 = e0 * e0 + e1 * e1;
-        let x14 = e3 * e3;
-        let x15 = e2 * e2;
-        let x16 = m + mg;
-        let x17 = f64::abs(e2);
-        let x18 = f64::abs(e1);
-        let x19 = f64::abs(e0);
-        let x20 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
-                2.0 * x11 + 2.0 * x8 + 2.0 * x9 + 2.0 * x12,
-                2.0 * (f64::abs(e2_dot) * x17) + 2.0 * (x18 * f64::abs(e1_dot))
-                    + 2.0 * (x19 * f64::abs(e0_dot)) + 2.0 * (x20 * f64::abs(e3_dot)),
+                2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
+                    + 2.0 * (e3 * e3_dot),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x13 + x14 + x15 - 1.0,
-                x18 * x18 + x17 * x17 + x20 * x20 + x19 * x19 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4792,23 +4730,17 @@ pub mod kane {
             q[7],
             2.0 * (e3 * e2_dot) - 2.0 * (e3_dot * e2) - 2.0 * (e0_dot * e1)
                 + 2.0 * (e1_dot * e0),
-            2.0 * x1 - 2.0 * x0 + 2.0 * x2 - 2.0 * x3,
-            2.0 * x5 - 2.0 * x4 - 2.0 * x6 + 2.0 * x7,
+            2.0 * (e2_dot * e0) - 2.0 * (e3 * e1_dot) + 2.0 * (e3_dot * e1)
+                - 2.0 * (e0_dot * e2),
+            2.0 * (e3_dot * e0) - 2.0 * (e3 * e0_dot) - 2.0 * (e2_dot * e1)
+                + 2.0 * (e2 * e1_dot),
             rho_dot,
             X_dot,
             Y_dot,
             Z_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            ((x8 + x9) * x10 - (x11 + x12) * x10 + rho_dot * (x13 - x14 - x15)) * m
-                + x16 * X_dot,
-            (rho_dot * (2.0 * (e3 * e0) + 2.0 * (e2 * e1)) + (x4 + x5 + x6 + x7) * x10)
-                * m + x16 * Y_dot,
-            m
-                * ((x0 + x2) * x10 - (x1 + x3) * x10
-                    + (2.0 * (e3 * e1) - 2.0 * (e2 * e0)) * rho_dot) + Z_dot * x16,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -6011,52 +5943,29 @@ pub mod reduced_volterra {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let rho = q[4];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
         let e3_dot = qdot[3];
         let rho_dot = qdot[4];
-        let X_dot = qdot[5];
-        let Y_dot = qdot[6];
-        let Z_dot = qdot[7];
-        let mg = params.mg;
-        let m = params.m;
-        let l = params.l;
-        let x0 = e3 * e1_dot;
-        let x1 = e2_dot * e0;
-        let x2 = e3_dot * e1;
-        let x3 = e0_dot * e2;
-        let x4 = e3 * e0_dot;
-        let x5 = e3_dot * e0;
-        let x6 = e2_dot * e1;
-        let x7 = e2 * e1_dot;
-        let x8 = e1_dot * e1;
-        let x9 = e0_dot * e0;
-        let x10 = 2.0 * rho + l;
-        let x11 = e2_dot * e2;
-        let x12 = e3 * e3_dot;
-        let x13 = e0 * e0 + e1 * e1;
-        let x14 = e3 * e3;
-        let x15 = e2 * e2;
-        let x16 = m + mg;
-        let x17 = f64::abs(e2);
-        let x18 = f64::abs(e1);
-        let x19 = f64::abs(e0);
-        let x20 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
-                2.0 * x11 + 2.0 * x8 + 2.0 * x9 + 2.0 * x12,
-                2.0 * (f64::abs(e2_dot) * x17) + 2.0 * (x18 * f64::abs(e1_dot))
-                    + 2.0 * (x19 * f64::abs(e0_dot)) + 2.0 * (x20 * f64::abs(e3_dot)),
+                2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
+                    + 2.0 * (e3 * e3_dot),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x13 + x14 + x15 - 1.0,
-                x18 * x18 + x17 * x17 + x20 * x20 + x19 * x19 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -6080,20 +5989,14 @@ pub mod reduced_volterra {
             q[7],
             2.0 * (e3 * e2_dot) - 2.0 * (e3_dot * e2) - 2.0 * (e0_dot * e1)
                 + 2.0 * (e1_dot * e0),
-            2.0 * x1 - 2.0 * x0 + 2.0 * x2 - 2.0 * x3,
-            2.0 * x5 - 2.0 * x4 - 2.0 * x6 + 2.0 * x7,
+            2.0 * (e2_dot * e0) - 2.0 * (e3 * e1_dot) + 2.0 * (e3_dot * e1)
+                - 2.0 * (e0_dot * e2),
+            2.0 * (e3_dot * e0) - 2.0 * (e3 * e0_dot) - 2.0 * (e2_dot * e1)
+                + 2.0 * (e2 * e1_dot),
             rho_dot,
             0.0,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            ((x8 + x9) * x10 - (x11 + x12) * x10 + rho_dot * (x13 - x14 - x15)) * m
-                + x16 * X_dot,
-            (rho_dot * (2.0 * (e3 * e0) + 2.0 * (e2 * e1)) + (x4 + x5 + x6 + x7) * x10)
-                * m + x16 * Y_dot,
-            m
-                * ((x0 + x2) * x10 - (x1 + x3) * x10
-                    + (2.0 * (e3 * e1) - 2.0 * (e2 * e0)) * rho_dot) + Z_dot * x16,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

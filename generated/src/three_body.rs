@@ -963,11 +963,6 @@ pub mod lagrange {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -976,58 +971,6 @@ pub mod lagrange {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::cos(gamma1);
-        let x1 = f64::sin(theta);
-        let x2 = f64::cos(psi);
-        let x3 = f64::sin(phi);
-        let x4 = x2 * x3;
-        let x5 = f64::cos(phi);
-        let x6 = f64::sin(psi);
-        let x7 = x5 * x6;
-        let x8 = x1 * x4 - x7;
-        let x9 = f64::sin(gamma1);
-        let x10 = f64::cos(theta);
-        let x11 = x2 * x10;
-        let x12 = x0 * x8 - x9 * x11;
-        let x13 = gamma1_dot * m1;
-        let x14 = f64::sin(gamma2);
-        let x15 = m2 * x14;
-        let x16 = x9 * m1;
-        let x17 = x2 * x5;
-        let x18 = x3 * x6;
-        let x19 = x1 * x17 + x18;
-        let x20 = m2 * gamma2_dot;
-        let x21 = f64::cos(gamma2);
-        let x22 = x14 * x11 + x21 * x19;
-        let x23 = x0 * a_ + d;
-        let x24 = x12 * x23;
-        let x25 = a_ * x9;
-        let x26 = (x0 * x11 + x9 * x8) * x25;
-        let x27 = x10 * x5;
-        let x28 = x10 * x3;
-        let x29 = x1 * x9 + x0 * x28;
-        let x30 = x29 * d + a_ * x28;
-        let x31 = a_ * x14;
-        let x32 = d + x21 * a_;
-        let x33 = x22 * x32 - (x21 * x11 - x14 * x19) * x31;
-        let x34 = x21 * x27 - x1 * x14;
-        let x35 = a_ * x27 + x34 * d;
-        let x36 = -((a_ + x0 * d) * x5);
-        let x37 = (a_ + x21 * d) * x3;
-        let x38 = m2 + m0 + m1;
-        let x39 = x1 * x7 - x4;
-        let x40 = x1 * x18 + x17;
-        let x41 = x10 * x6;
-        let x42 = (x40 * x9 + x0 * x41) * x25;
-        let x43 = x0 * x40 - x9 * x41;
-        let x44 = x43 * x23;
-        let x45 = x14 * x41 + x21 * x39;
-        let x46 = x45 * x32 - (x21 * x41 - x39 * x14) * x31;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1058,26 +1001,7 @@ pub mod lagrange {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            d * (x12 * x13 + phi_dot * (x16 * x19 - x15 * x8) + x20 * x22)
-                + (((x24 + x26) * x27 - x30 * x19) * m1 + (x28 * x33 - x8 * x35) * m2)
-                    * psi_dot
-                + theta_dot
-                    * ((x3 * (-x24 - x26) + x36 * x19) * m1 + (x33 * x5 + x8 * x37) * m2)
-                + X_dot * x38,
-            Y_dot * x38
-                + theta_dot
-                    * ((x39 * x36 + (-x42 - x44) * x3) * m1
-                        + m2 * (x40 * x37 + x46 * x5))
-                + ((x27 * (x42 + x44) - x39 * x30) * m1 + m2 * (x28 * x46 - x40 * x35))
-                    * psi_dot
-                + (x45 * x20 + (x39 * x16 - x15 * x40) * phi_dot + x13 * x43) * d,
-            theta_dot
-                * ((x3 * (-x29 * x23 - (x28 * x9 - x0 * x1) * x25) + x36 * x27) * m1
-                    + m2 * ((x31 * (x14 * x27 + x21 * x1) + x34 * x32) * x5 + x28 * x37))
-                + d * (x10 * phi_dot * (x16 * x5 - x15 * x3) + x20 * x34 + x13 * x29)
-                + Z_dot * x38,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -3427,11 +3351,6 @@ pub mod maggi {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -3440,58 +3359,6 @@ pub mod maggi {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::cos(gamma1);
-        let x1 = f64::sin(theta);
-        let x2 = f64::cos(psi);
-        let x3 = f64::sin(phi);
-        let x4 = x2 * x3;
-        let x5 = f64::cos(phi);
-        let x6 = f64::sin(psi);
-        let x7 = x5 * x6;
-        let x8 = x1 * x4 - x7;
-        let x9 = f64::sin(gamma1);
-        let x10 = f64::cos(theta);
-        let x11 = x2 * x10;
-        let x12 = x0 * x8 - x9 * x11;
-        let x13 = gamma1_dot * m1;
-        let x14 = f64::sin(gamma2);
-        let x15 = m2 * x14;
-        let x16 = x9 * m1;
-        let x17 = x2 * x5;
-        let x18 = x3 * x6;
-        let x19 = x1 * x17 + x18;
-        let x20 = m2 * gamma2_dot;
-        let x21 = f64::cos(gamma2);
-        let x22 = x14 * x11 + x21 * x19;
-        let x23 = x0 * a_ + d;
-        let x24 = x12 * x23;
-        let x25 = a_ * x9;
-        let x26 = (x0 * x11 + x9 * x8) * x25;
-        let x27 = x10 * x5;
-        let x28 = x10 * x3;
-        let x29 = x1 * x9 + x0 * x28;
-        let x30 = x29 * d + a_ * x28;
-        let x31 = a_ * x14;
-        let x32 = d + x21 * a_;
-        let x33 = x22 * x32 - (x21 * x11 - x14 * x19) * x31;
-        let x34 = x21 * x27 - x1 * x14;
-        let x35 = a_ * x27 + x34 * d;
-        let x36 = -((a_ + x0 * d) * x5);
-        let x37 = (a_ + x21 * d) * x3;
-        let x38 = m2 + m0 + m1;
-        let x39 = x1 * x7 - x4;
-        let x40 = x1 * x18 + x17;
-        let x41 = x10 * x6;
-        let x42 = (x40 * x9 + x0 * x41) * x25;
-        let x43 = x0 * x40 - x9 * x41;
-        let x44 = x43 * x23;
-        let x45 = x14 * x41 + x21 * x39;
-        let x46 = x45 * x32 - (x21 * x41 - x39 * x14) * x31;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3522,26 +3389,7 @@ pub mod maggi {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            d * (x12 * x13 + phi_dot * (x16 * x19 - x15 * x8) + x20 * x22)
-                + (((x24 + x26) * x27 - x30 * x19) * m1 + (x28 * x33 - x8 * x35) * m2)
-                    * psi_dot
-                + theta_dot
-                    * ((x3 * (-x24 - x26) + x36 * x19) * m1 + (x33 * x5 + x8 * x37) * m2)
-                + X_dot * x38,
-            Y_dot * x38
-                + theta_dot
-                    * ((x39 * x36 + (-x42 - x44) * x3) * m1
-                        + m2 * (x40 * x37 + x46 * x5))
-                + ((x27 * (x42 + x44) - x39 * x30) * m1 + m2 * (x28 * x46 - x40 * x35))
-                    * psi_dot
-                + (x45 * x20 + (x39 * x16 - x15 * x40) * phi_dot + x13 * x43) * d,
-            theta_dot
-                * ((x3 * (-x29 * x23 - (x28 * x9 - x0 * x1) * x25) + x36 * x27) * m1
-                    + m2 * ((x31 * (x14 * x27 + x21 * x1) + x34 * x32) * x5 + x28 * x37))
-                + d * (x10 * phi_dot * (x16 * x5 - x15 * x3) + x20 * x34 + x13 * x29)
-                + Z_dot * x38,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -6222,11 +6070,8 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
         let theta = q[1];
         let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -6235,56 +6080,9 @@ pub mod kane {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = x1 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = x1 * x4;
-        let x6 = f64::sin(psi);
-        let x7 = x0 * x4;
-        let x8 = f64::cos(psi);
-        let x9 = x2 * x6 + x7 * x8;
-        let x10 = f64::cos(gamma1);
-        let x11 = -((a_ + x10 * d) * x4);
-        let x12 = x0 * x2;
-        let x13 = x8 * x12 - x4 * x6;
-        let x14 = f64::sin(gamma1);
-        let x15 = x8 * x1;
-        let x16 = x10 * x13 - x14 * x15;
-        let x17 = x10 * a_ + d;
-        let x18 = x16 * x17;
-        let x19 = a_ * x14;
-        let x20 = x19 * (x10 * x15 + x13 * x14);
-        let x21 = f64::cos(gamma2);
-        let x22 = f64::sin(gamma2);
-        let x23 = a_ * x22;
-        let x24 = x21 * x9 + x22 * x15;
-        let x25 = d + x21 * a_;
-        let x26 = x24 * x25 - (x21 * x15 - x9 * x22) * x23;
-        let x27 = (a_ + x21 * d) * x2;
-        let x28 = m2 * gamma2_dot;
-        let x29 = m2 * x22;
-        let x30 = x14 * m1;
-        let x31 = gamma1_dot * m1;
-        let x32 = x21 * x5 - x0 * x22;
-        let x33 = a_ * x5 + x32 * d;
-        let x34 = x0 * x14 + x10 * x3;
-        let x35 = x34 * d + a_ * x3;
-        let x36 = m2 + m0 + m1;
-        let x37 = x8 * x4 + x12 * x6;
-        let x38 = x7 * x6 - x8 * x2;
-        let x39 = x1 * x6;
-        let x40 = x22 * x39 + x21 * x38;
-        let x41 = x25 * x40 - (x21 * x39 - x22 * x38) * x23;
-        let x42 = x10 * x37 - x14 * x39;
-        let x43 = x42 * x17;
-        let x44 = (x37 * x14 + x10 * x39) * x19;
+        let x0 = f64::cos(theta) * psi_dot;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -6306,35 +6104,16 @@ pub mod kane {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            x3 * psi_dot + theta_dot * x4,
-            psi_dot * x5 - theta_dot * x2,
+            phi_dot - f64::sin(theta) * psi_dot,
+            x0 * x1 + theta_dot * x2,
+            x0 * x2 - theta_dot * x1,
             gamma1_dot,
             gamma2_dot,
             X_dot,
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot
-                * ((x9 * x11 + x2 * (-x18 - x20)) * m1 + m2 * (x26 * x4 + x13 * x27))
-                + (x28 * x24 + phi_dot * (x9 * x30 - x13 * x29) + x31 * x16) * d
-                + psi_dot
-                    * (m2 * (x26 * x3 - x13 * x33) + ((x18 + x20) * x5 - x9 * x35) * m1)
-                + X_dot * x36,
-            Y_dot * x36
-                + theta_dot
-                    * (m2 * (x37 * x27 + x41 * x4)
-                        + (x11 * x38 + (-x43 - x44) * x2) * m1)
-                + psi_dot
-                    * (m2 * (x3 * x41 - x37 * x33) + m1 * ((x43 + x44) * x5 - x35 * x38))
-                + d * ((x30 * x38 - x29 * x37) * phi_dot + x28 * x40 + x31 * x42),
-            theta_dot
-                * ((x2 * (-x34 * x17 - (x3 * x14 - x10 * x0) * x19) + x11 * x5) * m1
-                    + m2 * ((x23 * (x22 * x5 + x21 * x0) + x32 * x25) * x4 + x3 * x27))
-                + d * (x1 * phi_dot * (x30 * x4 - x29 * x2) + x28 * x32 + x31 * x34)
-                + Z_dot * x36,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -7800,69 +7579,16 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
         let theta = q[1];
         let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
         let gamma1_dot = qdot[3];
         let gamma2_dot = qdot[4];
-        let X_dot = qdot[5];
-        let Y_dot = qdot[6];
-        let Z_dot = qdot[7];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = x1 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = x1 * x4;
-        let x6 = f64::sin(psi);
-        let x7 = x0 * x4;
-        let x8 = f64::cos(psi);
-        let x9 = x2 * x6 + x7 * x8;
-        let x10 = f64::cos(gamma1);
-        let x11 = -((a_ + x10 * d) * x4);
-        let x12 = x0 * x2;
-        let x13 = x8 * x12 - x4 * x6;
-        let x14 = f64::sin(gamma1);
-        let x15 = x8 * x1;
-        let x16 = x10 * x13 - x14 * x15;
-        let x17 = x10 * a_ + d;
-        let x18 = x16 * x17;
-        let x19 = a_ * x14;
-        let x20 = x19 * (x10 * x15 + x13 * x14);
-        let x21 = f64::cos(gamma2);
-        let x22 = f64::sin(gamma2);
-        let x23 = a_ * x22;
-        let x24 = x21 * x9 + x22 * x15;
-        let x25 = d + x21 * a_;
-        let x26 = x24 * x25 - (x21 * x15 - x9 * x22) * x23;
-        let x27 = (a_ + x21 * d) * x2;
-        let x28 = m2 * gamma2_dot;
-        let x29 = m2 * x22;
-        let x30 = x14 * m1;
-        let x31 = gamma1_dot * m1;
-        let x32 = x21 * x5 - x0 * x22;
-        let x33 = a_ * x5 + x32 * d;
-        let x34 = x0 * x14 + x10 * x3;
-        let x35 = x34 * d + a_ * x3;
-        let x36 = m2 + m0 + m1;
-        let x37 = x8 * x4 + x12 * x6;
-        let x38 = x7 * x6 - x8 * x2;
-        let x39 = x1 * x6;
-        let x40 = x22 * x39 + x21 * x38;
-        let x41 = x25 * x40 - (x21 * x39 - x22 * x38) * x23;
-        let x42 = x10 * x37 - x14 * x39;
-        let x43 = x42 * x17;
-        let x44 = (x37 * x14 + x10 * x39) * x19;
+        let x0 = f64::cos(theta) * psi_dot;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -7884,32 +7610,13 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            x3 * psi_dot + theta_dot * x4,
-            psi_dot * x5 - theta_dot * x2,
+            phi_dot - f64::sin(theta) * psi_dot,
+            x0 * x1 + theta_dot * x2,
+            x0 * x2 - theta_dot * x1,
             gamma1_dot,
             gamma2_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot
-                * ((x9 * x11 + x2 * (-x18 - x20)) * m1 + m2 * (x26 * x4 + x13 * x27))
-                + (x28 * x24 + phi_dot * (x9 * x30 - x13 * x29) + x31 * x16) * d
-                + psi_dot
-                    * (m2 * (x26 * x3 - x13 * x33) + ((x18 + x20) * x5 - x9 * x35) * m1)
-                + X_dot * x36,
-            Y_dot * x36
-                + theta_dot
-                    * (m2 * (x37 * x27 + x41 * x4)
-                        + (x11 * x38 + (-x43 - x44) * x2) * m1)
-                + psi_dot
-                    * (m2 * (x3 * x41 - x37 * x33) + m1 * ((x43 + x44) * x5 - x35 * x38))
-                + d * ((x30 * x38 - x29 * x37) * phi_dot + x28 * x40 + x31 * x42),
-            theta_dot
-                * ((x2 * (-x34 * x17 - (x3 * x14 - x10 * x0) * x19) + x11 * x5) * m1
-                    + m2 * ((x23 * (x22 * x5 + x21 * x0) + x32 * x25) * x4 + x3 * x27))
-                + d * (x1 * phi_dot * (x30 * x4 - x29 * x2) + x28 * x32 + x31 * x34)
-                + Z_dot * x36,
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

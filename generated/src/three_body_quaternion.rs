@@ -1028,8 +1028,6 @@ pub mod lagrange {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let gamma1 = q[4];
-        let gamma2 = q[5];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
@@ -1039,115 +1037,24 @@ pub mod lagrange {
         let X_dot = qdot[6];
         let Y_dot = qdot[7];
         let Z_dot = qdot[8];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = a_ * e3;
-        let x1 = e1 * e1;
-        let x2 = e0 * e0;
-        let x3 = 4.0 * x1 + 4.0 * x2;
-        let x4 = x0 * x3;
-        let x5 = f64::cos(gamma2);
-        let x6 = x5 * e3;
-        let x7 = f64::sin(gamma2);
-        let x8 = e2 * e0;
-        let x9 = e3 * x8;
-        let x10 = e2 * e2;
-        let x11 = 2.0 * x1 + 2.0 * x2;
-        let x12 = 2.0 * x10 + x11;
-        let x13 = e3 * e3;
-        let x14 = f64::sin(gamma1);
-        let x15 = e3 * e1;
-        let x16 = x15 * e2;
-        let x17 = 2.0 * x13 - 2.0 * x1;
-        let x18 = f64::cos(gamma1);
-        let x19 = x18 * e3;
-        let x20 = m0
-            + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
-                + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
-        let x21 = 4.0 * x13 + 4.0 * x10;
-        let x22 = x18 * e1;
-        let x23 = x17 + 2.0 * x2 + 2.0 * x10;
-        let x24 = x15 * e0;
-        let x25 = a_ * e1;
-        let x26 = x25 * x21;
-        let x27 = e2 * e1;
-        let x28 = x5 * e2;
-        let x29 = x7 * e0;
-        let x30 = a_ * e2;
-        let x31 = x30 * x3;
-        let x32 = 2.0 * x13 - 2.0 * x10 + x11;
-        let x33 = x18 * e2;
-        let x34 = gamma1_dot * m1;
-        let x35 = e3 * e0;
-        let x36 = x2 - x13;
-        let x37 = x1 + x36 - x10;
-        let x38 = m2 * gamma2_dot;
-        let x39 = a_ * e0;
-        let x40 = x39 * x21;
-        let x41 = x5 * e0;
-        let x42 = x14 * e1;
-        let x43 = e1 * e0;
-        let x44 = e3 * e2;
-        let x45 = 2.0 * x44 - 2.0 * x43;
-        let x46 = 2.0 * x35 + 2.0 * x27;
-        let x47 = x5 * x45 + x7 * x46;
-        let x48 = 2.0 * d + 2.0 * (x5 * a_);
-        let x49 = x47 * x48;
-        let x50 = a_ * x7;
-        let x51 = x50 * (x5 * x46 - x7 * x45);
-        let x52 = x49 - 2.0 * x51;
-        let x53 = x36 - x1 + x10;
-        let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
-        let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
-        let x56 = a_ * x14;
-        let x57 = (x53 * x14 + x18 * x46) * x56;
-        let x58 = 2.0 * (x18 * a_) + 2.0 * d;
-        let x59 = x18 * x53 - x14 * x46;
-        let x60 = x58 * x59;
-        let x61 = 2.0 * x57 + x60;
-        let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
-        let x63 = -2.0 * x57 - x60;
-        let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
-        let x65 = 2.0 * x51 - x49;
-        let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
-        let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
-        let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
-        let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
-        let x70 = 2.0 * x43 + 2.0 * x44;
-        let x71 = 2.0 * x15 - 2.0 * x8;
-        let x72 = x13 + x2;
-        let x73 = x72 - x1 - x10;
-        let x74 = x71 * x7 + x5 * x73;
-        let x75 = x74 * x48;
-        let x76 = (x5 * x71 - x73 * x7) * x50;
-        let x77 = 2.0 * x76 - x75;
-        let x78 = x18 * x70 - x71 * x14;
-        let x79 = x78 * x58;
-        let x80 = (x70 * x14 + x18 * x71) * x56;
-        let x81 = -x79 - 2.0 * x80;
-        let x82 = x79 + 2.0 * x80;
-        let x83 = x75 - 2.0 * x76;
-        let x84 = f64::abs(e2);
-        let x85 = f64::abs(e1);
-        let x86 = f64::abs(e0);
-        let x87 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
                 2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
                     + 2.0 * (e3 * e3_dot),
-                2.0 * (f64::abs(e2_dot) * x84) + 2.0 * (x85 * f64::abs(e1_dot))
-                    + 2.0 * (x86 * f64::abs(e0_dot)) + 2.0 * (x87 * f64::abs(e3_dot)),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x1 + x72 + x10 - 1.0,
-                x85 * x85 + x84 * x84 + x87 * x87 + x86 * x86 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1180,44 +1087,7 @@ pub mod lagrange {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            e3_dot
-                * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
-                    + (d
-                        * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16)
-                            - x19 * x3) - x4) * m1) + X_dot * x20
-                + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
-                    + m2
-                        * (d
-                            * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
-                                - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
-                + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
-                    + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
-                + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
-                    + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
-                + (m2
-                    * (d
-                        * (x7
-                            * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
-                                - 4.0 * x24) - x41 * x21) - x40)
-                    + m1
-                        * (x40
-                            + ((4.0 * (x19 * e0)
-                                + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
-                                + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
-            x20 * Y_dot
-                + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
-                + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
-                + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
-                + (x38 * x47 + x34 * x59) * d
-                + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
-            (m2 * (x70 * x64 + x77 * e2) + (x81 * e3 + x62 * x73) * m1) * e0_dot
-                + ((x73 * x68 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x69)) * e1_dot
-                + d * (x34 * x78 + x38 * x74)
-                + e3_dot * (m1 * (x82 * e0 - x55 * x73) + m2 * (x83 * e1 - x70 * x54))
-                + Z_dot * x20
-                + e2_dot * ((x81 * e1 - x73 * x67) * m1 + m2 * (x83 * e0 + x70 * x66)),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -4572,8 +4442,6 @@ pub mod maggi {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let gamma1 = q[4];
-        let gamma2 = q[5];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
@@ -4583,115 +4451,24 @@ pub mod maggi {
         let X_dot = qdot[6];
         let Y_dot = qdot[7];
         let Z_dot = qdot[8];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = a_ * e3;
-        let x1 = e1 * e1;
-        let x2 = e0 * e0;
-        let x3 = 4.0 * x1 + 4.0 * x2;
-        let x4 = x0 * x3;
-        let x5 = f64::cos(gamma2);
-        let x6 = x5 * e3;
-        let x7 = f64::sin(gamma2);
-        let x8 = e2 * e0;
-        let x9 = e3 * x8;
-        let x10 = e2 * e2;
-        let x11 = 2.0 * x1 + 2.0 * x2;
-        let x12 = 2.0 * x10 + x11;
-        let x13 = e3 * e3;
-        let x14 = f64::sin(gamma1);
-        let x15 = e3 * e1;
-        let x16 = x15 * e2;
-        let x17 = 2.0 * x13 - 2.0 * x1;
-        let x18 = f64::cos(gamma1);
-        let x19 = x18 * e3;
-        let x20 = m0
-            + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
-                + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
-        let x21 = 4.0 * x13 + 4.0 * x10;
-        let x22 = x18 * e1;
-        let x23 = x17 + 2.0 * x2 + 2.0 * x10;
-        let x24 = x15 * e0;
-        let x25 = a_ * e1;
-        let x26 = x25 * x21;
-        let x27 = e2 * e1;
-        let x28 = x5 * e2;
-        let x29 = x7 * e0;
-        let x30 = a_ * e2;
-        let x31 = x30 * x3;
-        let x32 = 2.0 * x13 - 2.0 * x10 + x11;
-        let x33 = x18 * e2;
-        let x34 = gamma1_dot * m1;
-        let x35 = e3 * e0;
-        let x36 = x2 - x13;
-        let x37 = x1 + x36 - x10;
-        let x38 = m2 * gamma2_dot;
-        let x39 = a_ * e0;
-        let x40 = x39 * x21;
-        let x41 = x5 * e0;
-        let x42 = x14 * e1;
-        let x43 = e1 * e0;
-        let x44 = e3 * e2;
-        let x45 = 2.0 * x44 - 2.0 * x43;
-        let x46 = 2.0 * x35 + 2.0 * x27;
-        let x47 = x5 * x45 + x7 * x46;
-        let x48 = 2.0 * d + 2.0 * (x5 * a_);
-        let x49 = x47 * x48;
-        let x50 = a_ * x7;
-        let x51 = x50 * (x5 * x46 - x7 * x45);
-        let x52 = x49 - 2.0 * x51;
-        let x53 = x36 - x1 + x10;
-        let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
-        let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
-        let x56 = a_ * x14;
-        let x57 = (x53 * x14 + x18 * x46) * x56;
-        let x58 = 2.0 * (x18 * a_) + 2.0 * d;
-        let x59 = x18 * x53 - x14 * x46;
-        let x60 = x58 * x59;
-        let x61 = 2.0 * x57 + x60;
-        let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
-        let x63 = -2.0 * x57 - x60;
-        let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
-        let x65 = 2.0 * x51 - x49;
-        let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
-        let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
-        let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
-        let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
-        let x70 = 2.0 * x43 + 2.0 * x44;
-        let x71 = 2.0 * x15 - 2.0 * x8;
-        let x72 = x13 + x2;
-        let x73 = x72 - x1 - x10;
-        let x74 = x71 * x7 + x5 * x73;
-        let x75 = x74 * x48;
-        let x76 = (x5 * x71 - x73 * x7) * x50;
-        let x77 = 2.0 * x76 - x75;
-        let x78 = x18 * x70 - x71 * x14;
-        let x79 = x78 * x58;
-        let x80 = (x70 * x14 + x18 * x71) * x56;
-        let x81 = -x79 - 2.0 * x80;
-        let x82 = x79 + 2.0 * x80;
-        let x83 = x75 - 2.0 * x76;
-        let x84 = f64::abs(e2);
-        let x85 = f64::abs(e1);
-        let x86 = f64::abs(e0);
-        let x87 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
                 2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
                     + 2.0 * (e3 * e3_dot),
-                2.0 * (f64::abs(e2_dot) * x84) + 2.0 * (x85 * f64::abs(e1_dot))
-                    + 2.0 * (x86 * f64::abs(e0_dot)) + 2.0 * (x87 * f64::abs(e3_dot)),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x1 + x72 + x10 - 1.0,
-                x85 * x85 + x84 * x84 + x87 * x87 + x86 * x86 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4724,44 +4501,7 @@ pub mod maggi {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            e3_dot
-                * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
-                    + (d
-                        * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16)
-                            - x19 * x3) - x4) * m1) + X_dot * x20
-                + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
-                    + m2
-                        * (d
-                            * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
-                                - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
-                + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
-                    + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
-                + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
-                    + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
-                + (m2
-                    * (d
-                        * (x7
-                            * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
-                                - 4.0 * x24) - x41 * x21) - x40)
-                    + m1
-                        * (x40
-                            + ((4.0 * (x19 * e0)
-                                + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
-                                + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
-            x20 * Y_dot
-                + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
-                + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
-                + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
-                + (x38 * x47 + x34 * x59) * d
-                + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
-            (m2 * (x70 * x64 + x77 * e2) + (x81 * e3 + x62 * x73) * m1) * e0_dot
-                + ((x73 * x68 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x69)) * e1_dot
-                + d * (x34 * x78 + x38 * x74)
-                + e3_dot * (m1 * (x82 * e0 - x55 * x73) + m2 * (x83 * e1 - x70 * x54))
-                + Z_dot * x20
-                + e2_dot * ((x81 * e1 - x73 * x67) * m1 + m2 * (x83 * e0 + x70 * x66)),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -9054,8 +8794,6 @@ pub mod kane {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let gamma1 = q[4];
-        let gamma2 = q[5];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
@@ -9065,115 +8803,24 @@ pub mod kane {
         let X_dot = qdot[6];
         let Y_dot = qdot[7];
         let Z_dot = qdot[8];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = a_ * e3;
-        let x1 = e1 * e1;
-        let x2 = e0 * e0;
-        let x3 = 4.0 * x1 + 4.0 * x2;
-        let x4 = x0 * x3;
-        let x5 = f64::cos(gamma2);
-        let x6 = x5 * e3;
-        let x7 = f64::sin(gamma2);
-        let x8 = e2 * e0;
-        let x9 = e3 * x8;
-        let x10 = e2 * e2;
-        let x11 = 2.0 * x1 + 2.0 * x2;
-        let x12 = 2.0 * x10 + x11;
-        let x13 = e3 * e3;
-        let x14 = f64::sin(gamma1);
-        let x15 = e3 * e1;
-        let x16 = x15 * e2;
-        let x17 = 2.0 * x13 - 2.0 * x1;
-        let x18 = f64::cos(gamma1);
-        let x19 = x18 * e3;
-        let x20 = m0
-            + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
-                + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
-        let x21 = 4.0 * x13 + 4.0 * x10;
-        let x22 = x18 * e1;
-        let x23 = x17 + 2.0 * x2 + 2.0 * x10;
-        let x24 = x15 * e0;
-        let x25 = a_ * e1;
-        let x26 = x25 * x21;
-        let x27 = e2 * e1;
-        let x28 = x5 * e2;
-        let x29 = x7 * e0;
-        let x30 = a_ * e2;
-        let x31 = x30 * x3;
-        let x32 = 2.0 * x13 - 2.0 * x10 + x11;
-        let x33 = x18 * e2;
-        let x34 = gamma1_dot * m1;
-        let x35 = e3 * e0;
-        let x36 = x2 - x13;
-        let x37 = x1 + x36 - x10;
-        let x38 = m2 * gamma2_dot;
-        let x39 = a_ * e0;
-        let x40 = x39 * x21;
-        let x41 = x5 * e0;
-        let x42 = x14 * e1;
-        let x43 = e1 * e0;
-        let x44 = e3 * e2;
-        let x45 = 2.0 * x44 - 2.0 * x43;
-        let x46 = 2.0 * x35 + 2.0 * x27;
-        let x47 = x5 * x45 + x7 * x46;
-        let x48 = 2.0 * d + 2.0 * (x5 * a_);
-        let x49 = x47 * x48;
-        let x50 = a_ * x7;
-        let x51 = x50 * (x5 * x46 - x7 * x45);
-        let x52 = x49 - 2.0 * x51;
-        let x53 = x36 - x1 + x10;
-        let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
-        let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
-        let x56 = a_ * x14;
-        let x57 = (x53 * x14 + x18 * x46) * x56;
-        let x58 = 2.0 * (x18 * a_) + 2.0 * d;
-        let x59 = x18 * x53 - x14 * x46;
-        let x60 = x58 * x59;
-        let x61 = 2.0 * x57 + x60;
-        let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
-        let x63 = -2.0 * x57 - x60;
-        let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
-        let x65 = 2.0 * x51 - x49;
-        let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
-        let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
-        let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
-        let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
-        let x70 = 2.0 * x43 + 2.0 * x44;
-        let x71 = 2.0 * x15 - 2.0 * x8;
-        let x72 = x13 + x2;
-        let x73 = x72 - x1 - x10;
-        let x74 = x71 * x7 + x5 * x73;
-        let x75 = x74 * x48;
-        let x76 = (x5 * x71 - x73 * x7) * x50;
-        let x77 = 2.0 * x76 - x75;
-        let x78 = x18 * x70 - x71 * x14;
-        let x79 = x78 * x58;
-        let x80 = (x70 * x14 + x18 * x71) * x56;
-        let x81 = -x79 - 2.0 * x80;
-        let x82 = x79 + 2.0 * x80;
-        let x83 = x75 - 2.0 * x76;
-        let x84 = f64::abs(e2);
-        let x85 = f64::abs(e1);
-        let x86 = f64::abs(e0);
-        let x87 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
                 2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
                     + 2.0 * (e3 * e3_dot),
-                2.0 * (f64::abs(e2_dot) * x84) + 2.0 * (x85 * f64::abs(e1_dot))
-                    + 2.0 * (x86 * f64::abs(e0_dot)) + 2.0 * (x87 * f64::abs(e3_dot)),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x1 + x72 + x10 - 1.0,
-                x85 * x85 + x84 * x84 + x87 * x87 + x86 * x86 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -9208,44 +8855,7 @@ pub mod kane {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            e3_dot
-                * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
-                    + (d
-                        * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16)
-                            - x19 * x3) - x4) * m1) + X_dot * x20
-                + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
-                    + m2
-                        * (d
-                            * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
-                                - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
-                + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
-                    + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
-                + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
-                    + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
-                + (m2
-                    * (d
-                        * (x7
-                            * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
-                                - 4.0 * x24) - x41 * x21) - x40)
-                    + m1
-                        * (x40
-                            + ((4.0 * (x19 * e0)
-                                + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
-                                + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
-            x20 * Y_dot
-                + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
-                + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
-                + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
-                + (x38 * x47 + x34 * x59) * d
-                + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
-            (m2 * (x70 * x64 + x77 * e2) + (x81 * e3 + x62 * x73) * m1) * e0_dot
-                + ((x73 * x68 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x69)) * e1_dot
-                + d * (x34 * x78 + x38 * x74)
-                + e3_dot * (m1 * (x82 * e0 - x55 * x73) + m2 * (x83 * e1 - x70 * x54))
-                + Z_dot * x20
-                + e2_dot * ((x81 * e1 - x73 * x67) * m1 + m2 * (x83 * e0 + x70 * x66)),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
@@ -10918,126 +10528,30 @@ pub mod reduced_volterra {
         let e1 = q[1];
         let e2 = q[2];
         let e3 = q[3];
-        let gamma1 = q[4];
-        let gamma2 = q[5];
         let e0_dot = qdot[0];
         let e1_dot = qdot[1];
         let e2_dot = qdot[2];
         let e3_dot = qdot[3];
         let gamma1_dot = qdot[4];
         let gamma2_dot = qdot[5];
-        let X_dot = qdot[6];
-        let Y_dot = qdot[7];
-        let Z_dot = qdot[8];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let x0 = a_ * e3;
-        let x1 = e1 * e1;
-        let x2 = e0 * e0;
-        let x3 = 4.0 * x1 + 4.0 * x2;
-        let x4 = x0 * x3;
-        let x5 = f64::cos(gamma2);
-        let x6 = x5 * e3;
-        let x7 = f64::sin(gamma2);
-        let x8 = e2 * e0;
-        let x9 = e3 * x8;
-        let x10 = e2 * e2;
-        let x11 = 2.0 * x1 + 2.0 * x2;
-        let x12 = 2.0 * x10 + x11;
-        let x13 = e3 * e3;
-        let x14 = f64::sin(gamma1);
-        let x15 = e3 * e1;
-        let x16 = x15 * e2;
-        let x17 = 2.0 * x13 - 2.0 * x1;
-        let x18 = f64::cos(gamma1);
-        let x19 = x18 * e3;
-        let x20 = m0
-            + (x10 * (x10 + x11) + (x12 + x13) * x13 + f64::powi(e0, 4)
-                + x1 * (x1 + 2.0 * x2)) * (m2 + m1);
-        let x21 = 4.0 * x13 + 4.0 * x10;
-        let x22 = x18 * e1;
-        let x23 = x17 + 2.0 * x2 + 2.0 * x10;
-        let x24 = x15 * e0;
-        let x25 = a_ * e1;
-        let x26 = x25 * x21;
-        let x27 = e2 * e1;
-        let x28 = x5 * e2;
-        let x29 = x7 * e0;
-        let x30 = a_ * e2;
-        let x31 = x30 * x3;
-        let x32 = 2.0 * x13 - 2.0 * x10 + x11;
-        let x33 = x18 * e2;
-        let x34 = gamma1_dot * m1;
-        let x35 = e3 * e0;
-        let x36 = x2 - x13;
-        let x37 = x1 + x36 - x10;
-        let x38 = m2 * gamma2_dot;
-        let x39 = a_ * e0;
-        let x40 = x39 * x21;
-        let x41 = x5 * e0;
-        let x42 = x14 * e1;
-        let x43 = e1 * e0;
-        let x44 = e3 * e2;
-        let x45 = 2.0 * x44 - 2.0 * x43;
-        let x46 = 2.0 * x35 + 2.0 * x27;
-        let x47 = x5 * x45 + x7 * x46;
-        let x48 = 2.0 * d + 2.0 * (x5 * a_);
-        let x49 = x47 * x48;
-        let x50 = a_ * x7;
-        let x51 = x50 * (x5 * x46 - x7 * x45);
-        let x52 = x49 - 2.0 * x51;
-        let x53 = x36 - x1 + x10;
-        let x54 = (2.0 * x41 - 2.0 * (x7 * e2)) * d + 2.0 * x39;
-        let x55 = 2.0 * x25 + d * (2.0 * x22 + 2.0 * (x14 * e2));
-        let x56 = a_ * x14;
-        let x57 = (x53 * x14 + x18 * x46) * x56;
-        let x58 = 2.0 * (x18 * a_) + 2.0 * d;
-        let x59 = x18 * x53 - x14 * x46;
-        let x60 = x58 * x59;
-        let x61 = 2.0 * x57 + x60;
-        let x62 = 2.0 * x30 - d * (2.0 * x42 - 2.0 * x33);
-        let x63 = -2.0 * x57 - x60;
-        let x64 = (2.0 * (x7 * e1) + 2.0 * x6) * d + 2.0 * x0;
-        let x65 = 2.0 * x51 - x49;
-        let x66 = 2.0 * x25 - (2.0 * (e3 * x7) - 2.0 * (x5 * e1)) * d;
-        let x67 = d * (2.0 * (x18 * e0) - 2.0 * (e3 * x14)) + 2.0 * x39;
-        let x68 = 2.0 * x0 + d * (2.0 * x19 + 2.0 * (x14 * e0));
-        let x69 = 2.0 * x30 + (2.0 * x28 + 2.0 * x29) * d;
-        let x70 = 2.0 * x43 + 2.0 * x44;
-        let x71 = 2.0 * x15 - 2.0 * x8;
-        let x72 = x13 + x2;
-        let x73 = x72 - x1 - x10;
-        let x74 = x71 * x7 + x5 * x73;
-        let x75 = x74 * x48;
-        let x76 = (x5 * x71 - x73 * x7) * x50;
-        let x77 = 2.0 * x76 - x75;
-        let x78 = x18 * x70 - x71 * x14;
-        let x79 = x78 * x58;
-        let x80 = (x70 * x14 + x18 * x71) * x56;
-        let x81 = -x79 - 2.0 * x80;
-        let x82 = x79 + 2.0 * x80;
-        let x83 = x75 - 2.0 * x76;
-        let x84 = f64::abs(e2);
-        let x85 = f64::abs(e1);
-        let x86 = f64::abs(e0);
-        let x87 = f64::abs(e3);
+        let x0 = f64::abs(e2);
+        let x1 = f64::abs(e1);
+        let x2 = f64::abs(e0);
+        let x3 = f64::abs(e3);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "unit",
                 2.0 * (e2_dot * e2) + 2.0 * (e1_dot * e1) + 2.0 * (e0_dot * e0)
                     + 2.0 * (e3 * e3_dot),
-                2.0 * (f64::abs(e2_dot) * x84) + 2.0 * (x85 * f64::abs(e1_dot))
-                    + 2.0 * (x86 * f64::abs(e0_dot)) + 2.0 * (x87 * f64::abs(e3_dot)),
+                2.0 * (f64::abs(e2_dot) * x0) + 2.0 * (x1 * f64::abs(e1_dot))
+                    + 2.0 * (x2 * f64::abs(e0_dot)) + 2.0 * (x3 * f64::abs(e3_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "unit",
-                x1 + x72 + x10 - 1.0,
-                x85 * x85 + x84 * x84 + x87 * x87 + x86 * x86 + 1.0,
+                e3 * e3 + e0 * e0 + e1 * e1 + e2 * e2 - 1.0,
+                x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -11069,44 +10583,7 @@ pub mod reduced_volterra {
             gamma1_dot,
             gamma2_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            e3_dot
-                * (m2 * (x4 + d * (x6 * x3 + x7 * ((x12 - 2.0 * x13) * e1 - 4.0 * x9)))
-                    + (d
-                        * (x14 * ((x17 - 2.0 * x2 - 2.0 * x10) * e0 - 4.0 * x16)
-                            - x19 * x3) - x4) * m1) + X_dot * x20
-                + (m1 * (d * (x21 * x22 + (x23 * e2 + 4.0 * x24) * x14) + x26)
-                    + m2
-                        * (d
-                            * ((x23 * x7 - 4.0 * (x5 * x15)) * e3
-                                - x27 * (4.0 * x28 + 4.0 * x29)) - x26)) * e1_dot
-                + (m2 * (x31 + (x7 * (x32 * e0 - 4.0 * x16) + x28 * x3) * d)
-                    + (d * (x14 * (x32 * e1 + 4.0 * x9) - x33 * x3) - x31) * m1) * e2_dot
-                + (x34 * (x18 * (2.0 * x27 - 2.0 * x35) - x14 * x37)
-                    + (x5 * (2.0 * x15 + 2.0 * x8) + x7 * x37) * x38) * d
-                + (m2
-                    * (d
-                        * (x7
-                            * ((2.0 * x1 + 2.0 * x13 - 2.0 * x2 + 2.0 * x10) * e2
-                                - 4.0 * x24) - x41 * x21) - x40)
-                    + m1
-                        * (x40
-                            + ((4.0 * (x19 * e0)
-                                + x14 * (2.0 * x2 - 2.0 * x1 - 2.0 * x13 - 2.0 * x10)) * e3
-                                + (4.0 * x33 - 4.0 * x42) * x8) * d)) * e0_dot,
-            x20 * Y_dot
-                + (m2 * (x52 * e1 - x53 * x54) + (x61 * e0 - x55 * x45) * m1) * e3_dot
-                + ((x62 * x45 + x63 * e3) * m1 + m2 * (x53 * x64 + x65 * e2)) * e0_dot
-                + (m2 * (x52 * e0 + x53 * x66) + (x63 * e1 - x67 * x45) * m1) * e2_dot
-                + (x38 * x47 + x34 * x59) * d
-                + e1_dot * (m1 * (x61 * e2 + x45 * x68) + m2 * (x65 * e3 - x53 * x69)),
-            (m2 * (x70 * x64 + x77 * e2) + (x81 * e3 + x62 * x73) * m1) * e0_dot
-                + ((x73 * x68 + x82 * e2) * m1 + m2 * (x77 * e3 - x70 * x69)) * e1_dot
-                + d * (x34 * x78 + x38 * x74)
-                + e3_dot * (m1 * (x82 * e0 - x55 * x73) + m2 * (x83 * e1 - x70 * x54))
-                + Z_dot * x20
-                + e2_dot * ((x81 * e1 - x73 * x67) * m1 + m2 * (x83 * e0 + x70 * x66)),
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))

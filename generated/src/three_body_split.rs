@@ -1113,12 +1113,6 @@ pub mod lagrange {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let mut v = [0.0f64; 47];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1149,115 +1143,10 @@ pub mod lagrange {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            d
-                * (v[12] * v[13] + phi_dot * (v[16] * v[19] - v[15] * v[8])
-                    + v[20] * v[22])
-                + (((v[24] + v[26]) * v[27] - v[30] * v[19]) * m1
-                    + (v[28] * v[33] - v[8] * v[35]) * m2) * psi_dot
-                + theta_dot
-                    * ((v[3] * (-v[24] - v[26]) + v[36] * v[19]) * m1
-                        + (v[33] * v[5] + v[8] * v[37]) * m2) + X_dot * v[38],
-            Y_dot * v[38]
-                + theta_dot
-                    * ((v[39] * v[36] + (-v[42] - v[44]) * v[3]) * m1
-                        + m2 * (v[40] * v[37] + v[46] * v[5]))
-                + ((v[27] * (v[42] + v[44]) - v[39] * v[30]) * m1
-                    + m2 * (v[28] * v[46] - v[40] * v[35])) * psi_dot
-                + (v[45] * v[20] + (v[39] * v[16] - v[15] * v[40]) * phi_dot
-                    + v[13] * v[43]) * d,
-            theta_dot
-                * ((v[3] * (-v[29] * v[23] - (v[28] * v[9] - v[0] * v[1]) * v[25])
-                    + v[36] * v[27]) * m1
-                    + m2
-                        * ((v[31] * (v[14] * v[27] + v[21] * v[1]) + v[34] * v[32])
-                            * v[5] + v[28] * v[37]))
-                + d
-                    * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
-                        + v[13] * v[29]) + Z_dot * v[38],
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 47],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let gamma1_dot = qdot[3];
-        let gamma2_dot = qdot[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::cos(gamma1);
-        v[1] = f64::sin(theta);
-        v[2] = f64::cos(psi);
-        v[3] = f64::sin(phi);
-        v[4] = v[2] * v[3];
-        v[5] = f64::cos(phi);
-        v[6] = f64::sin(psi);
-        v[7] = v[5] * v[6];
-        v[8] = v[1] * v[4] - v[7];
-        v[9] = f64::sin(gamma1);
-        v[10] = f64::cos(theta);
-        v[11] = v[2] * v[10];
-        v[12] = v[0] * v[8] - v[9] * v[11];
-        v[13] = gamma1_dot * m1;
-        v[14] = f64::sin(gamma2);
-        v[15] = m2 * v[14];
-        v[16] = v[9] * m1;
-        v[17] = v[2] * v[5];
-        v[18] = v[3] * v[6];
-        v[19] = v[1] * v[17] + v[18];
-        v[20] = m2 * gamma2_dot;
-        v[21] = f64::cos(gamma2);
-        v[22] = v[14] * v[11] + v[21] * v[19];
-        v[23] = v[0] * a_ + d;
-        v[24] = v[12] * v[23];
-        v[25] = a_ * v[9];
-        v[26] = (v[0] * v[11] + v[9] * v[8]) * v[25];
-        v[27] = v[10] * v[5];
-        v[28] = v[10] * v[3];
-        v[29] = v[1] * v[9] + v[0] * v[28];
-        v[30] = v[29] * d + a_ * v[28];
-        v[31] = a_ * v[14];
-        v[32] = d + v[21] * a_;
-        v[33] = v[22] * v[32] - (v[21] * v[11] - v[14] * v[19]) * v[31];
-        v[34] = v[21] * v[27] - v[1] * v[14];
-        v[35] = a_ * v[27] + v[34] * d;
-        v[36] = -((a_ + v[0] * d) * v[5]);
-        v[37] = (a_ + v[21] * d) * v[3];
-        v[38] = m2 + m0 + m1;
-        v[39] = v[1] * v[7] - v[4];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
-        v: &mut [f64; 47],
-    ) {
-        v[40] = v[1] * v[18] + v[17];
-        v[41] = v[10] * v[6];
-        v[42] = (v[40] * v[9] + v[0] * v[41]) * v[25];
-        v[43] = v[0] * v[40] - v[9] * v[41];
-        v[44] = v[43] * v[23];
-        v[45] = v[14] * v[41] + v[21] * v[39];
-        v[46] = v[45] * v[32] - (v[21] * v[41] - v[39] * v[14]) * v[31];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -4242,12 +4131,6 @@ pub mod maggi {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let mut v = [0.0f64; 47];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4278,115 +4161,10 @@ pub mod maggi {
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            d
-                * (v[12] * v[13] + phi_dot * (v[16] * v[19] - v[15] * v[8])
-                    + v[20] * v[22])
-                + (((v[24] + v[26]) * v[27] - v[30] * v[19]) * m1
-                    + (v[28] * v[33] - v[8] * v[35]) * m2) * psi_dot
-                + theta_dot
-                    * ((v[3] * (-v[24] - v[26]) + v[36] * v[19]) * m1
-                        + (v[33] * v[5] + v[8] * v[37]) * m2) + X_dot * v[38],
-            Y_dot * v[38]
-                + theta_dot
-                    * ((v[39] * v[36] + (-v[42] - v[44]) * v[3]) * m1
-                        + m2 * (v[40] * v[37] + v[46] * v[5]))
-                + ((v[27] * (v[42] + v[44]) - v[39] * v[30]) * m1
-                    + m2 * (v[28] * v[46] - v[40] * v[35])) * psi_dot
-                + (v[45] * v[20] + (v[39] * v[16] - v[15] * v[40]) * phi_dot
-                    + v[13] * v[43]) * d,
-            theta_dot
-                * ((v[3] * (-v[29] * v[23] - (v[28] * v[9] - v[0] * v[1]) * v[25])
-                    + v[36] * v[27]) * m1
-                    + m2
-                        * ((v[31] * (v[14] * v[27] + v[21] * v[1]) + v[34] * v[32])
-                            * v[5] + v[28] * v[37]))
-                + d
-                    * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
-                        + v[13] * v[29]) + Z_dot * v[38],
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 47],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let gamma1_dot = qdot[3];
-        let gamma2_dot = qdot[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::cos(gamma1);
-        v[1] = f64::sin(theta);
-        v[2] = f64::cos(psi);
-        v[3] = f64::sin(phi);
-        v[4] = v[2] * v[3];
-        v[5] = f64::cos(phi);
-        v[6] = f64::sin(psi);
-        v[7] = v[5] * v[6];
-        v[8] = v[1] * v[4] - v[7];
-        v[9] = f64::sin(gamma1);
-        v[10] = f64::cos(theta);
-        v[11] = v[2] * v[10];
-        v[12] = v[0] * v[8] - v[9] * v[11];
-        v[13] = gamma1_dot * m1;
-        v[14] = f64::sin(gamma2);
-        v[15] = m2 * v[14];
-        v[16] = v[9] * m1;
-        v[17] = v[2] * v[5];
-        v[18] = v[3] * v[6];
-        v[19] = v[1] * v[17] + v[18];
-        v[20] = m2 * gamma2_dot;
-        v[21] = f64::cos(gamma2);
-        v[22] = v[14] * v[11] + v[21] * v[19];
-        v[23] = v[0] * a_ + d;
-        v[24] = v[12] * v[23];
-        v[25] = a_ * v[9];
-        v[26] = (v[0] * v[11] + v[9] * v[8]) * v[25];
-        v[27] = v[10] * v[5];
-        v[28] = v[10] * v[3];
-        v[29] = v[1] * v[9] + v[0] * v[28];
-        v[30] = v[29] * d + a_ * v[28];
-        v[31] = a_ * v[14];
-        v[32] = d + v[21] * a_;
-        v[33] = v[22] * v[32] - (v[21] * v[11] - v[14] * v[19]) * v[31];
-        v[34] = v[21] * v[27] - v[1] * v[14];
-        v[35] = a_ * v[27] + v[34] * d;
-        v[36] = -((a_ + v[0] * d) * v[5]);
-        v[37] = (a_ + v[21] * d) * v[3];
-        v[38] = m2 + m0 + m1;
-        v[39] = v[1] * v[7] - v[4];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
-        v: &mut [f64; 47],
-    ) {
-        v[40] = v[1] * v[18] + v[17];
-        v[41] = v[10] * v[6];
-        v[42] = (v[40] * v[9] + v[0] * v[41]) * v[25];
-        v[43] = v[0] * v[40] - v[9] * v[41];
-        v[44] = v[43] * v[23];
-        v[45] = v[14] * v[41] + v[21] * v[39];
-        v[46] = v[45] * v[32] - (v[21] * v[41] - v[39] * v[14]) * v[31];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -7803,6 +7581,8 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
+        let theta = q[1];
+        let phi = q[2];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -7811,12 +7591,9 @@ pub mod kane {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let mut v = [0.0f64; 45];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
+        let x0 = f64::cos(theta) * psi_dot;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -7838,124 +7615,19 @@ pub mod kane {
             q[5],
             q[6],
             q[7],
-            phi_dot - v[0] * psi_dot,
-            v[3] * psi_dot + theta_dot * v[4],
-            psi_dot * v[5] - theta_dot * v[2],
+            phi_dot - f64::sin(theta) * psi_dot,
+            x0 * x1 + theta_dot * x2,
+            x0 * x2 - theta_dot * x1,
             gamma1_dot,
             gamma2_dot,
             X_dot,
             Y_dot,
             Z_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot
-                * ((v[9] * v[11] + v[2] * (-v[18] - v[20])) * m1
-                    + m2 * (v[26] * v[4] + v[13] * v[27]))
-                + (v[28] * v[24] + phi_dot * (v[9] * v[30] - v[13] * v[29])
-                    + v[31] * v[16]) * d
-                + psi_dot
-                    * (m2 * (v[26] * v[3] - v[13] * v[33])
-                        + ((v[18] + v[20]) * v[5] - v[9] * v[35]) * m1) + X_dot * v[36],
-            Y_dot * v[36]
-                + theta_dot
-                    * (m2 * (v[37] * v[27] + v[41] * v[4])
-                        + (v[11] * v[38] + (-v[43] - v[44]) * v[2]) * m1)
-                + psi_dot
-                    * (m2 * (v[3] * v[41] - v[37] * v[33])
-                        + m1 * ((v[43] + v[44]) * v[5] - v[35] * v[38]))
-                + d
-                    * ((v[30] * v[38] - v[29] * v[37]) * phi_dot + v[28] * v[40]
-                        + v[31] * v[42]),
-            theta_dot
-                * ((v[2] * (-v[34] * v[17] - (v[3] * v[14] - v[10] * v[0]) * v[19])
-                    + v[11] * v[5]) * m1
-                    + m2
-                        * ((v[23] * (v[22] * v[5] + v[21] * v[0]) + v[32] * v[25]) * v[4]
-                            + v[3] * v[27]))
-                + d
-                    * (v[1] * phi_dot * (v[30] * v[4] - v[29] * v[2]) + v[28] * v[32]
-                        + v[31] * v[34]) + Z_dot * v[36],
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 45],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let gamma1_dot = qdot[3];
-        let gamma2_dot = qdot[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::sin(theta);
-        v[1] = f64::cos(theta);
-        v[2] = f64::sin(phi);
-        v[3] = v[1] * v[2];
-        v[4] = f64::cos(phi);
-        v[5] = v[1] * v[4];
-        v[6] = f64::sin(psi);
-        v[7] = v[0] * v[4];
-        v[8] = f64::cos(psi);
-        v[9] = v[2] * v[6] + v[7] * v[8];
-        v[10] = f64::cos(gamma1);
-        v[11] = -((a_ + v[10] * d) * v[4]);
-        v[12] = v[0] * v[2];
-        v[13] = v[8] * v[12] - v[4] * v[6];
-        v[14] = f64::sin(gamma1);
-        v[15] = v[8] * v[1];
-        v[16] = v[10] * v[13] - v[14] * v[15];
-        v[17] = v[10] * a_ + d;
-        v[18] = v[16] * v[17];
-        v[19] = a_ * v[14];
-        v[20] = v[19] * (v[10] * v[15] + v[13] * v[14]);
-        v[21] = f64::cos(gamma2);
-        v[22] = f64::sin(gamma2);
-        v[23] = a_ * v[22];
-        v[24] = v[21] * v[9] + v[22] * v[15];
-        v[25] = d + v[21] * a_;
-        v[26] = v[24] * v[25] - (v[21] * v[15] - v[9] * v[22]) * v[23];
-        v[27] = (a_ + v[21] * d) * v[2];
-        v[28] = m2 * gamma2_dot;
-        v[29] = m2 * v[22];
-        v[30] = v[14] * m1;
-        v[31] = gamma1_dot * m1;
-        v[32] = v[21] * v[5] - v[0] * v[22];
-        v[33] = a_ * v[5] + v[32] * d;
-        v[34] = v[0] * v[14] + v[10] * v[3];
-        v[35] = v[34] * d + a_ * v[3];
-        v[36] = m2 + m0 + m1;
-        v[37] = v[8] * v[4] + v[12] * v[6];
-        v[38] = v[7] * v[6] - v[8] * v[2];
-        v[39] = v[1] * v[6];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
-        v: &mut [f64; 45],
-    ) {
-        v[40] = v[22] * v[39] + v[21] * v[38];
-        v[41] = v[25] * v[40] - (v[21] * v[39] - v[22] * v[38]) * v[23];
-        v[42] = v[10] * v[37] - v[14] * v[39];
-        v[43] = v[42] * v[17];
-        v[44] = (v[37] * v[14] + v[10] * v[39]) * v[19];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -9739,20 +9411,16 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
+        let theta = q[1];
+        let phi = q[2];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
         let gamma1_dot = qdot[3];
         let gamma2_dot = qdot[4];
-        let X_dot = qdot[5];
-        let Y_dot = qdot[6];
-        let Z_dot = qdot[7];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let mut v = [0.0f64; 45];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
+        let x0 = f64::cos(theta) * psi_dot;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -9774,121 +9442,16 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - v[0] * psi_dot,
-            v[3] * psi_dot + theta_dot * v[4],
-            psi_dot * v[5] - theta_dot * v[2],
+            phi_dot - f64::sin(theta) * psi_dot,
+            x0 * x1 + theta_dot * x2,
+            x0 * x2 - theta_dot * x1,
             gamma1_dot,
             gamma2_dot,
         ];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot
-                * ((v[9] * v[11] + v[2] * (-v[18] - v[20])) * m1
-                    + m2 * (v[26] * v[4] + v[13] * v[27]))
-                + (v[28] * v[24] + phi_dot * (v[9] * v[30] - v[13] * v[29])
-                    + v[31] * v[16]) * d
-                + psi_dot
-                    * (m2 * (v[26] * v[3] - v[13] * v[33])
-                        + ((v[18] + v[20]) * v[5] - v[9] * v[35]) * m1) + X_dot * v[36],
-            Y_dot * v[36]
-                + theta_dot
-                    * (m2 * (v[37] * v[27] + v[41] * v[4])
-                        + (v[11] * v[38] + (-v[43] - v[44]) * v[2]) * m1)
-                + psi_dot
-                    * (m2 * (v[3] * v[41] - v[37] * v[33])
-                        + m1 * ((v[43] + v[44]) * v[5] - v[35] * v[38]))
-                + d
-                    * ((v[30] * v[38] - v[29] * v[37]) * phi_dot + v[28] * v[40]
-                        + v[31] * v[42]),
-            theta_dot
-                * ((v[2] * (-v[34] * v[17] - (v[3] * v[14] - v[10] * v[0]) * v[19])
-                    + v[11] * v[5]) * m1
-                    + m2
-                        * ((v[23] * (v[22] * v[5] + v[21] * v[0]) + v[32] * v[25]) * v[4]
-                            + v[3] * v[27]))
-                + d
-                    * (v[1] * phi_dot * (v[30] * v[4] - v[29] * v[2]) + v[28] * v[32]
-                        + v[31] * v[34]) + Z_dot * v[36],
-        ];
+        let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
         ::seam::check::finite_after(t, STATES, &g_i)?;
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 45],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let gamma1_dot = qdot[3];
-        let gamma2_dot = qdot[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::sin(theta);
-        v[1] = f64::cos(theta);
-        v[2] = f64::sin(phi);
-        v[3] = v[1] * v[2];
-        v[4] = f64::cos(phi);
-        v[5] = v[1] * v[4];
-        v[6] = f64::sin(psi);
-        v[7] = v[0] * v[4];
-        v[8] = f64::cos(psi);
-        v[9] = v[2] * v[6] + v[7] * v[8];
-        v[10] = f64::cos(gamma1);
-        v[11] = -((a_ + v[10] * d) * v[4]);
-        v[12] = v[0] * v[2];
-        v[13] = v[8] * v[12] - v[4] * v[6];
-        v[14] = f64::sin(gamma1);
-        v[15] = v[8] * v[1];
-        v[16] = v[10] * v[13] - v[14] * v[15];
-        v[17] = v[10] * a_ + d;
-        v[18] = v[16] * v[17];
-        v[19] = a_ * v[14];
-        v[20] = v[19] * (v[10] * v[15] + v[13] * v[14]);
-        v[21] = f64::cos(gamma2);
-        v[22] = f64::sin(gamma2);
-        v[23] = a_ * v[22];
-        v[24] = v[21] * v[9] + v[22] * v[15];
-        v[25] = d + v[21] * a_;
-        v[26] = v[24] * v[25] - (v[21] * v[15] - v[9] * v[22]) * v[23];
-        v[27] = (a_ + v[21] * d) * v[2];
-        v[28] = m2 * gamma2_dot;
-        v[29] = m2 * v[22];
-        v[30] = v[14] * m1;
-        v[31] = gamma1_dot * m1;
-        v[32] = v[21] * v[5] - v[0] * v[22];
-        v[33] = a_ * v[5] + v[32] * d;
-        v[34] = v[0] * v[14] + v[10] * v[3];
-        v[35] = v[34] * d + a_ * v[3];
-        v[36] = m2 + m0 + m1;
-        v[37] = v[8] * v[4] + v[12] * v[6];
-        v[38] = v[7] * v[6] - v[8] * v[2];
-        v[39] = v[1] * v[6];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
-        v: &mut [f64; 45],
-    ) {
-        v[40] = v[22] * v[39] + v[21] * v[38];
-        v[41] = v[25] * v[40] - (v[21] * v[39] - v[22] * v[38]) * v[23];
-        v[42] = v[10] * v[37] - v[14] * v[39];
-        v[43] = v[42] * v[17];
-        v[44] = (v[37] * v[14] + v[10] * v[39]) * v[19];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]

@@ -207,3 +207,36 @@ def test_a_long_chain_s_bobs_do_not_overlap(tmp_path):
     assert math.isclose(state["typicalLink"], m.params["l1"], rel_tol=1e-6)
     assert 2 * state["pointSize"] <= 0.9 * state["typicalLink"] * (1 + 1e-12)
     assert 2 * state["pointSize"] < 0.1 * state["extent"], "smaller than a twentieth of the view"
+
+
+def test_a_trail_draws_where_a_body_has_been(tmp_path):
+    from PIL import Image
+
+    m = multibody.load("cart_pendulum")
+    run = m.simulate("kane", t_end=3.0, dt_out=0.01, frame=False)
+    path = tmp_path / "trail.html"
+    m.animate(run, path)
+    view = "&size=800x520&follow=0"
+    now = page_state(tmp_path, path.as_uri() + "#t=3" + view + "&trail=bar2")
+    assert now["trail"] == {"body": "bar2", "points": now["index"] + 1}
+    assert page_state(tmp_path, path.as_uri() + "#t=3" + view)["trail"] is None
+    shots = {}
+    for name, extra in [("plain", ""), ("trail", "&trail=bar2")]:
+        shot = tmp_path / f"{name}.png"
+        chromium(tmp_path, f"--screenshot={shot}", path.as_uri() + "#t=3" + view + extra)
+        shots[name] = Image.open(shot).convert("RGB")
+    # Where bar2's centre was earlier (the camera does not move: follow=0), its colour shows
+    # with the trail and not without, away from where the bodies are now.
+    want = (30 + 2 * 137.508) % 360
+    def near(hues):
+        return len([h for h in hues if min(abs(h - want), 360 - abs(h - want)) < 15])
+    shown = 0
+    for t in [1.5, 2.0, 2.5, 2.8]:
+        earlier = page_state(tmp_path, path.as_uri() + f"#t={t}" + view)
+        x, y = earlier["screen"][2]
+        x, y = x + earlier["offset"][0], y + earlier["offset"][1]
+        if min(math.dist((x, y), p) for p in now["screen"]) < 60:
+            continue
+        if near(hue_at(shots["trail"], x, y, radius=3)) >= 3 and near(hue_at(shots["plain"], x, y, radius=3)) == 0:
+            shown += 1
+    assert shown >= 2, shown

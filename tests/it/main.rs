@@ -29,3 +29,4 @@ mod rust_version;
 mod stiff;
 mod trajectories;
 mod volterra;
+mod watch;

@@ -5,7 +5,6 @@
 //! `matrix` (for conditioning monitors), plus `initial_state`, `velocities` and
 //! `singular_margin`. Each big expression is emitted once per formulation.
 
-use super::FunctionCost;
 use super::function::{Input, arg_list, state_args};
 use super::jacobian::Wrt;
 use super::ldl::Solve;
@@ -13,6 +12,7 @@ use super::module::Emitter;
 use super::ops::OpCount;
 use super::shared::FromMechanics;
 use super::syntax::{doc, usize_lit};
+use super::{Function, FunctionCost};
 use crate::formulation::Equations;
 use crate::model::ModelError;
 use crate::symbolic::expr::any_contains;
@@ -158,6 +158,7 @@ impl Emitter<'_> {
                 power_weights: f.constraint_power.is_some(),
                 depends_on_time,
                 solve,
+                momenta_by_function: self.momenta_by_function(),
             });
         }
         Ok(quote! {
@@ -580,12 +581,21 @@ impl Emitter<'_> {
         Ok(RhsItems { items, depends_on_time, solve: plan, assembly, conditions })
     }
 
+    /// Whether `initial_state` takes `G_I` from the module's `momenta` (emitted, and not empty).
+    fn momenta_by_function(&self) -> bool {
+        self.num_ignorable > 0 && self.options.functions.contains(&Function::Momenta)
+    }
+
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
         let work = self.work;
         let name = f.name();
         let (args, inputs) = self.q_qdot_inputs(true);
         let u = &f.speeds_from_qdot;
-        let g = &shared.momenta;
+        // The module's own `momenta` gives `G_I` where it is emitted: its body, stamped into
+        // every formulation's `initial_state` as well, was a fifth of the humanoid's module
+        // (rustc's time grows with the code it checks).
+        let by_function = self.momenta_by_function();
+        let g: &[Expr] = if by_function { &[] } else { &shared.momenta };
         let mut outputs = u.clone();
         outputs.extend(g.iter().copied());
         outputs.extend(shared.velocity_residuals.iter().copied());
@@ -607,9 +617,11 @@ impl Emitter<'_> {
         let w0 = if work { quote!(, 0.0) } else { TokenStream::new() };
         let stmts = &b.stmts;
         let helpers = &b.helpers;
-        let used: BTreeSet<usize> = b.used_args.iter().copied().chain([0, 1, 2]).collect();
+        let calls: &[usize] = if by_function { &[0, 1, 2, 3] } else { &[0, 1, 2] };
+        let used: BTreeSet<usize> = b.used_args.iter().copied().chain(calls.iter().copied()).collect();
         let fn_args = arg_list(&args, &used);
         let seam = &self.seam;
+        let g_i = if by_function { quote!(momenta(t, q, qdot, params)) } else { quote!([#(#g_out),*]) };
         Ok(quote! {
             #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
             #[allow(non_snake_case, clippy::all)]
@@ -624,7 +636,7 @@ impl Emitter<'_> {
                     }
                 }
                 let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
-                let g_i: [f64; NUM_IGNORABLE] = [#(#g_out),*];
+                let g_i: [f64; NUM_IGNORABLE] = #g_i;
                 #seam::check::finite(t, &state)?;
                 #seam::check::finite_after(t, STATES, &g_i)?;
                 Ok((state, g_i))

@@ -52,6 +52,8 @@ pub struct FormShape {
     pub depends_on_time: bool,
     /// How `rhs` solves its matrix (the plan the module's code follows).
     pub solve: super::ldl::Solve,
+    /// `initial_state` reads `G_I` from the module's `momenta` (its tape's outputs leave them out).
+    pub momenta_by_function: bool,
 }
 
 impl FormShape {

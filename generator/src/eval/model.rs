@@ -20,7 +20,7 @@ pub struct Evaluated {
     event_resets: Option<Box<dyn Kernel>>,
     energy: Option<Box<dyn Kernel>>,
     work_rate: Option<Box<dyn Kernel>>,
-    momenta: Option<Box<dyn Kernel>>,
+    momenta: Option<Arc<dyn Kernel>>,
     constraint_residuals: Option<Box<dyn Kernel>>,
     position_residuals: Option<Box<dyn Kernel>>,
     m: usize,
@@ -37,6 +37,9 @@ pub struct EvaluatedForm {
     holonomic_names: Arc<[String]>,
     rhs: Box<dyn Kernel>,
     initial_state: Box<dyn Kernel>,
+    /// The model's `momenta`, where `initial_state` reads `G_I` from it
+    /// ([`FormShape::momenta_by_function`]).
+    momenta: Option<Arc<dyn Kernel>>,
     velocities: Box<dyn Kernel>,
     singular_margin: Box<dyn Kernel>,
     /// `matrix`'s own tape where `rhs` assembles none (the articulated-body recursion).
@@ -128,6 +131,7 @@ impl Evaluated {
         let take = |name: &str, kernels: &mut std::collections::HashMap<String, Box<dyn Kernel>>| kernels.remove(name);
         let tapes = &mut kernels;
         let holonomic = d.holonomic_names.len();
+        let momenta: Option<Arc<dyn Kernel>> = take("momenta", tapes).map(Arc::from);
         let constraint_names: Arc<[String]> = d.constraints.clone().into();
         let holonomic_names: Arc<[String]> = d.holonomic_names.clone().into();
         let baked_params = if d.default_params.is_empty() { 0 } else { params };
@@ -144,6 +148,7 @@ impl Evaluated {
                     holonomic_names: holonomic_names.clone(),
                     rhs: take(&format!("{name}::rhs"), tapes)?,
                     initial_state: take(&format!("{name}::initial_state"), tapes)?,
+                    momenta: if shape.momenta_by_function { Some(momenta.clone()?) } else { None },
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
                     matrix: take(&format!("{name}::matrix"), tapes),
@@ -172,7 +177,7 @@ impl Evaluated {
             event_resets: take("event_resets", tapes),
             energy: take("energy", tapes),
             work_rate: take("work_rate", tapes),
-            momenta: take("momenta", tapes),
+            momenta,
             constraint_residuals: take("constraint_residuals", tapes),
             position_residuals: take("position_residuals", tapes),
             m,
@@ -201,7 +206,7 @@ impl Evaluated {
 
     fn point(
         &self,
-        tape: &Option<Box<dyn Kernel>>,
+        tape: Option<&dyn Kernel>,
         function: &'static str,
         t: f64,
         q: &[f64],
@@ -210,7 +215,7 @@ impl Evaluated {
         out: &mut [f64],
         rates: bool,
     ) -> Result<(), Failure> {
-        let tape = tape.as_ref().ok_or(Failure::Missing { function })?;
+        let tape = tape.ok_or(Failure::Missing { function })?;
         check("q", q, self.m)?;
         if rates {
             check("qdot", qdot, self.m)?;
@@ -218,32 +223,32 @@ impl Evaluated {
         check("params", params, self.params)?;
         check("out", out, tape.outputs())?;
         let qdot = if rates { qdot } else { &[] };
-        run(&**tape, t, params, q, qdot, |o| out.copy_from_slice(o));
+        run(tape, t, params, q, qdot, |o| out.copy_from_slice(o));
         Ok(())
     }
 }
 
 impl ModelFunctions for Evaluated {
     fn energy(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.energy, "energy", t, q, qdot, params, out, true)
+        self.point(self.energy.as_deref(), "energy", t, q, qdot, params, out, true)
     }
     fn work_rate(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.work_rate, "work_rate", t, q, qdot, params, out, true)
+        self.point(self.work_rate.as_deref(), "work_rate", t, q, qdot, params, out, true)
     }
     fn momenta(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.momenta, "momenta", t, q, qdot, params, out, true)
+        self.point(self.momenta.as_deref(), "momenta", t, q, qdot, params, out, true)
     }
     fn constraint_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.constraint_residuals, "constraint_residuals", t, q, qdot, params, out, true)
+        self.point(self.constraint_residuals.as_deref(), "constraint_residuals", t, q, qdot, params, out, true)
     }
     fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.position_residuals, "position_residuals", t, q, qdot, params, out, false)
+        self.point(self.position_residuals.as_deref(), "position_residuals", t, q, qdot, params, out, false)
     }
     fn event_values(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.event_values, "event_values", t, q, qdot, params, out, true)
+        self.point(self.event_values.as_deref(), "event_values", t, q, qdot, params, out, true)
     }
     fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
-        self.point(&self.event_resets, "event_resets", t, q, qdot, params, out, true)
+        self.point(self.event_resets.as_deref(), "event_resets", t, q, qdot, params, out, true)
     }
 }
 
@@ -532,9 +537,13 @@ impl FormulationFunctions for EvaluatedForm {
         check("g_i", g_i, self.ignorable)?;
         let s = &self.shape;
         let (nr, nh) = (self.constraint_names.len(), self.holonomic_names.len());
+        if let Some(momenta) = &self.momenta {
+            run(&**momenta, t, params, q, qdot, |o| g_i.copy_from_slice(o));
+        }
+        let own = if self.momenta.is_some() { 0 } else { self.ignorable };
         run(&*self.initial_state, t, params, q, qdot, |o| {
             let (u, rest) = o.split_at(s.speeds);
-            let (g, rest) = rest.split_at(self.ignorable);
+            let (g, rest) = rest.split_at(own);
             let (r, rest) = rest.split_at(nr);
             let (rb, rest) = rest.split_at(nr);
             let (h, hb) = rest.split_at(nh);
@@ -553,7 +562,9 @@ impl FormulationFunctions for EvaluatedForm {
             if s.work {
                 state[s.kept.len() + s.speeds] = 0.0;
             }
-            g_i.copy_from_slice(g);
+            if own > 0 {
+                g_i.copy_from_slice(g);
+            }
             seam::check::finite(t, state)?;
             seam::check::finite_after(t, state.len(), g_i)
         })

@@ -1,0 +1,182 @@
+//! `watch`: the live modelling loop. The model file is read ten times a second; when its bytes
+//! change (and then hold still for 60 ms: an editor's save can take several
+//! writes), the model is derived and run again exactly as `simulate` runs it, writing the same
+//! files, and the page of the motion, served on 127.0.0.1 behind a random token, reloads with
+//! its camera and time kept. A model's error is told in the terminal, located, and over the
+//! page; the loop goes on, the last good run still shown.
+
+use crate::simulate::{SimulateArgs, run};
+use crate::{CliError, print};
+use clap::Args;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct WatchArgs {
+    #[command(flatten)]
+    pub simulate: SimulateArgs,
+    /// The port the page is served on, on 127.0.0.1 only (default: one the system picks).
+    #[arg(long, default_value_t = 0)]
+    pub port: u16,
+}
+
+/// What the server shows: the run's number, its page (made live), and the last error.
+#[derive(Default)]
+struct Shown {
+    run: u64,
+    page: Option<String>,
+    error: Option<String>,
+}
+
+/// How often the model file is read, and how long its bytes must hold still before a run.
+const POLL: Duration = Duration::from_millis(100);
+const SETTLE: Duration = Duration::from_millis(60);
+
+pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
+    let model = &args.simulate.model;
+    if !model.is_file() {
+        return Err(CliError::WatchNeedsFile { given: files::printable_path(model) });
+    }
+    let mut simulate = args.simulate.clone();
+    let stem = model.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
+    let page_path = simulate.animate.clone().unwrap_or_else(|| simulate.out.join(format!("{stem}.html")));
+    simulate.animate = Some(page_path.clone());
+    files::check_output(&page_path)?;
+    let token = token()?;
+    let server = tiny_http::Server::http(("127.0.0.1", args.port)).map_err(|e| CliError::Serve { port: args.port, reason: e.to_string() })?;
+    let port = server.server_addr().to_ip().map_or(args.port, |a| a.port());
+    let shown = Arc::new(Mutex::new(Shown::default()));
+    {
+        let (shown, token) = (shown.clone(), token.clone());
+        std::thread::spawn(move || {
+            for request in server.incoming_requests() {
+                answer(request, &shown, &token);
+            }
+        });
+    }
+    print(&format!(
+        "watching {}: the motion at http://127.0.0.1:{port}/?token={token} (written to {} too); Ctrl-C stops\n",
+        files::printable_path(model),
+        files::printable_path(&page_path)
+    ))?;
+    // The bytes of the file the last run read; `None` after a failed read (run again when it
+    // is back, even unchanged: an editor's save may remove it for a moment).
+    let mut last: Option<Vec<u8>> = None;
+    let mut told_missing = false;
+    loop {
+        match settled(model) {
+            Ok(bytes) if last.as_ref() == Some(&bytes) => {}
+            Ok(bytes) => {
+                last = Some(bytes);
+                told_missing = false;
+                let started = Instant::now();
+                let outcome = run(&simulate).and_then(|w| Ok((read_page(&page_path)?, w.map(|e| CliError::Run(e).to_string()))));
+                let mut s = shown.lock().unwrap_or_else(|p| p.into_inner());
+                match outcome {
+                    Ok((page, stopped)) => {
+                        s.run += 1;
+                        s.page = Some(page);
+                        s.error = stopped;
+                        eprintln!("run {} ready in {:.2} s; watching for the next change", s.run, started.elapsed().as_secs_f64());
+                    }
+                    Err(e) => {
+                        eprintln!("{}", crate::describe(&e, std::io::IsTerminal::is_terminal(&std::io::stderr())));
+                        eprintln!("(the page keeps the last good run; watching for the next change)");
+                        s.error = Some(crate::describe(&e, false));
+                    }
+                }
+            }
+            Err(source) => {
+                last = None;
+                if !told_missing {
+                    let e = CliError::File(files::FileError::Io { path: model.clone(), action: "read", source });
+                    eprintln!("error: {e} (watching for it to come back)");
+                    shown.lock().unwrap_or_else(|p| p.into_inner()).error = Some(e.to_string());
+                    told_missing = true;
+                }
+            }
+        }
+        std::thread::sleep(POLL);
+    }
+}
+
+/// The model file's bytes once they have held still for [`SETTLE`].
+fn settled(path: &Path) -> std::io::Result<Vec<u8>> {
+    let mut bytes = std::fs::read(path)?;
+    loop {
+        std::thread::sleep(SETTLE);
+        let again = std::fs::read(path)?;
+        if again == bytes {
+            return Ok(bytes);
+        }
+        bytes = again;
+    }
+}
+
+/// The page the run just wrote. Read directly, not by `files::read_bounded`, which would count
+/// it among the run's inputs and refuse to write it the next time.
+fn read_page(path: &Path) -> Result<String, CliError> {
+    std::fs::read_to_string(path).map_err(|source| CliError::File(files::FileError::Io { path: path.to_path_buf(), action: "read", source }))
+}
+
+/// 128 random bits as hex: the page's address carries them, and the server answers nothing
+/// without them (another local user, or a web page guessing ports, cannot read the runs).
+fn token() -> Result<String, CliError> {
+    let mut bits = [0u8; 16];
+    getrandom::fill(&mut bits).map_err(|e| CliError::Serve { port: 0, reason: format!("no random token: {e}") })?;
+    Ok(bits.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// The page before the first good run: the error, asked for again until a run is ready.
+const WAITING: &str = r#"<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>multibody watch</title></head>
+<body style="font: 14px system-ui, sans-serif; margin: 24px"><p>Waiting for the first run of the model...</p>
+<pre id="problem" style="color: #8b0000; white-space: pre-wrap"></pre>
+<script>
+"use strict";
+const token = new URLSearchParams(location.search).get("token") || "";
+const poll = async () => {
+  try {
+    const news = await (await fetch("status?token=" + encodeURIComponent(token), { cache: "no-store" })).json();
+    document.getElementById("problem").textContent = news.error || "";
+    if (news.run > 0) { location.reload(); return; }
+  } catch (e) {}
+  setTimeout(poll, 250);
+};
+poll();
+</script></body></html>
+"#;
+
+/// One request: `/` the page, `/status` the news (`{"run": N, "error": ...}`), with the token.
+fn answer(request: tiny_http::Request, shown: &Mutex<Shown>, token: &str) {
+    let url = request.url().to_string();
+    let (path, query) = url.split_once('?').unwrap_or((&url, ""));
+    let given = query.split('&').find_map(|kv| kv.strip_prefix("token="));
+    let reply = |status: u16, kind: &str, body: String| {
+        let mut response = tiny_http::Response::from_string(body).with_status_code(status);
+        for (name, value) in [("Content-Type", kind), ("Cache-Control", "no-store"), ("X-Content-Type-Options", "nosniff")] {
+            response.add_header(tiny_http::Header::from_bytes(name, value).expect("plain header"));
+        }
+        response
+    };
+    let response = if request.method() != &tiny_http::Method::Get {
+        reply(405, "text/plain; charset=utf-8", "only GET\n".into())
+    } else if given != Some(token) {
+        reply(403, "text/plain; charset=utf-8", "the address needs the token the tool printed\n".into())
+    } else {
+        let s = shown.lock().unwrap_or_else(|p| p.into_inner());
+        match path {
+            "/" | "/index.html" => match s.page.as_deref() {
+                Some(page) => match animate::live(page, s.run, token) {
+                    Some(live) => reply(200, "text/html; charset=utf-8", live),
+                    None => reply(500, "text/plain; charset=utf-8", "the page could not be made live\n".into()),
+                },
+                None => reply(200, "text/html; charset=utf-8", WAITING.into()),
+            },
+            "/status" => reply(200, "application/json", serde_json::json!({ "run": s.run, "error": s.error }).to_string()),
+            _ => reply(404, "text/plain; charset=utf-8", "no such page\n".into()),
+        }
+    };
+    // A browser that went away mid-answer is no concern of the loop's.
+    let _ = request.respond(response);
+}

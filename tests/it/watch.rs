@@ -1,0 +1,125 @@
+//! `multibody watch`: the live loop, run as a user runs it on a model file of their own. A test
+//! edits the file and waits for the new run; a broken edit shows its located error and keeps
+//! the loop going; the server answers nothing without its token.
+
+use std::io::{BufRead, Read, Write};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The watch process, killed when the test ends however it ends.
+struct Watching(Child);
+
+impl Drop for Watching {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `GET path` on 127.0.0.1:`port`: the status code and the body.
+fn get(port: u16, path: &str) -> (u16, String) {
+    let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
+    stream.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    write!(stream, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut text = String::new();
+    stream.read_to_string(&mut text).unwrap();
+    let status = text.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
+    let body = text.split_once("\r\n\r\n").map_or(String::new(), |(_, b)| b.to_string());
+    (status, body)
+}
+
+/// The news the page polls for, once it satisfies `until` (within two minutes).
+fn wait_for(port: u16, token: &str, until: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+    let start = Instant::now();
+    loop {
+        let (status, body) = get(port, &format!("/status?token={token}"));
+        assert_eq!(status, 200, "{body}");
+        let news: serde_json::Value = serde_json::from_str(&body).unwrap();
+        if until(&news) {
+            return news;
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "the watch did not get there: {news}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+fn params_written(dir: &Path) -> serde_json::Value {
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("cart_pendulum_reduced_volterra.json")).unwrap()).unwrap();
+    json["params"].clone()
+}
+
+#[test]
+fn watch_runs_again_on_every_save_and_shows_a_broken_model_s_error_without_stopping() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("cart_pendulum.ron");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/models/cart_pendulum.ron")).unwrap();
+    assert!(text.contains(r#""M": 2.0,"#));
+    std::fs::write(&model, &text).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_multibody"))
+        .args(["watch", "cart_pendulum.ron", "--t-end", "2"])
+        .current_dir(dir.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let _watching = Watching(child);
+    // Its output read to the end (a closed pipe would end the tool, as it ends `... | head`).
+    let (lines, first) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout).lines() {
+            let _ = lines.send(line.unwrap_or_default());
+        }
+    });
+    let first = first.recv_timeout(Duration::from_secs(60)).expect("the watch prints its address");
+    // `watching cart_pendulum.ron: the motion at http://127.0.0.1:PORT/?token=TOKEN ...`
+    let address = first.split_whitespace().find(|w| w.starts_with("http://127.0.0.1:")).unwrap_or_else(|| panic!("no address in `{first}`"));
+    let (host, token) = address.split_once("/?token=").unwrap();
+    let port: u16 = host.rsplit(':').next().unwrap().parse().unwrap();
+    assert_eq!(token.len(), 32, "128 random bits in hex: {token}");
+
+    let news = wait_for(port, token, |n| n["run"] == 1);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(params_written(dir.path())["M"], 2.0);
+    // The page is the animation, made live with this run's number and the token.
+    let (status, page) = get(port, &format!("/?token={token}"));
+    assert_eq!(status, 200);
+    assert!(page.contains(&format!(r#"const live = {{"run":1,"token":"{token}"}};"#)), "the page is not live");
+    assert!(page.contains(r#""model":"cart_pendulum""#));
+    // Nothing without the token, nor with another.
+    assert_eq!(get(port, "/status").0, 403);
+    assert_eq!(get(port, "/?token=0123").0, 403);
+    assert_eq!(get(port, &format!("/status?token={}", "0".repeat(32))).0, 403);
+
+    // A save: the next run has the new mass, in the page's run number and in the files.
+    std::fs::write(&model, text.replace(r#""M": 2.0,"#, r#""M": 3.0,"#)).unwrap();
+    let news = wait_for(port, token, |n| n["run"] == 2);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(params_written(dir.path())["M"], 3.0);
+    let (_, page) = get(port, &format!("/?token={token}"));
+    assert!(page.contains(r#"const live = {"run":2,"#));
+
+    // A broken save: its located error, the last good run kept, the loop still going.
+    std::fs::write(&model, text.replace(r#""M": 2.0,"#, r#""M": 4.0 +,"#)).unwrap();
+    let news = wait_for(port, token, |n| !n["error"].is_null());
+    let error = news["error"].as_str().unwrap();
+    assert!(error.contains("cart_pendulum.ron:7:"), "the error is not located: {error}");
+    assert_eq!(news["run"], 2);
+    assert_eq!(params_written(dir.path())["M"], 3.0);
+
+    // Fixed: a new run, and the error gone.
+    std::fs::write(&model, text.replace(r#""M": 2.0,"#, r#""M": 5.0,"#)).unwrap();
+    let news = wait_for(port, token, |n| n["run"] == 3);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(params_written(dir.path())["M"], 5.0);
+}
+
+#[test]
+fn watch_needs_a_model_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = crate::common::multibody(dir.path(), &["watch", "cart_pendulum"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("`watch` follows a model file, and `cart_pendulum` is none"), "{err}");
+}
