@@ -13,8 +13,9 @@
 //! (`generator/benches/support/pinocchio.rs`: the `pin` wheel, `aba.cpp` built with
 //! `g++ -O3 -march=native`), example-robot-data in the same environment. Pinocchio's model of
 //! each robot is its parser's (`pin.buildModelFromUrdf`, saved as its text archive for the C++
-//! program). Our modules are compiled for plain x86-64 (`-C opt-level=3`): the comparison gives
-//! Pinocchio the newer instructions and us none. Every side times a call the same way (the best,
+//! program). Our modules are compiled for plain x86-64 (`-C opt-level=3`), which gives Pinocchio
+//! the newer instructions and us none, and, emitted with `--fma`, with `-C target-cpu=native`: the
+//! same instructions as Pinocchio's build. Every side times a call the same way (the best,
 //! over 7 rounds, of the mean of 200 calls at one state); the rounds alternate the sides, and
 //! each figure is the best over the rounds.
 //!
@@ -226,6 +227,12 @@ struct Row {
     reduced_over_aba: f64,
     reduced_jit_over_compiled: f64,
     kane_jit_over_compiled: f64,
+    /// The module emitted with fused multiply-adds (`--fma`) and built with `-C
+    /// target-cpu=native`: this machine's instructions, as Pinocchio's `-march=native` build.
+    kane_native_ns: f64,
+    reduced_native_ns: f64,
+    kane_native_over_aba: f64,
+    reduced_native_over_aba: f64,
     reduced_ops: String,
     /// The check against Pinocchio: the largest relative difference, or why none.
     check: String,
@@ -263,6 +270,9 @@ fn main() {
         let ops = generated.summary.ops("reduced_volterra::rhs").map(|c| format!("{} + {}", c.ops.total(), c.solve.total())).unwrap_or_default();
         eprintln!("robot calls: {name}: rustc ...");
         let (exe, _) = timing::compile(&work.join(name), &generated.code);
+        let fused = generator::emit::generate(&model, &generator::emit::Options { fma: true, ..generator::emit::Options::from_model(&model) })
+            .expect("the robot emits");
+        let (native_exe, _) = timing::compile_with(&work.join(format!("{name}_native")), &fused.code, &["-C", "target-cpu=native"]);
         // The JIT's right-hand sides at the model's initial state, as the timing program's.
         let (q0, qd0) = jit.initial.clone().expect("an initial state");
         let jit_call = |kind: FormulationKind| {
@@ -277,6 +287,7 @@ fn main() {
         };
         let (mut aba_ns, mut crba_ns, mut pin_dof) = (f64::INFINITY, f64::INFINITY, 0);
         let mut compiled = [f64::INFINITY; 4];
+        let mut native = [f64::INFINITY; 4];
         let (mut kane_jit, mut reduced_jit) = (f64::INFINITY, f64::INFINITY);
         for _ in 0..rounds {
             let text = pinocchio::run(Command::new(&aba).arg("saved").arg(&saved), "aba saved");
@@ -286,16 +297,19 @@ fn main() {
             aba_ns = aba_ns.min(field("aba "));
             crba_ns = crba_ns.min(field("crba "));
             pin_dof = field("dof ") as usize;
-            for (f, ns) in timing::run(&exe).1 {
-                let k = timing::FORMS.iter().position(|x| *x == f).expect("a formulation");
-                compiled[k] = compiled[k].min(ns);
+            for (times, exe) in [(&mut compiled, &exe), (&mut native, &native_exe)] {
+                for (f, ns) in timing::run(exe).1 {
+                    let k = timing::FORMS.iter().position(|x| *x == f).expect("a formulation");
+                    times[k] = times[k].min(ns);
+                }
             }
             kane_jit = kane_jit.min(jit_call(FormulationKind::Kane));
             reduced_jit = reduced_jit.min(jit_call(FormulationKind::ReducedVolterra));
         }
         let (kane, reduced) = (compiled[2], compiled[3]);
+        let (kane_native, reduced_native) = (native[2], native[3]);
         eprintln!(
-            "robot calls: {name}: ABA {aba_ns:.0} ns, CRBA + Cholesky {crba_ns:.0} ns; Kane {kane:.0} ns, reduced {reduced:.0} ns; JIT {kane_jit:.0}, {reduced_jit:.0} ns"
+            "robot calls: {name}: ABA {aba_ns:.0} ns, CRBA + Cholesky {crba_ns:.0} ns; Kane {kane:.0} ns, reduced {reduced:.0} ns; native {kane_native:.0}, {reduced_native:.0} ns; JIT {kane_jit:.0}, {reduced_jit:.0} ns"
         );
         rows.push(Row {
             robot: name.into(),
@@ -312,6 +326,10 @@ fn main() {
             reduced_over_aba: reduced / aba_ns,
             reduced_jit_over_compiled: reduced_jit / reduced,
             kane_jit_over_compiled: kane_jit / kane,
+            kane_native_ns: kane_native,
+            reduced_native_ns: reduced_native,
+            kane_native_over_aba: kane_native / aba_ns,
+            reduced_native_over_aba: reduced_native / aba_ns,
             reduced_ops: ops,
             check: check_text,
         });
@@ -320,7 +338,7 @@ fn main() {
     let json = serde_json::json!({
         "command": "cargo bench --bench robot_calls",
         "rounds": rounds,
-        "about": "ns per call, the best over the rounds of the best of 7 means of 200 calls; ours compiled by rustc -C opt-level=3 for plain x86-64, Pinocchio 4.1 by g++ -O3 -march=native; the JIT in-process",
+        "about": "ns per call, the best over the rounds of the best of 7 means of 200 calls; ours compiled by rustc -C opt-level=3 for plain x86-64 (kane_ns, reduced_ns) and, emitted with --fma, with -C target-cpu=native (kane_native_ns, reduced_native_ns), Pinocchio 4.1 by g++ -O3 -march=native; the JIT in-process",
         "rows": rows,
     });
     let text = serde_json::to_string_pretty(&json).expect("json") + "\n";

@@ -667,6 +667,28 @@ fn the_robot_figures_are_the_files() {
     let names = |rows: Vec<&serde_json::Value>| list(rows.iter().map(|r| s(&r["robot"])).collect());
     let v = format!("At most 0.5 of ABA's time (the better of Kane's and the reduced form): met on {}; missed on {}.", names(met), names(missed));
     assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
+    // The same instructions as Pinocchio's build: the module with `--fma`, `-C target-cpu=native`.
+    let native: Vec<Vec<String>> = calls["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            vec![
+                s(&r["robot"]),
+                s(&r["base"]),
+                format!("{:.0}", f(&r["aba_ns"])),
+                format!("{:.0}", f(&r["kane_native_ns"])),
+                format!("{:.0}", f(&r["reduced_native_ns"])),
+                format!("{:.2}", f(&r["kane_native_over_aba"])),
+                format!("{:.2}", f(&r["reduced_native_over_aba"])),
+            ]
+        })
+        .collect();
+    quoted(&table(&["robot", "base", "ABA ns", "Kane native ns", "reduced native ns", "Kane native / ABA", "reduced native / ABA"], native), "native calls");
+    let (met, missed): (Vec<_>, Vec<_>) =
+        calls["rows"].as_array().unwrap().iter().partition(|r| f(&r["kane_native_over_aba"]).min(f(&r["reduced_native_over_aba"])) <= 0.5);
+    let v = format!("With Pinocchio's instructions, at most 0.5 of ABA's time: met on {}; missed on {}.", names(met), names(missed));
+    assert!(page.contains(&v), "docs/robots.md does not say `{v}`");
     let (within, beyond): (Vec<_>, Vec<_>) =
         calls["rows"].as_array().unwrap().iter().partition(|r| f(&r["kane_jit_over_compiled"]).max(f(&r["reduced_jit_over_compiled"])) <= 2.0);
     let v = format!("The JIT within twice the compiled module: met on {}; missed on {}.", names(within), names(beyond));

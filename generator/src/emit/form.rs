@@ -5,12 +5,12 @@
 //! `matrix` (for conditioning monitors), plus `initial_state`, `velocities` and
 //! `singular_margin`. Each big expression is emitted once per formulation.
 
+use super::from_mechanics::FromMechanics;
 use super::function::{Input, arg_list, state_args};
 use super::jacobian::Wrt;
 use super::ldl::Solve;
 use super::module::Emitter;
 use super::ops::OpCount;
-use super::shared::FromMechanics;
 use super::syntax::{doc, usize_lit};
 use super::{Function, FunctionCost};
 use crate::formulation::Equations;

@@ -19,7 +19,7 @@ use super::cse::plan_with;
 use super::lower::{LowerError, lower};
 use super::ops::OpCount;
 use super::optimize::{expand_angle_sums, factor_sums_with, share_reciprocals};
-use super::share::share_pairs;
+use super::pairs::share_pairs;
 use super::syntax;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Ident, Literal, Span, TokenStream};

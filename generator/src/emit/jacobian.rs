@@ -7,10 +7,10 @@
 //! `dx/ds_k = A^-1 (dF/ds_k - dA/ds_k x)`, with the LU factors of `A` computed once and reused
 //! for every column. Maggi's speeds `W x + c` add `dW/ds_k x + W dx/ds_k + dc/ds_k`.
 
+use super::from_mechanics::FromMechanics;
 use super::function::state_args;
 use super::module::Emitter;
 use super::ops::OpCount;
-use super::shared::FromMechanics;
 use super::solvers::solve_cost;
 use super::syntax::usize_lit;
 use crate::formulation::Equations;

@@ -251,7 +251,7 @@ fn lower_node(
             ops.div += 1;
             Code::Product(vec![], vec![child(*a, ops)?])
         }
-        Node::Apply(name, a) if *name == super::share::group_symbol() => child(*a, ops)?,
+        Node::Apply(name, a) if *name == super::pairs::group_symbol() => child(*a, ops)?,
         Node::Apply(name, _) => return Err(LowerError::UndefinedFunction(name.name())),
     })
 }

@@ -2,12 +2,12 @@
 //! rate, momenta, constraint residuals) and one submodule per formulation ([`super::form`]).
 //! It only emits: everything it writes comes from one [`Derivation`].
 
+use super::from_mechanics::FromMechanics;
 use super::function::{Arg, Body, Input, arg_list, body_with_definitions, ident};
 use super::lower::literal;
 use super::names::Names;
 use super::prepare::Preparer;
 use super::reuse::{Bodies, Signature};
-use super::shared::FromMechanics;
 use super::solvers::PIVOT_TOLERANCE;
 use super::splice::Splices;
 use super::syntax::{doc, usize_lit};

@@ -35,8 +35,8 @@
 //! assert_eq!((aba.accelerations.len(), aba.pivots.len()), (6, 6));
 //! ```
 
+use super::composite::{Tree, tree};
 use super::mechanics::Mechanics;
-use super::recursive::{Tree, tree};
 use super::spatial::{Force, Motion, Program, SpatialInertia, zero3};
 use super::volterra::Volterra;
 use crate::model::Model;

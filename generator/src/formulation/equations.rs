@@ -55,7 +55,7 @@ pub struct Equations {
     pub constraint_power: Option<(Vec<Expr>, Expr)>,
     /// The same `mass` and `forcing` as a recursion over the tree of frames (Kane's form):
     /// emission keeps it where it takes fewer operations ([`super::recursive`]).
-    pub recursion: Option<super::recursive::Recursion>,
+    pub recursion: Option<super::composite::Recursion>,
     /// The speeds' rates `u'` of the same equations by the articulated-body recursion, with no
     /// matrix and no solve (Kane's form on a tree): emission keeps it where its right-hand
     /// side takes fewer operations than an assembly and its solve ([`super::articulated`]).

@@ -22,7 +22,7 @@ pub mod lagrange;
 pub mod maggi;
 pub mod mechanics;
 pub mod power;
-pub mod recursive;
+pub mod composite;
 pub mod reduced;
 mod spatial;
 #[cfg(test)]
@@ -73,10 +73,10 @@ pub struct Shared<'a> {
 /// Kane's equations by the recursions over a tree of frames, where the model is one.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Trees<'a> {
-    /// The model's frames as a tree in Kane's quasi-velocities ([`recursive::Tree`]).
-    pub frames: Option<&'a recursive::Tree>,
-    /// `M_K` and `L_K` by the composite-body and Newton-Euler recursions ([`recursive::derive`]).
-    pub composite: Option<&'a recursive::Recursion>,
+    /// The model's frames as a tree in Kane's quasi-velocities ([`composite::Tree`]).
+    pub frames: Option<&'a composite::Tree>,
+    /// `M_K` and `L_K` by the composite-body and Newton-Euler recursions ([`composite::derive`]).
+    pub composite: Option<&'a composite::Recursion>,
     /// `u'` by the articulated-body recursion ([`articulated::derive`]).
     pub articulated: Option<&'a articulated::Articulated>,
 }
@@ -250,10 +250,10 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     // The tree of frames, once, for both recursions of Kane's and the reduced form.
     clock = Instant::now();
     let frames = match &kane {
-        Some(k) if pending.is_ok() && (wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra)) => recursive::tree(model, &mech, k).zip(Some(k)),
+        Some(k) if pending.is_ok() && (wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra)) => composite::tree(model, &mech, k).zip(Some(k)),
         _ => None,
     };
-    let recursion = frames.as_ref().and_then(|(t, k)| recursive::on_tree(t, k));
+    let recursion = frames.as_ref().and_then(|(t, k)| composite::on_tree(t, k));
     let articulated = frames.as_ref().and_then(|(t, k)| articulated::on_tree(t, &mech, k));
     let trees = Trees { frames: frames.as_ref().map(|(t, _)| t), composite: recursion.as_ref(), articulated: articulated.as_ref() };
     let trees_time = clock.elapsed();

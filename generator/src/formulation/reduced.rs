@@ -51,7 +51,7 @@ impl Method for ReducedVolterra {
         let mut mass = v.mass_ni.clone();
         let mut forcing = v.l_ni.clone();
         let mut singular = v.singular_factors.clone();
-        let mut recursion = shared.kane.zip(shared.trees.composite).and_then(|(kane, rec)| super::recursive::reduce(model, shared.mech, kane, rec, v));
+        let mut recursion = shared.kane.zip(shared.trees.composite).and_then(|(kane, rec)| super::composite::reduce(model, shared.mech, kane, rec, v));
         let mut articulated = shared
             .kane
             .zip(shared.trees.frames)

@@ -14,7 +14,7 @@ use crate::symbolic::{Expr, Symbol};
 /// use generator::formulation::{derive, Request};
 /// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
 /// let d = derive(&model, &Request::all()).unwrap();
-/// let shared = generator::emit::shared::FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
+/// let shared = generator::emit::from_mechanics::FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
 /// assert_eq!((shared.momenta.len(), shared.velocity_residuals.len()), (1, 1));
 /// ```
 #[derive(Clone, Debug)]

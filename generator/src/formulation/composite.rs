@@ -23,11 +23,11 @@
 //! keeps whichever assembly takes fewer operations ([`crate::emit`]).
 //!
 //! ```
-//! use generator::formulation::{mechanics, recursive, volterra};
+//! use generator::formulation::{composite, mechanics, volterra};
 //! let model = generator::model::load("../models/three_body.ron").unwrap();
 //! let mech = mechanics::derive(&model);
 //! let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
-//! let r = recursive::derive(&model, &mech, &kane).unwrap();
+//! let r = composite::derive(&model, &mech, &kane).unwrap();
 //! assert_eq!((r.mass.rows, r.forcing.len()), (8, 8));
 //! assert!(!r.definitions.is_empty());
 //! ```

@@ -15,7 +15,7 @@
 //! bounded by [`PAIR_BUDGET`] updates (a count, never a time).
 //!
 //! ```
-//! use generator::emit::share::share_pairs;
+//! use generator::emit::pairs::share_pairs;
 //! use generator::symbolic::Expr;
 //! let (a, b, c, d) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("c"), Expr::sym("d"));
 //! let out = share_pairs(&[a * b * c, a * b * d]);
@@ -124,7 +124,7 @@ fn replace_pair(bag: &mut Vec<usize>, pair: Pair, group: usize) {
 /// pair in the bags. Stops when no pair is held by two bags, or after [`PAIR_BUDGET`] updates.
 ///
 /// ```
-/// use generator::emit::share::merge_pairs;
+/// use generator::emit::pairs::merge_pairs;
 /// let mut bags = vec![vec![0, 1, 2], vec![0, 1, 3], vec![0, 1]];
 /// let groups = merge_pairs(&mut bags, 4);
 /// assert_eq!(groups, vec![(0, 1)]);
