@@ -23,7 +23,7 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
 }
 
 /// The report of a derivation, as text or LaTeX, with each formulation's assembly as
-/// [`crate::emit::module::assemblies`] gives it.
+/// the emitter's assemblies give it.
 pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], latex: bool) -> String {
     let mech = &d.mechanics;
     let reports = &d.reports;
@@ -56,8 +56,7 @@ pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], la
     }
     let _ = writeln!(w, "\nhow each right-hand side assembles and solves its matrix (the plan the emitted code and the evaluator follow):");
     for e in &d.equations {
-        let how =
-            assemblies.iter().find(|(name, _)| name == e.name()).map_or_else(|| crate::emit::ldl::Solve::for_equations(e).describe(), |(_, how)| how.clone());
+        let how = assemblies.iter().find(|(name, _)| name == e.name()).map_or_else(|| crate::emit::Solve::for_equations(e).describe(), |(_, how)| how.clone());
         let _ = writeln!(w, "  {:<17} {}: {how}", e.name(), e.matrix_name);
     }
     let mut items = vec![("T".to_string(), mech.kinetic), ("V".to_string(), mech.potential)];

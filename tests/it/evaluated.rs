@@ -197,7 +197,7 @@ fn evaluated_functions_refuse_slices_of_the_wrong_length() {
 /// by the compiled module and by the evaluator alike, never as NaN.
 #[test]
 fn a_singular_matrix_is_reported_at_the_first_pivot_of_the_sparse_plan() {
-    use generator::emit::ldl::Solve;
+    use generator::emit::Solve;
     for (module, kind) in
         [("satellite_boom", seam::FormulationKind::Kane), ("three_body", seam::FormulationKind::Kane), ("three_body", seam::FormulationKind::Lagrange)]
     {

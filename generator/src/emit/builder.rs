@@ -148,7 +148,7 @@ impl Builder {
         self
     }
 
-    /// Emit fused multiply-adds ([`crate::emit::fma`]; default off). Build the crate with
+    /// Emit fused multiply-adds (default off). Build the crate with
     /// `-C target-cpu=native` or `-C target-feature=+fma` where the CPU has them.
     pub fn fma(mut self, on: bool) -> Builder {
         self.fma = on;

@@ -8,13 +8,6 @@
 //! The straight-line code is rewritten (its values are all `f64`): the bodies, and the
 //! unrolled `L D L^T` solves (`solve_ldl`, whose eliminations subtract products); the generic
 //! solvers with loops and the code around them are left as they are.
-//!
-//! ```
-//! use generator::emit::fma::fuse;
-//! let mut e: syn::Expr = syn::parse_quote!(x * y + z - 2.0 * w);
-//! fuse(&mut e);
-//! assert_eq!(quote::ToTokens::to_token_stream(&e).to_string(), "f64 :: mul_add (- 2.0 , w , f64 :: mul_add (x , y , z))");
-//! ```
 
 use syn::visit_mut::VisitMut;
 use syn::{BinOp, Expr, parse_quote};
@@ -134,5 +127,17 @@ mod tests {
         assert_eq!(show(parse_quote!((a + b) * c + (d + e))), "f64 :: mul_add (a + b , c , d + e)");
         assert_eq!(show(parse_quote!((a / b) * c - (d + e))), "f64 :: mul_add (a / b , c , - (d + e))");
         assert_eq!(show(parse_quote!(x * (a * b + c))), "x * f64 :: mul_add (a , b , c)");
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::fma::fuse;
+        let mut e: syn::Expr = syn::parse_quote!(x * y + z - 2.0 * w);
+        fuse(&mut e);
+        assert_eq!(quote::ToTokens::to_token_stream(&e).to_string(), "f64 :: mul_add (- 2.0 , w , f64 :: mul_add (x , y , z))");
     }
 }

@@ -9,14 +9,6 @@ use crate::symbolic::transfer::{Transfer, Visitor};
 use crate::symbolic::{Expr, Symbol};
 
 /// See the module docs.
-///
-/// ```
-/// use generator::formulation::{derive, Request};
-/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-/// let d = derive(&model, &Request::all()).unwrap();
-/// let shared = generator::emit::from_mechanics::FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
-/// assert_eq!((shared.momenta.len(), shared.velocity_residuals.len()), (1, 1));
-/// ```
 #[derive(Clone, Debug)]
 pub struct FromMechanics {
     /// The energy function (Jacobi's integral) `h = q' . dL/dq' - L = T2 - T0 + V`, with `T =
@@ -91,5 +83,18 @@ impl Transfer for FromMechanics {
         self.residual_bounds.visit(v);
         self.positions.visit(v);
         self.position_bounds.visit(v);
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn from_mechanics_example() {
+        use crate::formulation::{Request, derive};
+        let model = crate::model::load("../models/cart_pendulum.ron").unwrap();
+        let d = derive(&model, &Request::all()).unwrap();
+        let shared = crate::emit::from_mechanics::FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
+        assert_eq!((shared.momenta.len(), shared.velocity_residuals.len()), (1, 1));
     }
 }

@@ -2,18 +2,6 @@
 //! outputs; split into helper functions that fill a scratch array when it would be too long
 //! to compile quickly (measured when the crates were chosen: rustc time grows about quadratically above a
 //! few thousand statements in one function).
-//!
-//! ```
-//! use generator::emit::function::{Arg, Input, body};
-//! use generator::symbolic::Expr;
-//! use quote::quote;
-//! let x = Expr::sym("x");
-//! let args = [Arg::new("state", quote!(&[f64; 1]))];
-//! let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0]))];
-//! let b = body("f", &[x.sin() * x, x.sin() + x], &inputs, &args, usize::MAX).unwrap();
-//! assert_eq!(b.lets, 1); // sin(x), shared by both outputs
-//! assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x);
-//! ```
 
 use super::cse::plan_with;
 use super::lower::{LowerError, lower};
@@ -94,11 +82,13 @@ pub fn arg_list(args: &[Arg], used: &BTreeSet<usize>) -> Vec<TokenStream> {
 
 /// Builds the body computing `outputs`. Above `max_lets` bound subexpressions the work goes to
 /// helper functions `<name>_part<k>` that fill a scratch array.
+#[cfg(test)]
 pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize) -> Result<Body, LowerError> {
     body_with(name, outputs, inputs, args, max_lets, &mut HashMap::default())
 }
 
 /// [`body`] with the Horner memo of [`factor_sums_with`] kept by the caller (one per module).
+#[cfg(test)]
 pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize, horner: &mut HashMap<Expr, Expr>) -> Result<Body, LowerError> {
     body_with_definitions(name, &[], outputs, inputs, args, max_lets, horner)
 }
@@ -107,19 +97,6 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
 /// in terms of the inputs and the ones before it (a recursion's vectors, which the symbolic
 /// core would otherwise flatten into the outputs). Each gets its own `let` (or scratch slot),
 /// computed before anything that reads it, and shares subexpressions with everything else.
-///
-/// ```
-/// use generator::emit::function::{Arg, Input, body_with_definitions};
-/// use generator::symbolic::{Expr, Symbol};
-/// use quote::quote;
-/// let x = Expr::sym("x");
-/// let s = Symbol::internal("s");
-/// let args = [Arg::new("state", quote!(&[f64; 1]))];
-/// let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0]))];
-/// let b = body_with_definitions("f", &[(s, x.sin() + x)], &[s.expr() * s.expr() + 1, s.expr() * x], &inputs, &args, usize::MAX, &mut Default::default()).unwrap();
-/// assert_eq!(b.lets, 1); // s = sin(x) + x, once, read by both outputs
-/// assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x) + x;
-/// ```
 pub fn body_with_definitions(
     name: &str,
     definitions: &[(Symbol, Expr)],
@@ -226,14 +203,6 @@ impl<'a> SymbolUse<'a> {
 
 /// Operations of `outputs` and the `definitions` they read, before emission's sharing
 /// ([`crate::symbolic::expr::dag_ops`]): a cheap estimate of a program's size.
-///
-/// ```
-/// use generator::emit::function::program_ops;
-/// use generator::symbolic::{Expr, Symbol};
-/// let (x, d, unread) = (Symbol::new("x"), Symbol::internal("d0"), Symbol::internal("d1"));
-/// let definitions = [(d, x.expr() * x.expr() + Expr::int(1)), (unread, x.expr().sin())];
-/// assert_eq!(program_ops(&definitions, &[d.expr() * Expr::int(3)]), 3); // pow, add, mul
-/// ```
 pub fn program_ops(definitions: &[(Symbol, Expr)], outputs: &[Expr]) -> usize {
     let read: Vec<Expr> = needed(definitions, outputs).into_iter().map(|(_, e)| e).chain(outputs.iter().copied()).collect();
     crate::symbolic::expr::dag_ops(&read)
@@ -335,4 +304,43 @@ pub(super) fn state_args() -> Vec<Arg> {
         Arg::new("params", quote!(&Params)),
         Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
     ]
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::function::{Arg, Input, body};
+        use crate::symbolic::Expr;
+        use quote::quote;
+        let x = Expr::sym("x");
+        let args = [Arg::new("state", quote!(&[f64; 1]))];
+        let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0]))];
+        let b = body("f", &[x.sin() * x, x.sin() + x], &inputs, &args, usize::MAX).unwrap();
+        assert_eq!(b.lets, 1); // sin(x), shared by both outputs
+        assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x);
+    }
+    #[test]
+    fn body_with_definitions_example() {
+        use crate::emit::function::{Arg, Input, body_with_definitions};
+        use crate::symbolic::{Expr, Symbol};
+        use quote::quote;
+        let x = Expr::sym("x");
+        let s = Symbol::internal("s");
+        let args = [Arg::new("state", quote!(&[f64; 1]))];
+        let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0]))];
+        let b = body_with_definitions("f", &[(s, x.sin() + x)], &[s.expr() * s.expr() + 1, s.expr() * x], &inputs, &args, usize::MAX, &mut Default::default())
+            .unwrap();
+        assert_eq!(b.lets, 1); // s = sin(x) + x, once, read by both outputs
+        assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x) + x;
+    }
+    #[test]
+    fn program_ops_example() {
+        use crate::emit::function::program_ops;
+        use crate::symbolic::{Expr, Symbol};
+        let (x, d, unread) = (Symbol::new("x"), Symbol::internal("d0"), Symbol::internal("d1"));
+        let definitions = [(d, x.expr() * x.expr() + Expr::int(1)), (unread, x.expr().sin())];
+        assert_eq!(program_ops(&definitions, &[d.expr() * Expr::int(3)]), 3); // pow, add, mul
+    }
 }

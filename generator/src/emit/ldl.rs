@@ -6,22 +6,6 @@
 //!
 //! One plan drives both the emitted code ([`LdlPlan::emit`]) and in-process evaluation
 //! ([`LdlPlan::solve`]): the same operations in the same order, so the same numbers.
-//!
-//! ```
-//! use generator::emit::ldl::LdlPlan;
-//! // An arrow matrix: the dense row and column first would fill everything in; once at most
-//! // one other row is left, nothing.
-//! let arrow = |i: usize, j: usize| i == j || i == 0 || j == 0;
-//! let plan = LdlPlan::new(4, arrow);
-//! assert_eq!(plan.order(), &[1, 2, 0, 3]);
-//! assert_eq!(plan.fill_in(), 0);
-//! assert!(plan.cost().total() < LdlPlan::dense(4).cost().total());
-//! let mut b = [4.0, 1.0, 1.0, 1.0];
-//! let a = [4.0, 1.0, 1.0, 1.0, 1.0, 2.0, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 1.0, 0.0, 0.0, 2.0];
-//! plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
-//! // x = (1, 0, 0, 0) solves it: a's first column is b.
-//! assert!(b.iter().zip([1.0, 0.0, 0.0, 0.0]).all(|(x, e)| (x - e).abs() < 1e-15));
-//! ```
 
 use super::ops::OpCount;
 use super::splice::Splices;
@@ -76,12 +60,6 @@ struct Steps {
 
 impl LdlPlan {
     /// The plan of a dense `n x n` matrix in its own order: the module's generic `solve_spd`.
-    ///
-    /// ```
-    /// let plan = generator::emit::ldl::LdlPlan::dense(3);
-    /// assert!(plan.is_dense());
-    /// assert_eq!(plan.cost().div, 3);
-    /// ```
     pub fn dense(n: usize) -> LdlPlan {
         LdlPlan::with_order(n, |_, _| true, (0..n).collect())
     }
@@ -89,12 +67,6 @@ impl LdlPlan {
     /// The plan with the least work for a matrix whose entry `(i, j)` may be nonzero where
     /// `nonzero(i, j)` (read for `i > j`; the diagonal is always nonzero). The matrix's own
     /// order wins every tie, so a dense matrix keeps it.
-    ///
-    /// ```
-    /// use generator::emit::ldl::LdlPlan;
-    /// let diagonal = LdlPlan::new(3, |i, j| i == j);
-    /// assert_eq!((diagonal.order(), diagonal.cost().total()), (&[0, 1, 2][..], 6));
-    /// ```
     pub fn new(n: usize, nonzero: impl Fn(usize, usize) -> bool) -> LdlPlan {
         let adjacency: Vec<u64> = (0..n).map(|i| (0..n).filter(|&j| j != i && nonzero(i.max(j), i.min(j))).fold(0u64, |m, j| m | 1 << j)).collect();
         let natural = LdlPlan::with_order(n, &nonzero, (0..n).collect());
@@ -293,18 +265,6 @@ impl LdlPlan {
     /// `D` in elimination order. The same operations in the same order as `solve`, so where
     /// every pivot is above `PIVOT_TOLERANCE` times the largest diagonal entry (checked by the
     /// caller on the pivots, [`Self::checked`]) the same numbers.
-    ///
-    /// ```
-    /// use generator::emit::ldl::LdlPlan;
-    /// let plan = LdlPlan::dense(2);
-    /// let tape = plan.tape();
-    /// let (a, mut b) = ([4.0, 2.0, 2.0, 3.0], [2.0, 1.0]);
-    /// let mut out = [0.0; 4];
-    /// tape.eval(&[a[0], a[1], a[2], a[3], b[0], b[1]], &mut out);
-    /// plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
-    /// assert_eq!(out[..2], b);
-    /// assert_eq!(plan.checked(&a, &out[2..]), Ok(()));
-    /// ```
     pub fn tape(&self) -> Tape {
         let n = self.size();
         let (o, st, m) = (&self.order, &self.steps, self.entries.len());
@@ -370,7 +330,7 @@ impl LdlPlan {
 
     /// The solve as straight-line code: `fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
     /// b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize>`, the same operations as [`Self::solve`];
-    /// with `fma`, each product subtracted is fused ([`super::fma`]).
+    /// with `fma`, each product subtracted is fused.
     pub fn emit(&self, splices: &mut Splices, fma: bool) -> TokenStream {
         use super::syntax::{assign_stmt, binary, ident, index, let_stmt, literal};
         let n = self.size();
@@ -465,20 +425,6 @@ impl Solve {
     /// The solve of `f`'s matrix: `L D L^T` planned on its structural zeros where the matrix is
     /// symmetric positive definite (every formulation's but Lagrange's with constraints, whose
     /// multipliers make it indefinite), LU otherwise.
-    ///
-    /// ```
-    /// use generator::emit::ldl::Solve;
-    /// let model = generator::model::load("../models/satellite_boom.ron").unwrap();
-    /// let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
-    /// let kane = Solve::for_equations(d.equations("kane").unwrap());
-    /// assert!(matches!(&kane, Solve::Ldl(plan) if !plan.is_dense()));
-    /// // No constraints: Lagrange's matrix is the mass matrix itself.
-    /// assert!(matches!(Solve::for_equations(d.equations("lagrange").unwrap()), Solve::Ldl(_)));
-    /// // One constraint: its multiplier makes the matrix indefinite.
-    /// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-    /// let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
-    /// assert!(matches!(Solve::for_equations(d.equations("lagrange").unwrap()), Solve::Lu(4)));
-    /// ```
     pub fn for_equations(f: &Equations) -> Solve {
         let n = f.mass.rows;
         // Lagrange's matrix is `M` alone when there are no multipliers.
@@ -745,5 +691,64 @@ mod tests {
         assert!(failed == 0 || failed == 2, "{failed}");
         let negative = [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0];
         assert_eq!(plan.solve(&negative, &mut [1.0, 1.0, 1.0], &mut Vec::new()), Err(1));
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::ldl::LdlPlan;
+        // An arrow matrix: the dense row and column first would fill everything in; once at most
+        // one other row is left, nothing.
+        let arrow = |i: usize, j: usize| i == j || i == 0 || j == 0;
+        let plan = LdlPlan::new(4, arrow);
+        assert_eq!(plan.order(), &[1, 2, 0, 3]);
+        assert_eq!(plan.fill_in(), 0);
+        assert!(plan.cost().total() < LdlPlan::dense(4).cost().total());
+        let mut b = [4.0, 1.0, 1.0, 1.0];
+        let a = [4.0, 1.0, 1.0, 1.0, 1.0, 2.0, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 1.0, 0.0, 0.0, 2.0];
+        plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
+        // x = (1, 0, 0, 0) solves it: a's first column is b.
+        assert!(b.iter().zip([1.0, 0.0, 0.0, 0.0]).all(|(x, e)| (x - e).abs() < 1e-15));
+    }
+    #[test]
+    fn dense_example() {
+        let plan = crate::emit::ldl::LdlPlan::dense(3);
+        assert!(plan.is_dense());
+        assert_eq!(plan.cost().div, 3);
+    }
+    #[test]
+    fn new_example() {
+        use crate::emit::ldl::LdlPlan;
+        let diagonal = LdlPlan::new(3, |i, j| i == j);
+        assert_eq!((diagonal.order(), diagonal.cost().total()), (&[0, 1, 2][..], 6));
+    }
+    #[test]
+    fn tape_example() {
+        use crate::emit::ldl::LdlPlan;
+        let plan = LdlPlan::dense(2);
+        let tape = plan.tape();
+        let (a, mut b) = ([4.0, 2.0, 2.0, 3.0], [2.0, 1.0]);
+        let mut out = [0.0; 4];
+        tape.eval(&[a[0], a[1], a[2], a[3], b[0], b[1]], &mut out);
+        plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
+        assert_eq!(out[..2], b);
+        assert_eq!(plan.checked(&a, &out[2..]), Ok(()));
+    }
+    #[test]
+    fn for_equations_example() {
+        use crate::emit::ldl::Solve;
+        let model = crate::model::load("../models/satellite_boom.ron").unwrap();
+        let d = crate::formulation::derive(&model, &crate::formulation::Request::all()).unwrap();
+        let kane = Solve::for_equations(d.equations("kane").unwrap());
+        assert!(matches!(&kane, Solve::Ldl(plan) if !plan.is_dense()));
+        // No constraints: Lagrange's matrix is the mass matrix itself.
+        assert!(matches!(Solve::for_equations(d.equations("lagrange").unwrap()), Solve::Ldl(_)));
+        // One constraint: its multiplier makes the matrix indefinite.
+        let model = crate::model::load("../models/cart_pendulum.ron").unwrap();
+        let d = crate::formulation::derive(&model, &crate::formulation::Request::all()).unwrap();
+        assert!(matches!(Solve::for_equations(d.equations("lagrange").unwrap()), Solve::Lu(4)));
     }
 }

@@ -3,17 +3,6 @@
 //! Children that are bound to `let`s (or are inputs) appear as identifiers; everything else is
 //! inlined. Parentheses are written only where Rust's precedence needs them, so the output
 //! passes `#![deny(warnings)]` (no `unused_parens`).
-//!
-//! ```
-//! use generator::emit::lower::lower;
-//! use generator::symbolic::Expr;
-//! let x = Expr::sym("x");
-//! let e = x.sin() * 3 - x;
-//! let name = |s: generator::symbolic::Symbol| Some(generator::emit::syntax::ident(&s.name()));
-//! let (tree, ops) = lower(e, &name, &|_| None).unwrap();
-//! assert_eq!(quote::ToTokens::to_token_stream(&tree).to_string(), "3.0 * f64 :: sin (x) - x");
-//! assert_eq!(ops.total(), 3);
-//! ```
 
 use super::ops::OpCount;
 use super::syntax;
@@ -306,5 +295,21 @@ mod tests {
         let tiny = Expr::num(crate::symbolic::number::rat_from_f64(1e-12).unwrap());
         assert_eq!(show(a * tiny), "1e-12 * a");
         assert_eq!(show(a * 2), "2.0 * a");
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::lower::lower;
+        use crate::symbolic::Expr;
+        let x = Expr::sym("x");
+        let e = x.sin() * 3 - x;
+        let name = |s: crate::symbolic::Symbol| Some(crate::emit::syntax::ident(&s.name()));
+        let (tree, ops) = lower(e, &name, &|_| None).unwrap();
+        assert_eq!(quote::ToTokens::to_token_stream(&tree).to_string(), "3.0 * f64 :: sin (x) - x");
+        assert_eq!(ops.total(), 3);
     }
 }

@@ -1,9 +1,11 @@
 //! Emission: the derived equations as a flat, specialized Rust module.
 //!
 //! [`generate`] runs the whole pipeline on a model: mechanics, the ignorable coordinates, the
-//! requested formulations, then [`module`] writes the module as a syntax tree (quote), printed
-//! by prettyplease. Inside each function, [`cse`] picks one `let` per common subexpression,
-//! [`lower`] turns nodes into Rust expressions and [`ops`] counts what they cost.
+//! requested formulations, then its private `module` writes the module as a syntax tree
+//! (quote), printed by prettyplease. Inside each function, `cse` picks one `let` per common
+//! subexpression, `lower` turns nodes into Rust expressions and `ops` counts what they cost
+//! ([`OpCount`]). The public face: [`generate`], [`Options`], [`Builder`], the [`Summary`], the
+//! solve plans ([`Solve`], [`LdlPlan`]) and the register tapes' compiler ([`tape`]).
 //!
 //! ```no_run
 //! let model = generator::model::load("models/cart_pendulum.ron").unwrap();
@@ -12,34 +14,36 @@
 //! eprintln!("{}", out.summary);
 //! ```
 
-pub mod assembly;
-pub mod builder;
-pub mod cse;
-pub mod fma;
-pub mod form;
-pub mod jacobian;
-pub mod ldl;
-pub mod function;
-pub mod lower;
-pub mod module;
-pub mod names;
-pub mod ops;
-pub mod program;
-pub mod optimize;
-pub mod prepare;
-pub mod reuse;
-pub mod seam;
-pub mod pairs;
-pub mod from_mechanics;
-pub mod solvers;
-pub mod splice;
-pub mod syntax;
+mod assembly;
+mod builder;
+mod cse;
+mod fma;
+mod form;
+mod from_mechanics;
+mod function;
+mod jacobian;
+mod ldl;
+mod lower;
+pub(crate) mod module;
+mod names;
+mod ops;
+mod optimize;
+mod pairs;
+pub(crate) mod program;
+mod prepare;
+mod reuse;
+mod seam;
+mod solvers;
+mod splice;
+mod syntax;
 pub mod tape;
 
 pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
 use crate::model::{Model, ModelError};
 pub use builder::{BuildError, Builder, Built};
-use ops::OpCount;
+pub use ldl::{LdlPlan, Solve};
+pub use ops::OpCount;
+pub use solvers::spd_cost;
 use std::fmt;
 use std::time::Duration;
 
@@ -51,7 +55,7 @@ pub struct Options {
     pub parameters: Parameters,
     pub integrate_ignorable: bool,
     pub max_lets_per_function: usize,
-    /// Emit each formulation's exact `jacobian` (see [`jacobian`]).
+    /// Emit each formulation's exact `jacobian` (the right-hand side's derivative by the state).
     pub jacobian: bool,
     /// Emit each formulation's `parameter_jacobian` (runtime parameters only).
     pub parameter_jacobian: bool,
@@ -65,7 +69,7 @@ pub struct Options {
     /// ([`crate::eval`]), returned as [`Generated::program`].
     pub tapes: bool,
     /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies and the unrolled solves, for targets that
-    /// have the instruction ([`fma`]). The tapes are the plain code's.
+    /// have the instruction. The tapes are the plain code's.
     pub fma: bool,
 }
 

@@ -207,15 +207,6 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
 /// summary describes them ([`super::assembly`]): the same bodies [`generate`] compares, built
 /// from a derivation by emitters that emit what [`generate`]'s two emit (every formulation but
 /// the last, and the last), so that a body reused there is reused here.
-///
-/// ```
-/// use generator::{emit, formulation};
-/// let model = generator::model::load("../models/three_body.ron").unwrap();
-/// let d = formulation::derive(&model, &formulation::Request::all()).unwrap();
-/// let chosen = emit::module::assemblies(&model, &d, &emit::Options::from_model(&model)).unwrap();
-/// assert_eq!(chosen.len(), 4);
-/// assert!(chosen.iter().all(|(_, how)| how.contains("; assembly: ")));
-/// ```
 pub fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
     let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
     let (sent, kept) = split_between_emitters(d.equations.iter().map(|e| e.kind).collect());
@@ -965,5 +956,19 @@ mod tests {
         assert_eq!(super::split_between_emitters(vec![Lagrange, Maggi, Kane, ReducedVolterra]), (vec![Lagrange, Maggi, Kane], vec![ReducedVolterra]));
         assert_eq!(super::split_between_emitters(vec![Kane]), (vec![], vec![Kane]));
         assert_eq!(super::split_between_emitters(vec![]), (vec![], vec![]));
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn assemblies_example() {
+        use crate::{emit, formulation};
+        let model = crate::model::load("../models/three_body.ron").unwrap();
+        let d = formulation::derive(&model, &formulation::Request::all()).unwrap();
+        let chosen = emit::module::assemblies(&model, &d, &emit::Options::from_model(&model)).unwrap();
+        assert_eq!(chosen.len(), 4);
+        assert!(chosen.iter().all(|(_, how)| how.contains("; assembly: ")));
     }
 }

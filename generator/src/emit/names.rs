@@ -1,13 +1,5 @@
 //! Identifiers for model symbols in emitted code: unique, never a Rust keyword, and never one
 //! of the module's own item or argument names.
-//!
-//! ```
-//! use generator::emit::names::Names;
-//! let mut names = Names::new();
-//! assert_eq!(names.fresh("theta1'"), "theta1_");
-//! assert_eq!(names.fresh("fn"), "fn_");
-//! assert_eq!(names.fresh("theta1'"), "theta1__");
-//! ```
 
 use std::collections::HashSet;
 
@@ -131,5 +123,18 @@ impl Names {
         }
         self.taken.insert(name.clone());
         name
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::names::Names;
+        let mut names = Names::new();
+        assert_eq!(names.fresh("theta1'"), "theta1_");
+        assert_eq!(names.fresh("fn"), "fn_");
+        assert_eq!(names.fresh("theta1'"), "theta1__");
     }
 }

@@ -1,12 +1,4 @@
 //! Operation counts of emitted code: arithmetic operations and calls, per function.
-//!
-//! ```
-//! use generator::emit::ops::OpCount;
-//! let mut a = OpCount::default();
-//! a.add += 2;
-//! a.call("sin");
-//! assert_eq!(a.total(), 3);
-//! ```
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -62,5 +54,18 @@ impl fmt::Display for OpCount {
             write!(f, ", {v} {k}")?;
         }
         write!(f, ")")
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::ops::OpCount;
+        let mut a = OpCount::default();
+        a.add += 2;
+        a.call("sin");
+        assert_eq!(a.total(), 3);
     }
 }

@@ -13,16 +13,6 @@
 //! outputs, then by the order in which pairs reached their count, so the result depends only
 //! on the expressions; a merge updates only the pairs of the atoms it moved, and the work is
 //! bounded by [`PAIR_BUDGET`] updates (a count, never a time).
-//!
-//! ```
-//! use generator::emit::pairs::share_pairs;
-//! use generator::symbolic::Expr;
-//! let (a, b, c, d) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("c"), Expr::sym("d"));
-//! let out = share_pairs(&[a * b * c, a * b * d]);
-//! // Both products now hold the same grouped node for `a*b`.
-//! let shared: Vec<_> = out[0].children().into_iter().filter(|x| out[1].children().contains(x)).collect();
-//! assert_eq!(shared.len(), 1);
-//! ```
 
 use super::cse::post_order;
 use crate::symbolic::number::Rat;
@@ -122,14 +112,6 @@ fn replace_pair(bag: &mut Vec<usize>, pair: Pair, group: usize) {
 /// Greedy pair merging over `bags` of atom numbers. Atoms `0..first_group` exist; merged pairs
 /// get the numbers `first_group, first_group + 1, ...` in the order returned, and replace their
 /// pair in the bags. Stops when no pair is held by two bags, or after [`PAIR_BUDGET`] updates.
-///
-/// ```
-/// use generator::emit::pairs::merge_pairs;
-/// let mut bags = vec![vec![0, 1, 2], vec![0, 1, 3], vec![0, 1]];
-/// let groups = merge_pairs(&mut bags, 4);
-/// assert_eq!(groups, vec![(0, 1)]);
-/// assert_eq!(bags, vec![vec![2, 4], vec![3, 4], vec![4]]);
-/// ```
 pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
     let mut count: FxHashMap<Pair, usize> = FxHashMap::default();
     let mut holders: FxHashMap<Pair, Vec<usize>> = FxHashMap::default();
@@ -473,5 +455,28 @@ mod tests {
                 prop_assert!((want - got).abs() <= 1e-12 * want.abs().max(1.0), "{o} = {want}, {s} = {got}");
             }
         }
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::pairs::share_pairs;
+        use crate::symbolic::Expr;
+        let (a, b, c, d) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("c"), Expr::sym("d"));
+        let out = share_pairs(&[a * b * c, a * b * d]);
+        // Both products now hold the same grouped node for `a*b`.
+        let shared: Vec<_> = out[0].children().into_iter().filter(|x| out[1].children().contains(x)).collect();
+        assert_eq!(shared.len(), 1);
+    }
+    #[test]
+    fn merge_pairs_example() {
+        use crate::emit::pairs::merge_pairs;
+        let mut bags = vec![vec![0, 1, 2], vec![0, 1, 3], vec![0, 1]];
+        let groups = merge_pairs(&mut bags, 4);
+        assert_eq!(groups, vec![(0, 1)]);
+        assert_eq!(bags, vec![vec![2, 4], vec![3, 4], vec![4]]);
     }
 }

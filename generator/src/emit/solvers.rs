@@ -3,14 +3,6 @@
 //! `solve_spd` (`L D L^T` without pivoting, where a matrix has no structural zero to skip;
 //! elsewhere a formulation's own plan, [`super::ldl`]); the relative pivot tolerance they share
 //! is the seam's.
-//!
-//! ```
-//! use generator::emit::solvers::{solve_cost, spd_cost};
-//! // L D L^T takes fewer multiplications than Gaussian elimination, and one division per pivot
-//! // where elimination divides once per entry below the diagonal and once per unknown.
-//! assert!(spd_cost(20).mul < solve_cost(20).mul);
-//! assert_eq!((spd_cost(20).div, solve_cost(20).div), (20, 20 * 19 / 2 + 20));
-//! ```
 
 use super::ops::OpCount;
 
@@ -38,3 +30,16 @@ pub fn solve_cost(n: usize) -> OpCount {
 /// The largest dense symmetric positive definite matrix whose solve is emitted unrolled
 /// (`solve_ldl`); larger ones call the looped `solve_spd`.
 pub const MAX_UNROLLED_DENSE: usize = 16;
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::solvers::{solve_cost, spd_cost};
+        // L D L^T takes fewer multiplications than Gaussian elimination, and one division per pivot
+        // where elimination divides once per entry below the diagonal and once per unknown.
+        assert!(spd_cost(20).mul < solve_cost(20).mul);
+        assert_eq!((spd_cost(20).div, solve_cost(20).div), (20, 20 * 19 / 2 + 20));
+    }
+}

@@ -5,17 +5,6 @@
 //! helper functions) are built as trees by [`super::lower`] and [`super::function`]. Each
 //! stands in the skeleton as a placeholder macro `__splice!(k)` that [`Splices::apply`]
 //! replaces after parsing, so syn never parses what the generator built itself.
-//!
-//! ```
-//! use generator::emit::splice::Splices;
-//! use generator::emit::syntax::{ident, let_stmt};
-//! let mut s = Splices::default();
-//! let stmts = s.stmts(vec![let_stmt("x", ident("y"))]);
-//! let value = s.expr(ident("x"));
-//! let mut file: syn::File = syn::parse2(quote::quote!(fn f(y: f64) -> f64 { #stmts #value })).unwrap();
-//! s.apply(&mut file).unwrap();
-//! assert_eq!(prettyplease::unparse(&file), "fn f(y: f64) -> f64 {\n    let x = y;\n    x\n}\n");
-//! ```
 
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
@@ -195,5 +184,21 @@ mod tests {
         let e = s.expr(ident("b"));
         let mut file: syn::File = syn::parse2(quote!(fn f(b: f64) -> f64 { #e })).unwrap();
         assert_eq!(s.apply(&mut file).unwrap_err().0, 0);
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::splice::Splices;
+        use crate::emit::syntax::{ident, let_stmt};
+        let mut s = Splices::default();
+        let stmts = s.stmts(vec![let_stmt("x", ident("y"))]);
+        let value = s.expr(ident("x"));
+        let mut file: syn::File = syn::parse2(quote::quote!(fn f(y: f64) -> f64 { #stmts #value })).unwrap();
+        s.apply(&mut file).unwrap();
+        assert_eq!(prettyplease::unparse(&file), "fn f(y: f64) -> f64 {\n    let x = y;\n    x\n}\n");
     }
 }

@@ -1,13 +1,6 @@
 //! Small constructors of Rust syntax trees (`syn::Expr`, `syn::Stmt`) for the emitted bodies,
 //! which are built as trees rather than as tokens to parse: syn parsing the bodies of scene 2
 //! was a third of its emission time.
-//!
-//! ```
-//! use generator::emit::syntax::{binary, ident, neg, paren};
-//! let (a, b) = (ident("a"), ident("b"));
-//! let e = neg(binary(a, syn::BinOp::Mul(Default::default()), paren(b)));
-//! assert_eq!(quote::ToTokens::to_token_stream(&e).to_string(), "- a * (b)");
-//! ```
 
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::quote;
@@ -130,5 +123,17 @@ mod tests {
         assert_eq!(s, syn::parse_str::<syn::Stmt>("let x0 = y;").unwrap());
         let s = assign_stmt(index("v", 0), ident("y"));
         assert_eq!(s, syn::parse_str::<syn::Stmt>("v[0] = y;").unwrap());
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::emit::syntax::{binary, ident, neg, paren};
+        let (a, b) = (ident("a"), ident("b"));
+        let e = neg(binary(a, syn::BinOp::Mul(Default::default()), paren(b)));
+        assert_eq!(quote::ToTokens::to_token_stream(&e).to_string(), "- a * (b)");
     }
 }

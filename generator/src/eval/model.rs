@@ -4,8 +4,8 @@
 
 use super::kernel::{Backend, Interpreter, Kernel};
 use super::{FormShape, Program};
-use crate::emit::ldl::{LdlPlan, Solve};
 use crate::emit::tape::Tape;
+use crate::emit::{LdlPlan, Solve};
 use seam::solve::Rows;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
 use std::borrow::Cow;
@@ -607,7 +607,7 @@ impl FormulationFunctions for EvaluatedForm {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emit::ldl::LdlPlan;
+    use crate::emit::LdlPlan;
     use crate::symbolic::zero::SplitMix;
 
     /// A random symmetric positive definite matrix `B B^T + n I`, row-major.

@@ -2,7 +2,7 @@
 //! *Rigid Body Dynamics Algorithms*, 7.3): `u'` directly, in `O(n)` operations on a chain of `n`
 //! links, with no mass matrix and no dense solve.
 //!
-//! The composite-body recursion ([`super::recursive`]) still forms the `n x n` matrix that a
+//! The composite-body recursion ([`super::composite`]) still forms the `n x n` matrix that a
 //! dense `L D L^T` then factors (`n^3 / 3` operations); here each joint's axes are eliminated
 //! where they hang, from the leaves in:
 //!

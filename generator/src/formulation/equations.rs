@@ -54,7 +54,7 @@ pub struct Equations {
     /// [`super::derive_with`].
     pub constraint_power: Option<(Vec<Expr>, Expr)>,
     /// The same `mass` and `forcing` as a recursion over the tree of frames (Kane's form):
-    /// emission keeps it where it takes fewer operations ([`super::recursive`]).
+    /// emission keeps it where it takes fewer operations ([`super::composite`]).
     pub recursion: Option<super::composite::Recursion>,
     /// The speeds' rates `u'` of the same equations by the articulated-body recursion, with no
     /// matrix and no solve (Kane's form on a tree): emission keeps it where its right-hand

@@ -45,7 +45,7 @@ fn kanes_articulated_body_rates_are_lagranges_and_its_matrix_is_the_mass_matrix(
     // the summary compares with the solve it saves.
     let how = &summary.solves.iter().find(|(n, _)| n == "kane").unwrap().1;
     let solve_alone: usize = how.split("(the matrix's solve alone: ").nth(1).and_then(|r| r.strip_suffix(')')).expect(how).parse().unwrap();
-    assert_eq!(solve_alone, generator::emit::solvers::spd_cost(model.m()).total(), "{how}");
+    assert_eq!(solve_alone, generator::emit::spd_cost(model.m()).total(), "{how}");
     assert!(kane_ops.total() < solve_alone, "{how}");
     assert!(kane_ops.total() < lagrange_ops.total(), "{} against {}", kane_ops.total(), lagrange_ops.total());
     let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
