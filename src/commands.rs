@@ -39,6 +39,10 @@ pub struct CompareArgs {
     /// Also write SVG plots of the coordinates and errors into DIR.
     #[arg(long, value_name = "DIR")]
     pub plots: Option<PathBuf>,
+    /// Also write the self-contained page of the motion with every formulation's run over the
+    /// default one's (each in a colour of its own, dashed): at loose tolerances, see them part.
+    #[arg(long, value_name = "OUT.html")]
+    pub animate: Option<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone, PartialEq)]
@@ -125,8 +129,8 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         route.describe()
     );
     let json_to_stdout = args.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
-    if let Some(path) = args.json.as_deref().filter(|_| !json_to_stdout) {
-        // Before the runs: the records may not go over a file the run reads.
+    // Before anything is written: no output may go over a file the run reads.
+    for path in args.json.as_deref().filter(|_| !json_to_stdout).into_iter().chain(args.animate.as_deref()) {
         files::check_output(path)?;
     }
     if json_to_stdout {
@@ -151,6 +155,17 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         for p in plot::write_plots(&model, &runs, dir)? {
             eprintln!("wrote {}", files::printable_path(&p));
         }
+    }
+    if let Some(page) = &args.animate {
+        // The default formulation's run drawn as the bodies, the others over it.
+        let mut ordered: Vec<&runtime::compare::Run> = runs.iter().collect();
+        ordered.sort_by_key(|r| r.kind != model.default_kind());
+        let q: Vec<Vec<f64>> = ordered.iter().map(|r| r.invariants.coordinates.concat()).collect();
+        let motions: Vec<animate::Motion> =
+            ordered.iter().zip(&q).map(|(r, q)| animate::Motion { formulation: r.kind.name(), times: &r.solution.times, q }).collect();
+        let params = options.reference.as_ref().map_or_else(|| model.default_params.clone(), |r| r.params.clone());
+        animate::write_overlaid(page, &source, &params, &motions)?;
+        eprintln!("wrote {}", files::printable_path(page));
     }
     Ok(())
 }

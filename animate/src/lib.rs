@@ -67,31 +67,34 @@ pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
 
 /// The page showing `motion` of `model` with parameters `params` (the model's order).
 pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String, AnimateError> {
-    let m = model.coordinates.len();
-    let rows = motion.times.len();
-    if rows == 0 {
-        return Err(AnimateError::Empty);
-    }
-    if motion.q.len() != rows * m {
-        return Err(AnimateError::Shape { rows, got: motion.q.len() / rows.max(1), times: rows, expected: m });
-    }
+    page_overlaid(model, params, std::slice::from_ref(motion))
+}
+
+/// The page showing the first of `motions` as [`page`] does, and each other one over it: its
+/// links and its bodies' centres in a colour of its own, at the time shown (the four
+/// formulations of `multibody compare --animate`, to see them part at loose tolerances).
+///
+/// ```
+/// let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
+/// let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+/// let (times, a, b) = ([0.0, 0.1], [0.0, 0.0, 0.0, 0.1, 0.0, 0.2], [0.0, 0.0, 0.0, 0.1, 0.05, 0.2]);
+/// let kane = animate::Motion { formulation: "kane", times: &times, q: &a };
+/// let lagrange = animate::Motion { formulation: "lagrange", times: &times, q: &b };
+/// let html = animate::page_overlaid(&model, &params, &[kane, lagrange]).unwrap();
+/// assert!(html.contains(r#""overlays":[{"centers":null,"formulation":"lagrange""#));
+/// ```
+pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> Result<String, AnimateError> {
     let poser = Poser::new(model, params)?;
     let moving = poser.bodies.iter().any(|b| b.moving);
-    let mut poses = Vec::with_capacity(rows);
-    // Where a centre of mass moves with the coordinates (a mass sliding on a boom), every
-    // body's centre at every sample.
-    let mut centers = Vec::new();
-    for (i, &t) in motion.times.iter().enumerate() {
-        let q = &motion.q[i * m..(i + 1) * m];
-        if !q.iter().all(|x| x.is_finite()) {
-            return Err(AnimateError::NotFinite { t });
-        }
-        let frames = poser.frames_at(t, q)?;
-        poses.push(frames.iter().map(|p| p.origin.iter().chain(&p.rotation).map(|x| compact(*x)).collect::<Vec<_>>()).collect::<Vec<_>>());
-        if moving {
-            centers.push(poser.centers_at(t, q)?.iter().map(|c| c.map(compact)).collect::<Vec<_>>());
-        }
-    }
+    let Some((motion, others)) = motions.split_first() else { return Err(AnimateError::Empty) };
+    let (poses, centers) = sampled(model, &poser, motion)?;
+    let overlays = others
+        .iter()
+        .map(|o| {
+            let (poses, centers) = sampled(model, &poser, o)?;
+            Ok(serde_json::json!({ "formulation": o.formulation, "times": o.times, "poses": poses, "centers": if moving { serde_json::json!(centers) } else { serde_json::Value::Null } }))
+        })
+        .collect::<Result<Vec<_>, AnimateError>>()?;
     let bodies: Vec<serde_json::Value> = poser
         .bodies
         .iter()
@@ -126,6 +129,7 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
         "centers": if moving { serde_json::json!(centers) } else { serde_json::Value::Null },
         "up": up,
         "gravity": poser.gravity,
+        "overlays": overlays,
     });
     // JSON inside a script element: `</` would end it, so it is written `<\/` (the same string).
     let json = serde_json::to_string(&data).expect("plain data").replace("</", "<\\/");
@@ -154,6 +158,35 @@ pub fn live(page: &str, run: u64, token: &str) -> Option<String> {
     Some(page.replacen(PLACE, &json, 1))
 }
 
+/// Each frame's pose (origin, then rotation row-major) at each sample of `motion`, and, where a
+/// centre of mass moves with the coordinates (a mass sliding on a boom), every body's centre.
+type Sampled = (Vec<Vec<Vec<serde_json::Value>>>, Vec<Vec<[serde_json::Value; 3]>>);
+
+fn sampled(model: &Model, poser: &Poser, motion: &Motion<'_>) -> Result<Sampled, AnimateError> {
+    let m = model.coordinates.len();
+    let rows = motion.times.len();
+    if rows == 0 {
+        return Err(AnimateError::Empty);
+    }
+    if motion.q.len() != rows * m {
+        return Err(AnimateError::Shape { rows, got: motion.q.len() / rows.max(1), times: rows, expected: m });
+    }
+    let moving = poser.bodies.iter().any(|b| b.moving);
+    let (mut poses, mut centers) = (Vec::with_capacity(rows), Vec::new());
+    for (i, &t) in motion.times.iter().enumerate() {
+        let q = &motion.q[i * m..(i + 1) * m];
+        if !q.iter().all(|x| x.is_finite()) {
+            return Err(AnimateError::NotFinite { t });
+        }
+        let frames = poser.frames_at(t, q)?;
+        poses.push(frames.iter().map(|p| p.origin.iter().chain(&p.rotation).map(|x| compact(*x)).collect::<Vec<_>>()).collect::<Vec<_>>());
+        if moving {
+            centers.push(poser.centers_at(t, q)?.iter().map(|c| c.map(compact)).collect::<Vec<_>>());
+        }
+    }
+    Ok((poses, centers))
+}
+
 /// A float with the digits a drawing needs (single precision's shortest round trip).
 fn compact(x: f64) -> serde_json::Value {
     let short: f64 = format!("{}", x as f32).parse().expect("a float prints as a float");
@@ -163,7 +196,12 @@ fn compact(x: f64) -> serde_json::Value {
 /// [`page`], written to `path` atomically (through an exclusive temporary file; never over what
 /// is not a regular file).
 pub fn write(path: &std::path::Path, model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<(), AnimateError> {
-    let html = page(model, params, motion)?;
+    write_overlaid(path, model, params, std::slice::from_ref(motion))
+}
+
+/// [`page_overlaid`], written as [`write`] writes.
+pub fn write_overlaid(path: &std::path::Path, model: &Model, params: &[f64], motions: &[Motion<'_>]) -> Result<(), AnimateError> {
+    let html = page_overlaid(model, params, motions)?;
     files::write_creating_folder(path, html.as_bytes())?;
     Ok(())
 }

@@ -1522,10 +1522,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..5 {
-            a.force[8 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[8..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
@@ -1849,16 +1852,10 @@ pub mod lagrange {
                 x115 * f64::sqrt(x106) + x160,
             ),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],

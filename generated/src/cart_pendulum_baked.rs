@@ -264,10 +264,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..1 {
-            a.force[3 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[3..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
@@ -301,16 +304,10 @@ pub mod lagrange {
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot, theta2_dot, x_dot];
         let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
@@ -796,16 +793,10 @@ pub mod maggi {
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot, theta2_dot, x_dot];
         let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
@@ -1365,16 +1356,10 @@ pub mod kane {
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot - theta2_dot, x_dot];
         let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
@@ -1910,16 +1895,10 @@ pub mod reduced_volterra {
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], q[2], theta2_dot - theta1_dot];
         let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;

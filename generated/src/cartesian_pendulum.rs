@@ -255,10 +255,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..1 {
-            a.force[2 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[2..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
@@ -296,16 +299,10 @@ pub mod lagrange {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;
@@ -700,16 +697,10 @@ pub mod maggi {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;
@@ -1177,16 +1168,10 @@ pub mod kane {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x * y_dot - x_dot * y, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;
@@ -1592,16 +1577,10 @@ pub mod reduced_volterra {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x * y_dot - x_dot * y, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;

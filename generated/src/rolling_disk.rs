@@ -280,10 +280,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..2 {
-            a.force[4 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[4..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
@@ -318,16 +321,10 @@ pub mod lagrange {
             ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -1000,16 +997,10 @@ pub mod maggi {
             ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -1615,16 +1606,10 @@ pub mod kane {
             ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], q[2], q[3], psi_dot, phi_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;
@@ -2146,16 +2131,10 @@ pub mod reduced_volterra {
             ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], q[2], q[3], phi_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = momenta(t, q, qdot, params);
         ::seam::check::finite(t, &state)?;

@@ -1001,10 +1001,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..1 {
-            a.force[9 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[9..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
@@ -1057,16 +1060,10 @@ pub mod lagrange {
                 x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -4471,16 +4468,10 @@ pub mod maggi {
                 x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -8823,16 +8814,10 @@ pub mod kane {
                 x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -10554,16 +10539,10 @@ pub mod reduced_volterra {
                 x1 * x1 + x0 * x0 + x3 * x3 + x2 * x2 + 1.0,
             ),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],

@@ -1082,10 +1082,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..0 {
-            a.force[8 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[8..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M), for monitoring its conditioning.
@@ -1115,16 +1118,10 @@ pub mod lagrange {
         let Z_dot = qdot[7];
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -4133,16 +4130,10 @@ pub mod maggi {
         let Z_dot = qdot[7];
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -7596,16 +7587,10 @@ pub mod kane {
         let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],
@@ -9423,16 +9408,10 @@ pub mod reduced_volterra {
         let x2 = f64::cos(phi);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [
             q[0],
             q[1],

@@ -279,10 +279,13 @@ pub mod lagrange {
         beta: f64,
     ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
-        for i in 0..1 {
-            a.force[2 + i]
-                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-        }
+        ::seam::solve::baumgarte(
+            &mut a.force[2..],
+            &a.residuals,
+            &a.positions,
+            alpha,
+            beta,
+        );
         finish(t, a, dstate)
     }
     ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
@@ -328,16 +331,10 @@ pub mod lagrange {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rope", x * x - x2 * x2 + y * y, x6 * x6 + x5 * x5 + x7 * x7),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;
@@ -939,16 +936,10 @@ pub mod maggi {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rope", x * x - x2 * x2 + y * y, x6 * x6 + x5 * x5 + x7 * x7),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;
@@ -1605,16 +1596,10 @@ pub mod kane {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rope", x * x - x2 * x2 + y * y, x6 * x6 + x5 * x5 + x7 * x7),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;
@@ -2290,16 +2275,10 @@ pub mod reduced_volterra {
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             ("rope", x * x - x2 * x2 + y * y, x6 * x6 + x5 * x5 + x7 * x7),
         ];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(Failure::ConstraintViolated {
-                    constraint: constraint.into(),
-                    residual,
-                    tolerance,
-                });
-            }
-        }
+        ::seam::check::satisfied(
+            residuals.into_iter().chain(positions),
+            CONSTRAINT_TOLERANCE,
+        )?;
         let state: [f64; STATES] = [q[0], q[1], x_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         ::seam::check::finite(t, &state)?;

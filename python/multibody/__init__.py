@@ -271,24 +271,33 @@ class Model:
         ``result``, what ``simulate`` returned (a DataFrame or a ``Trajectory``), in 3-D: each
         body as its equivalent inertia box, each frame as its axes, with a time slider,
         play/pause and the time shown. ``#t=1.5`` after the page's address opens it paused at
-        t = 1.5. Without ``path``, returns the page as an :class:`Animation`, which a notebook
-        shows inline."""
+        t = 1.5. A list of runs draws the first as the bodies and each other one over it, dashed
+        in a colour of its own (the formulations at loose tolerances, to see them part; the
+        first run's parameters are drawn). Without ``path``, returns the page as an
+        :class:`Animation`, which a notebook shows inline."""
         if path is None:
             with _tempfile.TemporaryDirectory() as folder:
                 page = _os.path.join(folder, f"{self.name}.html")
                 self.animate(result, page)
                 with open(page, encoding="utf-8") as f:
                     return Animation(f.read())
-        attrs = getattr(result, "attrs", None)
-        meta = attrs if attrs is not None and "params" in attrs else vars(result)
-        if meta.get("model") not in (None, self.name):
-            raise ValueError(f"the run is of model `{meta.get('model')}`, not of `{self.name}`: animate it with its own model")
-        missing = [c for c in ["t", *self.coordinates] if c not in getattr(result, "columns", [])]
-        if missing:
-            raise ValueError(f"the run has no column {', '.join(map(repr, missing))}: give what `{self.name}`'s simulate returned")
-        times = np.ascontiguousarray(np.asarray(result["t"], dtype=float))
-        q = np.ascontiguousarray(np.column_stack([np.asarray(result[c], dtype=float) for c in self.coordinates]))
-        self._native.animate(str(path), times, q, meta.get("formulation", ""), meta.get("params"))
+        results = list(result) if isinstance(result, (list, tuple)) else [result]
+        if not results:
+            raise ValueError("no run to animate: give what `simulate` returned, or a list of such runs")
+        runs, params = [], None
+        for one in results:
+            attrs = getattr(one, "attrs", None)
+            meta = attrs if attrs is not None and "params" in attrs else vars(one)
+            if meta.get("model") not in (None, self.name):
+                raise ValueError(f"the run is of model `{meta.get('model')}`, not of `{self.name}`: animate it with its own model")
+            missing = [c for c in ["t", *self.coordinates] if c not in getattr(one, "columns", [])]
+            if missing:
+                raise ValueError(f"the run has no column {', '.join(map(repr, missing))}: give what `{self.name}`'s simulate returned")
+            times = np.ascontiguousarray(np.asarray(one["t"], dtype=float))
+            q = np.ascontiguousarray(np.column_stack([np.asarray(one[c], dtype=float) for c in self.coordinates]))
+            runs.append((times, q, meta.get("formulation", "")))
+            params = meta.get("params") if params is None else params
+        self._native.animate(str(path), runs, params)
 
 
 class Animation:

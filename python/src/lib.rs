@@ -532,24 +532,23 @@ impl Model {
         })
     }
 
-    /// Writes the self-contained HTML page that plays a motion in 3-D (the `animate` crate):
-    /// `times` (T,) and the coordinates `q` (T, m) at them, with the parameters `params`.
-    #[pyo3(signature = (path, times, q, formulation="", params=None))]
+    /// Writes the self-contained HTML page that plays motions in 3-D (the `animate` crate):
+    /// each run a `(times (T,), q (T, m), formulation)`, the first drawn as the bodies and the
+    /// others over it, with the parameters `params`.
+    #[pyo3(signature = (path, runs, params=None))]
     fn animate(
         &self,
         path: std::path::PathBuf,
-        times: PyReadonlyArray1<'_, f64>,
-        q: PyReadonlyArray2<'_, f64>,
-        formulation: &str,
+        runs: Vec<(PyReadonlyArray1<'_, f64>, PyReadonlyArray2<'_, f64>, String)>,
         params: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
         guarded(|| {
             let model = self.source.model().map_err(model_error)?;
             let params = self.param_values(params)?;
-            let times = times.as_array().to_vec();
-            let q: Vec<f64> = q.as_array().iter().copied().collect();
-            let motion = animate::Motion { formulation, times: &times, q: &q };
-            animate::write(&path, &model, &params, &motion).map_err(|e| match e {
+            let data: Vec<(Vec<f64>, Vec<f64>)> = runs.iter().map(|(t, q, _)| (t.as_array().to_vec(), q.as_array().iter().copied().collect())).collect();
+            let motions: Vec<animate::Motion> =
+                runs.iter().zip(&data).map(|((_, _, formulation), (times, q))| animate::Motion { formulation, times, q }).collect();
+            animate::write_overlaid(&path, &model, &params, &motions).map_err(|e| match e {
                 animate::AnimateError::File(e) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
                 other => PyValueError::new_err(other.to_string()),
             })

@@ -240,3 +240,34 @@ def test_a_trail_draws_where_a_body_has_been(tmp_path):
         if near(hue_at(shots["trail"], x, y, radius=3)) >= 3 and near(hue_at(shots["plain"], x, y, radius=3)) == 0:
             shown += 1
     assert shown >= 2, shown
+
+
+def test_runs_overlaid_are_drawn_where_their_coordinates_put_them(tmp_path):
+    from PIL import Image
+
+    m = multibody.load("cart_pendulum")
+    first = m.simulate("kane", t_end=2.0, dt_out=0.01, frame=False)
+    # Another run that parts from the first: its pendulum started further out.
+    other = m.simulate("lagrange", t_end=2.0, dt_out=0.01, q={"theta1": 1.2, "theta2": 1.5}, qdot={"theta1": 0.0, "theta2": 0.0, "x": 0.0}, frame=False)
+    path = tmp_path / "overlaid.html"
+    m.animate([first, other], path)
+    l = m.params["l"]
+    url = path.as_uri() + "#t=1.5&size=800x520&follow=0"
+    state = page_state(tmp_path, url)
+    assert [o["formulation"] for o in state["overlays"]] == ["lagrange"]
+    overlay = state["overlays"][0]
+    i = overlay["index"]
+    assert math.isclose(other["t"][i], 1.5, abs_tol=1e-9)
+    x, a, b = other["x"][i], other["theta1"][i], other["theta2"][i]
+    expected = [x + l * math.sin(a) + l / 2 * math.sin(b), -l * math.cos(a) - l / 2 * math.cos(b), 0.0]
+    assert np.allclose(overlay["bodies"][2]["center"], expected, atol=1e-5)
+    # The bodies are the first run's, apart from the overlay's.
+    assert np.linalg.norm(np.subtract(state["bodies"][2]["center"], expected)) > 0.3
+    shot = tmp_path / "overlaid.png"
+    chromium(tmp_path, f"--screenshot={shot}", url)
+    image = Image.open(shot).convert("RGB")
+    # The overlay's dot for bar2 (dark, #222222) where the page says it is.
+    px, py = overlay["screen"][2]
+    px, py = px + state["offset"][0], py + state["offset"][1]
+    dark = [image.getpixel((int(px) + i, int(py) + j)) for i in range(-2, 3) for j in range(-2, 3)]
+    assert sum(1 for r, g, b in dark if max(r, g, b) < 90) >= 10, dark

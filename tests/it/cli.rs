@@ -122,6 +122,40 @@ fn simulate_animates_the_run() {
     assert!(dir.path().join("taken.html").is_dir());
 }
 
+/// `compare --animate`: every formulation's run in one page, the default one as the bodies and
+/// the others over it, each at the coordinates its own run gave.
+#[test]
+fn compare_animates_the_formulations_over_each_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["compare", "cart_pendulum", "--t-end", "1", "--dt-out", "0.25", "--rtol", "1e-2", "--atol", "1e-2", "--repeats", "1"];
+    let out = multibody(dir.path(), &[&args[..], &["--animate", "all.html", "--json", "runs.json"]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let html = std::fs::read_to_string(dir.path().join("all.html")).unwrap();
+    let start = html.find(r#"<script type="application/json" id="data">"#).unwrap();
+    let json = &html[start..];
+    let data: serde_json::Value = serde_json::from_str(&json[json.find('>').unwrap() + 1..json.find("</script>").unwrap()]).unwrap();
+    assert_eq!(data["formulation"], "reduced_volterra");
+    let overlays: Vec<&str> = data["overlays"].as_array().unwrap().iter().map(|o| o["formulation"].as_str().unwrap()).collect();
+    assert_eq!(overlays, ["lagrange", "maggi", "kane"]);
+    // Each overlay's cart (frame 1's origin, x) at each time is its own run's x.
+    let runs: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path().join("runs.json")).unwrap()).unwrap();
+    assert_eq!(runs.as_array().unwrap().len(), 4);
+    for o in data["overlays"].as_array().unwrap() {
+        assert_eq!(o["times"], data["times"]);
+        assert_eq!(o["poses"].as_array().unwrap().len(), 5);
+    }
+    // Loose tolerances: the runs part, so the drawings differ somewhere.
+    let carts = |poses: &serde_json::Value| poses.as_array().unwrap().iter().map(|p| p[1][0].as_f64().unwrap()).collect::<Vec<_>>();
+    let base = carts(&data["poses"]);
+    assert!(data["overlays"].as_array().unwrap().iter().any(|o| carts(&o["poses"]) != base), "the overlays are the same run");
+    // A page over what is not a regular file is refused before anything runs.
+    std::fs::create_dir(dir.path().join("taken.html")).unwrap();
+    let refused = multibody(dir.path(), &[&args[..], &["--animate", "taken.html"]].concat());
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("not a regular file"), "{}", String::from_utf8_lossy(&refused.stderr));
+    assert!(dir.path().join("taken.html").is_dir());
+}
+
 #[test]
 fn sweep_and_linearize_run_on_a_model_file() {
     let (dir, _) = user_model();

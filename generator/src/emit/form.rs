@@ -463,6 +463,7 @@ impl Emitter<'_> {
                 values.push(quote!(residuals: [#(#res),*]));
                 values.push(quote!(positions: [#(#pos),*]));
                 let m_l = usize_lit(model.m());
+                let seam = &self.seam;
                 let extra = OpCount { add: 2 * r, mul: 4 * r + 1, ..OpCount::default() };
                 let mut cost = self.functions.last().expect("rhs").clone();
                 cost.name = format!("{name}::rhs_baumgarte");
@@ -472,9 +473,7 @@ impl Emitter<'_> {
                     #[doc = "Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`."]
                     pub fn rhs_baumgarte(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], alpha: f64, beta: f64) -> Result<(), Failure> {
                         let mut a = assemble(t, state, params, g_i);
-                        for i in 0..#r_l {
-                            a.force[#m_l + i] -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
-                        }
+                        #seam::solve::baumgarte(&mut a.force[#m_l..], &a.residuals, &a.positions, alpha, beta);
                         finish(t, a, dstate)
                     }
                 }
@@ -629,12 +628,7 @@ impl Emitter<'_> {
                 #stmts
                 let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [#((#names, #r_out, #rb_out)),*];
                 let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [#((#h_names, #h_out, #hb_out)),*];
-                for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-                    let tolerance = CONSTRAINT_TOLERANCE * bound;
-                    if !(residual.abs() <= tolerance) {
-                        return Err(Failure::ConstraintViolated { constraint: constraint.into(), residual, tolerance });
-                    }
-                }
+                #seam::check::satisfied(residuals.into_iter().chain(positions), CONSTRAINT_TOLERANCE)?;
                 let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
                 let g_i: [f64; NUM_IGNORABLE] = #g_i;
                 #seam::check::finite(t, &state)?;

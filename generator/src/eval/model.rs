@@ -340,9 +340,7 @@ impl EvaluatedForm {
                 let stabilized = s.stabilization.is_some() && stabilize.is_some();
                 if let (Some(r), Some((alpha, beta))) = (s.stabilization, stabilize) {
                     let (residuals, positions) = (take(r), take(r));
-                    for i in 0..r {
-                        force[self.m + i] -= 2.0 * alpha * residuals[i] + beta * beta * positions[i];
-                    }
+                    seam::solve::baumgarte(&mut force[self.m..self.m + r], residuals, positions, alpha, beta);
                 }
                 seam::check::nonsingular(t, &s.conditions, checks, SINGULAR_TOLERANCE)?;
                 // The module's own solve: `solve_spd` or its `solve_ldl`, both a plan's twin.
@@ -549,12 +547,8 @@ impl FormulationFunctions for EvaluatedForm {
             let (h, hb) = rest.split_at(nh);
             let residuals = self.constraint_names.iter().zip(r.iter().zip(rb));
             let positions = self.holonomic_names.iter().zip(h.iter().zip(hb));
-            for (constraint, (&residual, &bound)) in residuals.chain(positions) {
-                let tolerance = CONSTRAINT_TOLERANCE * bound;
-                if !(residual.abs() <= tolerance) {
-                    return Err(Failure::ConstraintViolated { constraint: Cow::Owned(constraint.clone()), residual, tolerance });
-                }
-            }
+            let entries = residuals.chain(positions).map(|(constraint, (&residual, &bound))| (constraint.clone(), residual, bound));
+            seam::check::satisfied(entries, CONSTRAINT_TOLERANCE)?;
             for (k, &j) in s.kept.iter().enumerate() {
                 state[k] = q[j];
             }

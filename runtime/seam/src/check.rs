@@ -42,6 +42,28 @@ pub fn nonsingular<S: Clone + Into<Cow<'static, str>>>(t: f64, conditions: &[S],
     Ok(())
 }
 
+/// `Err(Failure::ConstraintViolated)` naming the first constraint whose residual's magnitude
+/// is not within `relative` times its bound (a NaN included): each entry is the constraint's
+/// name, its residual and the bound it is measured against (the sum of its terms' magnitudes,
+/// so that the tolerance scales with what the constraint adds up).
+///
+/// ```
+/// use seam::{Failure, check};
+/// assert!(check::satisfied([("wheel", 1e-15, 2.0)], 1e-9).is_ok());
+/// let err = check::satisfied([("wheel", 1e-15, 2.0), ("rope", 1e-3, 1.0)], 1e-9).unwrap_err();
+/// assert!(matches!(err, Failure::ConstraintViolated { ref constraint, .. } if constraint == "rope"));
+/// ```
+#[inline]
+pub fn satisfied<S: Into<Cow<'static, str>>>(entries: impl IntoIterator<Item = (S, f64, f64)>, relative: f64) -> Result<(), Failure> {
+    for (constraint, residual, bound) in entries {
+        let tolerance = relative * bound;
+        if !(residual.abs() <= tolerance) {
+            return Err(Failure::ConstraintViolated { constraint: constraint.into(), residual, tolerance });
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -53,5 +75,8 @@ mod tests {
         assert!(nonsingular(2.0, &names, &[1.0, 2.0], 1e-12).is_ok());
         let err = nonsingular(2.0, &names, &[f64::NAN, 0.0], 1e-12).unwrap_err();
         assert!(matches!(err, Failure::Singular { ref condition, t, .. } if condition == "a" && t == 2.0));
+        let err = satisfied([("a".to_string(), f64::NAN, 1.0)], 1e-9).unwrap_err();
+        assert!(matches!(err, Failure::ConstraintViolated { ref constraint, .. } if constraint == "a"));
+        assert!(satisfied(Vec::<(&'static str, f64, f64)>::new(), 1e-9).is_ok());
     }
 }

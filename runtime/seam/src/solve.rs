@@ -9,7 +9,8 @@
 //!   positive definite matrix with no structural zero to skip (a formulation whose matrix has
 //!   some gets its own unrolled plan from the generator);
 //! - [`lu_factor`] and [`lu_solve`]: the factors kept for many right-hand sides (the exact
-//!   Jacobians).
+//!   Jacobians);
+//! - [`baumgarte`]: the stabilized constraints' forcing, before Lagrange's solve.
 //!
 //! Each returns `Err(column)` where a pivot is not above [`PIVOT_TOLERANCE`] times the matrix's
 //! scale (for `L D L^T`, not positive: the matrix is singular or not positive definite).
@@ -259,6 +260,24 @@ pub fn lu_factor_array<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; 
 #[inline]
 pub fn lu_solve_array<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
     lu_solve(a, pivots, b)
+}
+
+/// Baumgarte's stabilization of the constraints' rows of a forcing: each constraint at
+/// acceleration level becomes `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h`, so row `i` of
+/// `force` (the constraints' rows) loses `2 alpha residuals[i] + beta^2 positions[i]` (the
+/// velocity residual `a q' + b` and the holonomic residual `h`, zero for a velocity constraint).
+/// `alpha = beta = 0` leaves the forcing as it was.
+///
+/// ```
+/// let mut force = [1.0, 0.5];
+/// seam::solve::baumgarte(&mut force, &[0.1, 0.2], &[0.01, 0.0], 2.0, 3.0);
+/// assert_eq!(force, [1.0 - (2.0 * 2.0 * 0.1 + 9.0 * 0.01), 0.5 - 2.0 * 2.0 * 0.2]);
+/// ```
+#[inline]
+pub fn baumgarte(force: &mut [f64], residuals: &[f64], positions: &[f64], alpha: f64, beta: f64) {
+    for ((f, r), h) in force.iter_mut().zip(residuals).zip(positions) {
+        *f -= 2.0 * alpha * r + beta * beta * h;
+    }
 }
 
 #[cfg(test)]
