@@ -231,7 +231,7 @@ def test_a_trail_draws_where_a_body_has_been(tmp_path):
     def near(hues):
         return len([h for h in hues if min(abs(h - want), 360 - abs(h - want)) < 15])
     shown = 0
-    for t in [1.5, 2.0, 2.5, 2.8]:
+    for t in [0.5, 1.0, 1.5, 2.0]:
         earlier = page_state(tmp_path, path.as_uri() + f"#t={t}" + view)
         x, y = earlier["screen"][2]
         x, y = x + earlier["offset"][0], y + earlier["offset"][1]

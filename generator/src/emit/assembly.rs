@@ -1,5 +1,5 @@
 //! How a right-hand side assembles its matrix and forcing: the dense form's entries, or the
-//! recursion over the tree of frames ([`crate::formulation::recursive`]), whichever the emitted
+//! recursion over the tree of frames (`formulation::composite`), whichever the emitted
 //! code computes in fewer operations (both bodies are built: a count before the emitter's
 //! sharing, [`crate::symbolic::expr::dag_ops`], picks wrongly on the 20-link pendulum and on
 //! scene 2's reduced form). One rule, for emission, the summary and `inspect`.

@@ -195,7 +195,7 @@ impl Emitter<'_> {
     /// What the state's rates are computed from, in order: the kept coordinates' rates, the
     /// matrix (both triangles read the upper entry, so CSE binds it once), the forcing, Maggi's
     /// `W` and `c`, and the power `Q . q'` when forces do work (with the moving constraints'
-    /// power's offset, then its weights on the solution, [`crate::formulation::power`]).
+    /// power's offset, then its weights on the solution, `formulation::power`).
     pub(super) fn rate_outputs(&self, f: &Equations, shared: &FromMechanics) -> Vec<Expr> {
         self.rate_outputs_of(f, shared, (&f.qdot, &f.mass, &f.forcing))
     }

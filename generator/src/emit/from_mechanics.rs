@@ -20,7 +20,7 @@ pub struct FromMechanics {
     /// non-potential forces' power and the explicit time dependence, from a prescribed motion or
     /// time-varying forces), so `h - W` is constant along a motion whose constraints do not move
     /// (`b = 0`). Moving constraints do work this does not count: each formulation adds it after
-    /// its solve ([`crate::formulation::power`]).
+    /// its solve (`formulation::power`).
     pub power: Expr,
     /// What `energy` is and what its balance with `W` means.
     pub energy_balance: seam::EnergyBalance,

@@ -417,7 +417,7 @@ pub enum Solve {
     /// The symmetric positive definite matrices of the other formulations.
     Ldl(Box<LdlPlan>),
     /// No solve: the right-hand side's body gives the speeds' rates by the articulated-body
-    /// recursion ([`crate::formulation::articulated`]), having checked its `pivots`.
+    /// recursion (`formulation::articulated`), having checked its `pivots`.
     Articulated { pivots: usize },
 }
 

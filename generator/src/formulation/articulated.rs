@@ -25,17 +25,8 @@
 //! joint of several axes) vanish exactly where the mass matrix is singular: they are the checks
 //! a right-hand side makes before it divides. Joints of several axes are taken on the world
 //! alone (a floating base).
-//!
-//! ```
-//! use generator::formulation::{articulated, mechanics, volterra};
-//! let model = generator::model::load("../models/pendulum_on_cart_5.ron").unwrap();
-//! let mech = mechanics::derive(&model);
-//! let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
-//! let aba = articulated::derive(&model, &mech, &kane).unwrap();
-//! assert_eq!((aba.accelerations.len(), aba.pivots.len()), (6, 6));
-//! ```
 
-use super::composite::{Tree, tree};
+use super::composite::Tree;
 use super::mechanics::Mechanics;
 use super::spatial::{Force, Motion, Program, SpatialInertia, zero3};
 use super::volterra::Volterra;
@@ -163,8 +154,9 @@ fn solve_small(prog: &mut Program, d: &[Vec<Expr>], b: &[Expr], pivots: &mut Vec
 /// `kane` (for `q' = W u + X` and the applied forces `U_K`). `None` where the tree's joints do
 /// not split the quasi-velocities into one rate per axis by a triangular `J`, or a joint of
 /// several axes hangs below another frame.
+#[cfg(test)]
 pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Articulated> {
-    on_tree(&tree(model, mech, kane)?, mech, kane)
+    on_tree(&super::composite::tree(model, mech, kane)?, mech, kane)
 }
 
 /// [`derive`] on the tree `t` of Kane's form `kane`.
@@ -277,8 +269,9 @@ pub(super) fn on_tree(t: &Tree, mech: &Mechanics, kane: &Volterra) -> Option<Art
 /// the leaves at `u_I = 0`) and `M_II` the dense form's (small and simplified: the total mass on
 /// a floating base), then Kane's recursion at that `u`. `None` unless each ignorable rate is
 /// the rate of one axis of a joint on the world, alone in its row of `J`.
+#[cfg(test)]
 pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Articulated, reduced: &Volterra) -> Option<Articulated> {
-    reduce_on(&tree(model, mech, kane)?, model, mech, kane, kane_aba, reduced)
+    reduce_on(&super::composite::tree(model, mech, kane)?, model, mech, kane, kane_aba, reduced)
 }
 
 /// [`reduce`] on the tree `t` of Kane's form `kane`.
@@ -453,5 +446,19 @@ mod tests {
             let p = volterra::derive(&model, &mechanics::derive(&model), &[], &model.quasi_full).unwrap().u.len();
             assert_eq!(agrees(&model), p, "{name}");
         }
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{articulated, mechanics, volterra};
+        let model = crate::model::load("../models/pendulum_on_cart_5.ron").unwrap();
+        let mech = mechanics::derive(&model);
+        let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+        let aba = articulated::derive(&model, &mech, &kane).unwrap();
+        assert_eq!((aba.accelerations.len(), aba.pivots.len()), (6, 6));
     }
 }

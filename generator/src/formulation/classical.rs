@@ -6,14 +6,6 @@
 //!
 //! Here `f = Q - dV/dq - h` (`h` the generalized inertia forces, [`Mechanics::inertial`]) and
 //! `a q'' = gamma`, `gamma = -(a' q' + b')` (the constraints differentiated once more).
-//!
-//! ```
-//! use generator::formulation::{classical, mechanics};
-//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-//! let mech = mechanics::derive(&model);
-//! let c = classical::derive(&model, &mech);
-//! assert_eq!((c.force.len(), c.gamma.len()), (3, 1));
-//! ```
 
 use super::mechanics::Mechanics;
 use super::volterra::Volterra;
@@ -52,4 +44,17 @@ pub fn maggi_drift(model: &Model, mech: &Mechanics, kane: &Volterra) -> Vec<Expr
         })
         .collect();
     kane.qdot.iter().map(|e| mech.tidy.of(chain.dt(*e).subs(&u_of_qdot))).collect()
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{classical, mechanics};
+        let model = crate::model::load("../models/cart_pendulum.ron").unwrap();
+        let mech = mechanics::derive(&model);
+        let c = classical::derive(&model, &mech);
+        assert_eq!((c.force.len(), c.gamma.len()), (3, 1));
+    }
 }

@@ -21,16 +21,6 @@
 //! recursion forms becomes a named intermediate ([`Recursion::definitions`]): the symbolic core
 //! flattens sums, and a flattened composite inertia would be the dense form again. Emission
 //! keeps whichever assembly takes fewer operations ([`crate::emit`]).
-//!
-//! ```
-//! use generator::formulation::{composite, mechanics, volterra};
-//! let model = generator::model::load("../models/three_body.ron").unwrap();
-//! let mech = mechanics::derive(&model);
-//! let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
-//! let r = composite::derive(&model, &mech, &kane).unwrap();
-//! assert_eq!((r.mass.rows, r.forcing.len()), (8, 8));
-//! assert!(!r.definitions.is_empty());
-//! ```
 
 use super::mechanics::Mechanics;
 use super::spatial::{Force, Inertia, Motion, Program, zero3};
@@ -166,6 +156,7 @@ pub(super) fn tree(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<T
 /// Kane's equations of `model` by the recursion over its frames, from its Kane form `kane`
 /// (for `q' = W u + X` and the applied forces `U_K`). `None` when no body hangs below a frame
 /// below the world (every frame on the world: the dense form is the recursion already).
+#[cfg(test)]
 pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recursion> {
     on_tree(&tree(model, mech, kane)?, kane)
 }
@@ -443,5 +434,20 @@ mod tests {
             let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
             assert!(derive(&model, &mech, &kane).is_none(), "{}", model.name);
         }
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{composite, mechanics, volterra};
+        let model = crate::model::load("../models/three_body.ron").unwrap();
+        let mech = mechanics::derive(&model);
+        let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+        let r = composite::derive(&model, &mech, &kane).unwrap();
+        assert_eq!((r.mass.rows, r.forcing.len()), (8, 8));
+        assert!(!r.definitions.is_empty());
     }
 }

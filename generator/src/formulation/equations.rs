@@ -50,15 +50,15 @@ pub struct Equations {
     /// How the velocity transformation was eliminated, for the summary and `inspect`.
     pub elimination: &'static str,
     /// Where a constraint moves: the power of the constraint forces as `(weights, offset)`,
-    /// `R . q' = weights . x + offset` for the solution `x` ([`super::power`]); filled in by
+    /// `R . q' = weights . x + offset` for the solution `x` (`power`); filled in by
     /// [`super::derive_with`].
     pub constraint_power: Option<(Vec<Expr>, Expr)>,
     /// The same `mass` and `forcing` as a recursion over the tree of frames (Kane's form):
-    /// emission keeps it where it takes fewer operations ([`super::composite`]).
+    /// emission keeps it where it takes fewer operations (`composite`).
     pub recursion: Option<super::composite::Recursion>,
     /// The speeds' rates `u'` of the same equations by the articulated-body recursion, with no
     /// matrix and no solve (Kane's form on a tree): emission keeps it where its right-hand
-    /// side takes fewer operations than an assembly and its solve ([`super::articulated`]).
+    /// side takes fewer operations than an assembly and its solve (`articulated`).
     pub articulated: Option<super::articulated::Articulated>,
 }
 

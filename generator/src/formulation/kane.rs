@@ -1,12 +1,5 @@
 //! Kane's equations (Gibbs-Appell, the standard Volterra form), state `[q; u]` with the p full
 //! quasi-velocities: `M_K u' = L_K` (the paper's Table 1: p equations).
-//!
-//! ```
-//! use generator::formulation::{derive, Request};
-//! let model = generator::model::load("../models/three_body.ron").unwrap();
-//! let d = derive(&model, &Request::all()).unwrap();
-//! assert_eq!(d.equations("kane").unwrap().equations, 8);
-//! ```
 
 use super::Shared;
 use super::equations::{Equations, Method};
@@ -49,5 +42,17 @@ impl Method for Kane {
             recursion: shared.trees.composite.cloned(),
             articulated: shared.trees.articulated.cloned(),
         })
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{Request, derive};
+        let model = crate::model::load("../models/three_body.ron").unwrap();
+        let d = derive(&model, &Request::all()).unwrap();
+        assert_eq!(d.equations("kane").unwrap().equations, 8);
     }
 }

@@ -1,12 +1,5 @@
 //! Lagrange's equations with multipliers, state `[q; q']`: `[M a^T; a 0] [q''; -lambda] =
 //! [f; gamma]` (the paper's Table 1: m equations).
-//!
-//! ```
-//! use generator::formulation::{derive, Request};
-//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-//! let d = derive(&model, &Request::all()).unwrap();
-//! assert_eq!(d.equations("lagrange").unwrap().mass.rows, 4); // m + r
-//! ```
 
 use super::Shared;
 use super::classical;
@@ -65,5 +58,17 @@ impl Method for Lagrange {
             recursion: None,
             articulated: None,
         })
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{Request, derive};
+        let model = crate::model::load("../models/cart_pendulum.ron").unwrap();
+        let d = derive(&model, &Request::all()).unwrap();
+        assert_eq!(d.equations("lagrange").unwrap().mass.rows, 4); // m + r
     }
 }

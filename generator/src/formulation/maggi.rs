@@ -1,13 +1,6 @@
 //! Maggi's equations, state `[q; q']`: `q'' = W u' + c` with `W^T M W u' = W^T (f - M c)`,
 //! `W` the null-space basis of `a` from the full quasi-velocities (Kane's `W`), no multipliers
 //! (the paper's Table 1: m equations).
-//!
-//! ```
-//! use generator::formulation::{derive, Request};
-//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-//! let d = derive(&model, &Request::all()).unwrap();
-//! assert_eq!(d.equations("maggi").unwrap().mass.rows, 2); // p
-//! ```
 
 use super::Shared;
 use super::classical;
@@ -57,5 +50,17 @@ impl Method for Maggi {
             recursion: None,
             articulated: None,
         })
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{Request, derive};
+        let model = crate::model::load("../models/cart_pendulum.ron").unwrap();
+        let d = derive(&model, &Request::all()).unwrap();
+        assert_eq!(d.equations("maggi").unwrap().mass.rows, 2); // p
     }
 }

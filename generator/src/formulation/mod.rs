@@ -1,8 +1,9 @@
 //! From mechanics to equations of motion: the shared derivation ([`mechanics`]), the
 //! ignorable-coordinate analysis ([`ignorable`]), the Volterra forms ([`volterra`]) and the
-//! four formulations, each a [`Method`] giving [`Equations`]: [`lagrange`], [`maggi`],
-//! [`kane`], [`reduced`]. [`derive`] runs them once for `inspect`; emission runs the same
-//! stages in the same order, spread over two threads ([`crate::emit::generate`]).
+//! four formulations, each a [`Method`] giving [`Equations`] (private modules: `lagrange`,
+//! `maggi`, `kane`, `reduced`; over a tree of frames, `composite` and `articulated`).
+//! [`derive`] runs them once for `inspect`; emission runs the same stages in the same order,
+//! spread over two threads ([`crate::emit::generate`]).
 //!
 //! ```
 //! use generator::formulation::{derive, Request};
@@ -13,17 +14,17 @@
 //! assert_eq!(d.ignorable, vec![2]);
 //! ```
 
-pub mod articulated;
-pub mod classical;
-pub mod equations;
+mod articulated;
+mod classical;
+mod composite;
+mod equations;
 pub mod ignorable;
-pub mod kane;
-pub mod lagrange;
-pub mod maggi;
+mod kane;
+mod lagrange;
+mod maggi;
 pub mod mechanics;
-pub mod power;
-pub mod composite;
-pub mod reduced;
+pub(crate) mod power;
+pub(crate) mod reduced;
 mod spatial;
 #[cfg(test)]
 mod test_states;
@@ -73,11 +74,11 @@ pub struct Shared<'a> {
 /// Kane's equations by the recursions over a tree of frames, where the model is one.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Trees<'a> {
-    /// The model's frames as a tree in Kane's quasi-velocities ([`composite::Tree`]).
+    /// The model's frames as a tree in Kane's quasi-velocities (`composite::Tree`).
     pub frames: Option<&'a composite::Tree>,
-    /// `M_K` and `L_K` by the composite-body and Newton-Euler recursions ([`composite::derive`]).
+    /// `M_K` and `L_K` by the composite-body and Newton-Euler recursions (`composite::derive` in the tests; `on_tree` here).
     pub composite: Option<&'a composite::Recursion>,
-    /// `u'` by the articulated-body recursion ([`articulated::derive`]).
+    /// `u'` by the articulated-body recursion (`articulated::derive` in the tests).
     pub articulated: Option<&'a articulated::Articulated>,
 }
 

@@ -12,27 +12,6 @@
 //! `q'' = dqdot/dq_K qdot_K + dqdot/dt + dqdot/ds s'`, `s' = x` (or Maggi's `W x + c`), so
 //! `weights = (qdot^T M dqdot/ds) [I 0]` (or `... W`) and
 //! `offset = qdot^T (M (dqdot/dq_K qdot_K + dqdot/dt (+ dqdot/ds c)) - f)`.
-//!
-//! ```
-//! use generator::formulation::{derive, Request};
-//! let model = generator::model::from_source("rod.ron", r#"Model(
-//!     name: "rod",
-//!     parameters: { "m": 1.0, "I": 0.1, "Omega": 2.0 },
-//!     coordinates: ["phi", "r"],
-//!     frames: [Frame(name: "rod", parent: "world", rotation: [Z("phi")])],
-//!     bodies: [
-//!         Body(name: "hub", frame: "rod", mass: "1", com: ["0", "0", "0"], inertia: Diagonal(["I", "I", "I"])),
-//!         Body(name: "bead", frame: "rod", mass: "m", com: ["r", "0", "0"], inertia: PointMass),
-//!     ],
-//!     constraints: [Velocity(name: "motor", expr: "phi' - Omega")],
-//!     quasi_velocities: QuasiVelocities(full: ["r'"], reduced: ["r'"]),
-//!     ignorable: Auto,
-//! )"#).unwrap();
-//! let d = derive(&model, &Request::all()).unwrap();
-//! // Lagrange's x is [q''; -lambda]: the power reads the accelerations (phi'' and r'').
-//! let (weights, _) = d.equations("lagrange").unwrap().constraint_power.clone().unwrap();
-//! assert_eq!(weights.len(), 3);
-//! ```
 
 use super::equations::Equations;
 use super::mechanics::{Mechanics, Quantities};
@@ -76,4 +55,34 @@ pub fn constraint_power(model: &Model, mech: &Mechanics, force: &[Expr], eqs: &E
     let weights = (0..n).map(|k| mech.tidy.of(Expr::sum((0..m).map(|j| row[j] * by_x(j, k))))).collect();
     let offset = mech.tidy.of(Expr::sum((0..m).map(|j| row[j] * drift[j] - qdot[j] * force[j].subs(&to_state))));
     (weights, offset)
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{Request, derive};
+        let model = crate::model::from_source(
+            "rod.ron",
+            r#"Model(
+            name: "rod",
+            parameters: { "m": 1.0, "I": 0.1, "Omega": 2.0 },
+            coordinates: ["phi", "r"],
+            frames: [Frame(name: "rod", parent: "world", rotation: [Z("phi")])],
+            bodies: [
+                Body(name: "hub", frame: "rod", mass: "1", com: ["0", "0", "0"], inertia: Diagonal(["I", "I", "I"])),
+                Body(name: "bead", frame: "rod", mass: "m", com: ["r", "0", "0"], inertia: PointMass),
+            ],
+            constraints: [Velocity(name: "motor", expr: "phi' - Omega")],
+            quasi_velocities: QuasiVelocities(full: ["r'"], reduced: ["r'"]),
+            ignorable: Auto,
+        )"#,
+        )
+        .unwrap();
+        let d = derive(&model, &Request::all()).unwrap();
+        // Lagrange's x is [q''; -lambda]: the power reads the accelerations (phi'' and r'').
+        let (weights, _) = d.equations("lagrange").unwrap().constraint_power.clone().unwrap();
+        assert_eq!(weights.len(), 3);
+    }
 }

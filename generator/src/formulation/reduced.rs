@@ -1,12 +1,5 @@
 //! The paper's reduced Volterra equations, state `[q; u_NI]` (or `[q_NI; u_NI]` with the
 //! ignorable coordinates left out): `M_NI u_NI' = L_NI` (Eqs. 64-67; Table 1: p - s equations).
-//!
-//! ```
-//! use generator::formulation::{derive, Request};
-//! let model = generator::model::load("../models/three_body.ron").unwrap();
-//! let d = derive(&model, &Request::all()).unwrap();
-//! assert_eq!(d.equations("reduced_volterra").unwrap().equations, 5);
-//! ```
 
 use super::Shared;
 use super::equations::{Equations, Method};
@@ -112,5 +105,17 @@ impl Method for ReducedVolterra {
             recursion,
             articulated,
         })
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::formulation::{Request, derive};
+        let model = crate::model::load("../models/three_body.ron").unwrap();
+        let d = derive(&model, &Request::all()).unwrap();
+        assert_eq!(d.equations("reduced_volterra").unwrap().equations, 5);
     }
 }
