@@ -63,13 +63,13 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
     // The bytes of the file the last run read; `None` after a failed read (run again when it
     // is back, even unchanged: an editor's save may remove it for a moment).
     let mut last: Option<Vec<u8>> = None;
-    let mut told_missing = false;
+    let mut told_unreadable = false;
     loop {
         match settled(model) {
             Ok(bytes) if last.as_ref() == Some(&bytes) => {}
             Ok(bytes) => {
                 last = Some(bytes);
-                told_missing = false;
+                told_unreadable = false;
                 let started = Instant::now();
                 let outcome = run(&simulate).and_then(|w| Ok((read_page(&page_path)?, w.map(|e| CliError::Run(e).to_string()))));
                 let mut s = shown.lock().unwrap_or_else(|p| p.into_inner());
@@ -87,13 +87,13 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
                     }
                 }
             }
-            Err(source) => {
+            Err(e) => {
                 last = None;
-                if !told_missing {
-                    let e = CliError::File(files::FileError::Io { path: model.clone(), action: "read", source });
-                    eprintln!("error: {e} (watching for it to come back)");
+                if !told_unreadable {
+                    let e = CliError::File(e);
+                    eprintln!("error: {e} (watching for it to change)");
                     shown.lock().unwrap_or_else(|p| p.into_inner()).error = Some(e.to_string());
-                    told_missing = true;
+                    told_unreadable = true;
                 }
             }
         }
@@ -101,12 +101,14 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
     }
 }
 
-/// The model file's bytes once they have held still for [`SETTLE`].
-fn settled(path: &Path) -> std::io::Result<Vec<u8>> {
-    let mut bytes = std::fs::read(path)?;
+/// The model file's bytes once they have held still for [`SETTLE`] (read as the loader reads
+/// a model: at most `MAX_MODEL_BYTES`, whatever the path is).
+fn settled(path: &Path) -> Result<Vec<u8>, files::FileError> {
+    let read = || files::read_bounded(path, generator::model::MAX_MODEL_BYTES);
+    let mut bytes = read()?;
     loop {
         std::thread::sleep(SETTLE);
-        let again = std::fs::read(path)?;
+        let again = read()?;
         if again == bytes {
             return Ok(bytes);
         }

@@ -113,6 +113,15 @@ fn watch_runs_again_on_every_save_and_shows_a_broken_model_s_error_without_stopp
     let news = wait_for(port, token, |n| n["run"] == 3);
     assert!(news["error"].is_null(), "{news}");
     assert_eq!(params_written(dir.path())["M"], 5.0);
+
+    // Gone (an editor's save that removes the file first): told, then run again once back.
+    std::fs::remove_file(&model).unwrap();
+    let news = wait_for(port, token, |n| !n["error"].is_null());
+    assert!(news["error"].as_str().unwrap().contains("cannot read"), "{news}");
+    assert_eq!(news["run"], 3);
+    std::fs::write(&model, text.replace(r#""M": 2.0,"#, r#""M": 5.0,"#)).unwrap();
+    let news = wait_for(port, token, |n| n["run"] == 4);
+    assert!(news["error"].is_null(), "{news}");
 }
 
 #[test]
