@@ -1,6 +1,7 @@
-//! `watch`: the live modelling loop. The model file is read ten times a second; when its bytes
-//! change (and then hold still for 60 ms: an editor's save can take several
-//! writes), the model is derived and run again exactly as `simulate` runs it, writing the same
+//! `watch`: the live modelling loop. The model file, and every file a run read (a URDF it
+//! includes, an input's series), are read ten times a second; when their bytes change (and then
+//! hold still for 60 ms: an editor's save can take several writes), the model is derived and
+//! run again exactly as `simulate` runs it, writing the same
 //! files, and the page of the motion, served on 127.0.0.1 behind a random token, reloads with
 //! its camera and time kept. A model's error is told in the terminal, located, and over the
 //! page; the loop goes on, the last good run still shown.
@@ -60,12 +61,14 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
         files::printable_path(model),
         files::printable_path(&page_path)
     ))?;
-    // The bytes of the file the last run read; `None` after a failed read (run again when it
-    // is back, even unchanged: an editor's save may remove it for a moment).
-    let mut last: Option<Vec<u8>> = None;
+    // The files watched: the model's, then every other file a run read (a URDF it includes,
+    // an input's series). The bytes the last run read of them; `None` after a failed read (run
+    // again when they are back, even unchanged: an editor's save may remove a file a moment).
+    let mut watched = vec![model.clone()];
+    let mut last: Option<Vec<Vec<u8>>> = None;
     let mut told_unreadable = false;
     loop {
-        match settled(model) {
+        match settled(&watched) {
             Ok(bytes) if last.as_ref() == Some(&bytes) => {}
             Ok(bytes) => {
                 last = Some(bytes);
@@ -73,6 +76,15 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
                 let started = Instant::now();
                 let outcome = run(&simulate).and_then(|w| Ok((read_page(&page_path)?, w.map(|e| CliError::Run(e).to_string()))));
                 let mut s = shown.lock().unwrap_or_else(|p| p.into_inner());
+                let before = watched.len();
+                for path in files::inputs() {
+                    if !watched.contains(&path) {
+                        watched.push(path);
+                    }
+                }
+                if let Some(bytes) = last.as_mut() {
+                    bytes.extend(watched[before..].iter().map(|p| std::fs::read(p).unwrap_or_default()));
+                }
                 match outcome {
                     Ok((page, stopped)) => {
                         s.run += 1;
@@ -101,10 +113,10 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
     }
 }
 
-/// The model file's bytes once they have held still for [`SETTLE`] (read as the loader reads
-/// a model: at most `MAX_MODEL_BYTES`, whatever the path is).
-fn settled(path: &Path) -> Result<Vec<u8>, files::FileError> {
-    let read = || files::read_bounded(path, generator::model::MAX_MODEL_BYTES);
+/// The bytes of the files `paths` once they have held still for [`SETTLE`] (each read bounded,
+/// as the loader reads a model or an input's series, whatever the path is).
+fn settled(paths: &[std::path::PathBuf]) -> Result<Vec<Vec<u8>>, files::FileError> {
+    let read = || paths.iter().map(|p| files::read_bounded(p, 64 << 20)).collect::<Result<Vec<_>, _>>();
     let mut bytes = read()?;
     loop {
         std::thread::sleep(SETTLE);

@@ -186,6 +186,25 @@ fn input_at(meta: &std::fs::Metadata, path: &Path) -> Option<PathBuf> {
     inputs.iter().find(|(d, i, _)| (*d, *i) == id).map(|(_, _, p)| p.clone())
 }
 
+/// The files this process has read as its inputs ([`read_bounded`], [`note_input`]), by their
+/// paths as read, in the order first read; those no longer at their path are forgotten.
+/// `multibody watch` follows them all: a model file, a URDF it includes, an input's series.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("model.ron");
+/// std::fs::write(&path, "Model()").unwrap();
+/// files::read_bounded(&path, 100).unwrap();
+/// assert!(files::inputs().contains(&path));
+/// std::fs::remove_file(&path).unwrap();
+/// assert!(!files::inputs().contains(&path));
+/// ```
+pub fn inputs() -> Vec<PathBuf> {
+    let mut inputs = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
+    inputs.retain(|(d, i, p)| std::fs::metadata(p).is_ok_and(|m| identity(&m, p) == (*d, *i)));
+    inputs.iter().map(|(_, _, p)| p.clone()).collect()
+}
+
 /// Remembers `path`, read by other means than [`read_bounded`], as an input of this process:
 /// no write replaces it afterwards.
 pub fn note_input(path: &Path) {

@@ -124,6 +124,48 @@ fn watch_runs_again_on_every_save_and_shows_a_broken_model_s_error_without_stopp
     assert!(news["error"].is_null(), "{news}");
 }
 
+/// A RON model that includes a URDF: a save of the URDF runs the model again too.
+#[test]
+fn watch_follows_the_urdf_a_model_includes() {
+    let dir = tempfile::tempdir().unwrap();
+    let docs = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/robots/");
+    std::fs::copy(format!("{docs}space_manipulator.ron"), dir.path().join("arm.ron")).unwrap();
+    let urdf = std::fs::read_to_string(format!("{docs}space_manipulator.urdf")).unwrap();
+    assert!(urdf.contains(r#"<mass value="8.0"/>"#));
+    std::fs::write(dir.path().join("space_manipulator.urdf"), &urdf).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_multibody"))
+        .args(["watch", "arm.ron", "--t-end", "0.2"])
+        .current_dir(dir.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let _watching = Watching(child);
+    let (lines, first) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout).lines() {
+            let _ = lines.send(line.unwrap_or_default());
+        }
+    });
+    let first = first.recv_timeout(Duration::from_secs(60)).expect("the watch prints its address");
+    let address = first.split_whitespace().find(|w| w.starts_with("http://127.0.0.1:")).unwrap_or_else(|| panic!("no address in `{first}`"));
+    let (host, token) = address.split_once("/?token=").unwrap();
+    let port: u16 = host.rsplit(':').next().unwrap().parse().unwrap();
+    let written = || -> serde_json::Value {
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path().join("space_manipulator_reduced_volterra.json")).unwrap()).unwrap();
+        json["params"]["mass_link1"].clone()
+    };
+    let news = wait_for(port, token, |n| n["run"] == 1);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(written(), 8.0);
+    // The URDF saved, the RON untouched: a new run with the new mass.
+    std::fs::write(dir.path().join("space_manipulator.urdf"), urdf.replacen(r#"<mass value="8.0"/>"#, r#"<mass value="9.5"/>"#, 1)).unwrap();
+    let news = wait_for(port, token, |n| n["run"] == 2);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(written(), 9.5);
+}
+
 #[test]
 fn watch_needs_a_model_file() {
     let dir = tempfile::tempdir().unwrap();
