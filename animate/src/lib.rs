@@ -85,14 +85,13 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
 /// ```
 pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> Result<String, AnimateError> {
     let poser = Poser::new(model, params)?;
-    let moving = poser.bodies.iter().any(|b| b.moving);
     let Some((motion, others)) = motions.split_first() else { return Err(AnimateError::Empty) };
     let (poses, centers) = sampled(model, &poser, motion)?;
     let overlays = others
         .iter()
         .map(|o| {
             let (poses, centers) = sampled(model, &poser, o)?;
-            Ok(serde_json::json!({ "formulation": o.formulation, "times": o.times, "poses": poses, "centers": if moving { serde_json::json!(centers) } else { serde_json::Value::Null } }))
+            Ok(serde_json::json!({ "formulation": o.formulation, "times": o.times, "poses": poses, "centers": centers }))
         })
         .collect::<Result<Vec<_>, AnimateError>>()?;
     let bodies: Vec<serde_json::Value> = poser
@@ -126,14 +125,18 @@ pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> R
         "parents": model.frames.iter().map(|f| f.joint.as_ref().map(|j| j.parent)).collect::<Vec<_>>(),
         "bodies": bodies,
         "poses": poses,
-        "centers": if moving { serde_json::json!(centers) } else { serde_json::Value::Null },
+        "centers": centers,
         "up": up,
         "gravity": poser.gravity,
         "overlays": overlays,
     });
-    // JSON inside a script element: `</` would end it, so it is written `<\/` (the same string).
-    let json = serde_json::to_string(&data).expect("plain data").replace("</", "<\\/");
-    Ok(TEMPLATE.replacen("/*DATA*/", &json, 1))
+    Ok(TEMPLATE.replacen("/*DATA*/", &script_json(&data), 1))
+}
+
+/// `value` as JSON to put inside a script element: `</` would end the element, so it is written
+/// `<\/` (the same string to the script).
+fn script_json(value: &serde_json::Value) -> String {
+    serde_json::to_string(value).expect("plain data").replace("</", "<\\/")
 }
 
 /// `page` (as [`page`] made it) made live for `multibody watch`: it asks `status?token=TOKEN`
@@ -154,13 +157,13 @@ pub fn live(page: &str, run: u64, token: &str) -> Option<String> {
     if page.matches(PLACE).count() != 1 {
         return None;
     }
-    let json = serde_json::json!({ "run": run, "token": token }).to_string().replace("</", "<\\/");
-    Some(page.replacen(PLACE, &json, 1))
+    Some(page.replacen(PLACE, &script_json(&serde_json::json!({ "run": run, "token": token })), 1))
 }
 
 /// Each frame's pose (origin, then rotation row-major) at each sample of `motion`, and, where a
-/// centre of mass moves with the coordinates (a mass sliding on a boom), every body's centre.
-type Sampled = (Vec<Vec<Vec<serde_json::Value>>>, Vec<Vec<[serde_json::Value; 3]>>);
+/// centre of mass moves with the coordinates (a mass sliding on a boom), every body's centre
+/// (else `None`: the page reads each body's fixed centre).
+type Sampled = (Vec<Vec<Vec<serde_json::Value>>>, Option<Vec<Vec<[serde_json::Value; 3]>>>);
 
 fn sampled(model: &Model, poser: &Poser, motion: &Motion<'_>) -> Result<Sampled, AnimateError> {
     let m = model.coordinates.len();
@@ -184,7 +187,7 @@ fn sampled(model: &Model, poser: &Poser, motion: &Motion<'_>) -> Result<Sampled,
             centers.push(poser.centers_at(t, q)?.iter().map(|c| c.map(compact)).collect::<Vec<_>>());
         }
     }
-    Ok((poses, centers))
+    Ok((poses, moving.then_some(centers)))
 }
 
 /// A float with the digits a drawing needs (single precision's shortest round trip).

@@ -181,9 +181,15 @@ fn input_at(meta: &std::fs::Metadata, path: &Path) -> Option<PathBuf> {
         return None;
     }
     let id = identity(meta, path);
+    still_inputs().iter().find(|(d, i, _)| (*d, *i) == id).map(|(_, _, p)| p.clone())
+}
+
+/// The remembered inputs, those no longer at their path (deleted, or replaced: the inode may now
+/// be another file's) forgotten.
+fn still_inputs() -> std::sync::MutexGuard<'static, Vec<(u64, u64, PathBuf)>> {
     let mut inputs = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
     inputs.retain(|(d, i, p)| std::fs::metadata(p).is_ok_and(|m| identity(&m, p) == (*d, *i)));
-    inputs.iter().find(|(d, i, _)| (*d, *i) == id).map(|(_, _, p)| p.clone())
+    inputs
 }
 
 /// The files this process has read as its inputs ([`read_bounded`], [`note_input`]), by their
@@ -200,9 +206,7 @@ fn input_at(meta: &std::fs::Metadata, path: &Path) -> Option<PathBuf> {
 /// assert!(!files::inputs().contains(&path));
 /// ```
 pub fn inputs() -> Vec<PathBuf> {
-    let mut inputs = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
-    inputs.retain(|(d, i, p)| std::fs::metadata(p).is_ok_and(|m| identity(&m, p) == (*d, *i)));
-    inputs.iter().map(|(_, _, p)| p.clone()).collect()
+    still_inputs().iter().map(|(_, _, p)| p.clone()).collect()
 }
 
 /// Remembers `path`, read by other means than [`read_bounded`], as an input of this process:

@@ -17,6 +17,28 @@ impl Drop for Watching {
     }
 }
 
+/// `multibody watch ARGS` started in `dir`: the process (killed when dropped), and the port and
+/// token of the address it prints.
+fn watch(dir: &Path, args: &[&str]) -> (Watching, u16, String) {
+    let mut child =
+        Command::new(env!("CARGO_BIN_EXE_multibody")).arg("watch").args(args).current_dir(dir).stdout(Stdio::piped()).stderr(Stdio::null()).spawn().unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let watching = Watching(child);
+    // Its output read to the end (a closed pipe would end the tool, as it ends `... | head`).
+    let (lines, first) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout).lines() {
+            let _ = lines.send(line.unwrap_or_default());
+        }
+    });
+    let first = first.recv_timeout(Duration::from_secs(60)).expect("the watch prints its address");
+    // `watching MODEL: the motion at http://127.0.0.1:PORT/?token=TOKEN ...`
+    let address = first.split_whitespace().find(|w| w.starts_with("http://127.0.0.1:")).unwrap_or_else(|| panic!("no address in `{first}`"));
+    let (host, token) = address.split_once("/?token=").unwrap();
+    let port: u16 = host.rsplit(':').next().unwrap().parse().unwrap();
+    (watching, port, token.to_string())
+}
+
 /// `GET path` on 127.0.0.1:`port`: the status code and the body.
 fn get(port: u16, path: &str) -> (u16, String) {
     let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
@@ -56,27 +78,8 @@ fn watch_runs_again_on_every_save_and_shows_a_broken_model_s_error_without_stopp
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/models/cart_pendulum.ron")).unwrap();
     assert!(text.contains(r#""M": 2.0,"#));
     std::fs::write(&model, &text).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_multibody"))
-        .args(["watch", "cart_pendulum.ron", "--t-end", "2"])
-        .current_dir(dir.path())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let _watching = Watching(child);
-    // Its output read to the end (a closed pipe would end the tool, as it ends `... | head`).
-    let (lines, first) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in std::io::BufReader::new(stdout).lines() {
-            let _ = lines.send(line.unwrap_or_default());
-        }
-    });
-    let first = first.recv_timeout(Duration::from_secs(60)).expect("the watch prints its address");
-    // `watching cart_pendulum.ron: the motion at http://127.0.0.1:PORT/?token=TOKEN ...`
-    let address = first.split_whitespace().find(|w| w.starts_with("http://127.0.0.1:")).unwrap_or_else(|| panic!("no address in `{first}`"));
-    let (host, token) = address.split_once("/?token=").unwrap();
-    let port: u16 = host.rsplit(':').next().unwrap().parse().unwrap();
+    let (_watching, port, token) = watch(dir.path(), &["cart_pendulum.ron", "--t-end", "2"]);
+    let token = token.as_str();
     assert_eq!(token.len(), 32, "128 random bits in hex: {token}");
 
     let news = wait_for(port, token, |n| n["run"] == 1);
@@ -133,25 +136,8 @@ fn watch_follows_the_urdf_a_model_includes() {
     let urdf = std::fs::read_to_string(format!("{docs}space_manipulator.urdf")).unwrap();
     assert!(urdf.contains(r#"<mass value="8.0"/>"#));
     std::fs::write(dir.path().join("space_manipulator.urdf"), &urdf).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_multibody"))
-        .args(["watch", "arm.ron", "--t-end", "0.2"])
-        .current_dir(dir.path())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let _watching = Watching(child);
-    let (lines, first) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in std::io::BufReader::new(stdout).lines() {
-            let _ = lines.send(line.unwrap_or_default());
-        }
-    });
-    let first = first.recv_timeout(Duration::from_secs(60)).expect("the watch prints its address");
-    let address = first.split_whitespace().find(|w| w.starts_with("http://127.0.0.1:")).unwrap_or_else(|| panic!("no address in `{first}`"));
-    let (host, token) = address.split_once("/?token=").unwrap();
-    let port: u16 = host.rsplit(':').next().unwrap().parse().unwrap();
+    let (_watching, port, token) = watch(dir.path(), &["arm.ron", "--t-end", "0.2"]);
+    let token = token.as_str();
     let written = || -> serde_json::Value {
         let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path().join("space_manipulator_reduced_volterra.json")).unwrap()).unwrap();
         json["params"]["mass_link1"].clone()
