@@ -266,12 +266,12 @@ fn main() {
         let checked = check(&aba, &saved, &jit, floating, name);
         let check_text = checked.map_or("not here: mimic joints (docs/robots/pinocchio_check.py)".to_string(), |e| format!("{e:.0e}"));
         eprintln!("robot calls: {name}: Pinocchio's model against ours: {check_text}");
-        let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).expect("the robot emits");
+        let generated = generator::generate(&model, &generator::emit::Options::from_model(&model)).expect("the robot emits");
         let ops = generated.summary.ops("reduced_volterra::rhs").map(|c| format!("{} + {}", c.ops.total(), c.solve.total())).unwrap_or_default();
         eprintln!("robot calls: {name}: rustc ...");
         let (exe, _) = timing::compile(&work.join(name), &generated.code);
-        let fused = generator::emit::generate(&model, &generator::emit::Options { fma: true, ..generator::emit::Options::from_model(&model) })
-            .expect("the robot emits");
+        let fused =
+            generator::generate(&model, &generator::emit::Options { fma: true, ..generator::emit::Options::from_model(&model) }).expect("the robot emits");
         let (native_exe, _) = timing::compile_with(&work.join(format!("{name}_native")), &fused.code, &["-C", "target-cpu=native"]);
         // The JIT's right-hand sides at the model's initial state, as the timing program's.
         let (q0, qd0) = jit.initial.clone().expect("an initial state");

@@ -92,7 +92,7 @@ fn child(path: &Path, base: &str, rustc: bool, one: bool) {
     if let Some(kind) = only {
         options.formulations = vec![generator::emit::Formulation::of(kind)];
     }
-    let generated = generator::emit::generate(&model, &options).unwrap();
+    let generated = generator::generate(&model, &options).unwrap();
     let built = rustc.then(|| {
         let cache = tempfile::tempdir().unwrap();
         let start = Instant::now();

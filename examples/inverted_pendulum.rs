@@ -49,7 +49,7 @@ pub fn balance(tilt: f64) -> Balanced {
     let file = concat!(env!("CARGO_MANIFEST_DIR"), "/models/inverted_pendulum.ron");
     let m = generator::model::load(file).expect("the model loads");
     let options = generator::emit::Options { jacobian: true, parameter_jacobian: true, ..generator::emit::Options::from_model(&m) };
-    let model = generator::eval::evaluate_with(&m, &options).expect("the model derives");
+    let model = generator::evaluate_with(&m, &options).expect("the model derives");
     let kind = FormulationKind::Kane;
     // A and B at the upright pole, in Kane's state [x, th, x', th'].
     let upright = Operating { q: vec![0.0, 0.0], qdot: vec![0.0, 0.0], params: model.default_params.clone(), held: vec![] };

@@ -33,10 +33,10 @@ fn main() {
     for name in ["cart_pendulum", "three_body", "satellite_boom", "pendulum_on_cart_5"] {
         let compiled = generated::find(name).unwrap();
         let m = generator::model::load(format!("{root}/models/{name}.ron")).unwrap();
-        let evaluated = generator::eval::evaluate(&m).unwrap();
-        let jitted = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
+        let evaluated = generator::evaluate(&m).unwrap();
+        let jitted = generator::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
         jit::settle();
-        let generated = generator::emit::generate(&m, &generator::emit::Options { tapes: true, ..generator::emit::Options::from_model(&m) }).unwrap();
+        let generated = generator::generate(&m, &generator::emit::Options { tapes: true, ..generator::emit::Options::from_model(&m) }).unwrap();
         let library = native::build(&generated.code, cache.path(), &mut |_| {}).unwrap();
         let built = library.model(generator::eval::model::Evaluated::model(generated.program.unwrap())).unwrap();
         let (q0, qd0) = compiled.initial.clone().unwrap();
@@ -69,7 +69,7 @@ fn main() {
     for _ in 0..5 {
         let start = Instant::now();
         let m = generator::model::load(format!("{root}/models/three_body.ron")).unwrap();
-        let model = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
+        let model = generator::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
         let runs = runtime::compare::compare(&model, &runtime::compare::Options { repeats: 1, ..runtime::compare::Options::paper(&model) }).unwrap();
         black_box(runtime::compare::table(&runs));
         best = best.min(start.elapsed().as_secs_f64());

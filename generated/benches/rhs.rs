@@ -80,7 +80,7 @@ fn main() {
         let m = generator::model::load(format!("{root}/models/{model}.ron")).unwrap();
         let mut options = generator::emit::Options { module_name: Some(module.to_string()), jacobian: true, ..generator::emit::Options::from_model(&m) };
         edit(&mut options);
-        for f in generator::emit::generate(&m, &options).unwrap().summary.functions {
+        for f in generator::generate(&m, &options).unwrap().summary.functions {
             ops.insert((module, f.name.clone()), (f.ops.total(), f.solve.total()));
         }
     }

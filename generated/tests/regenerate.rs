@@ -1,7 +1,9 @@
 //! Every committed module is exactly what the generator makes of its model today.
 //! `REGENERATE=1 cargo test -p generated --test regenerate` rewrites them instead.
 
-use generator::emit::{Options, generate};
+use generator::emit::Options;
+
+use generator::generate;
 
 mod common {
     pub mod variants;

@@ -5,7 +5,9 @@
 //! `cargo bench -p generator --bench derive` writes `docs/benchmarks/derive.json` (the table of
 //! `docs/benchmarks.md`, checked by `tests/it/figures.rs`) and prints it.
 
-use generator::emit::{Options, generate};
+use generator::emit::Options;
+
+use generator::generate;
 use std::time::Instant;
 
 const COMMAND: &str = "cargo bench -p generator --bench derive";

@@ -39,7 +39,9 @@ mod point;
 #[path = "support/pinocchio.rs"]
 mod pinocchio;
 
-use generator::emit::{Options, generate};
+use generator::emit::Options;
+
+use generator::generate;
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -86,7 +88,7 @@ fn aba_ns(exe: &Path, (model, n): (&str, usize)) -> (f64, usize) {
 /// `u'`; the pendulum on a cart (absolute angles, revolute joints relative) on Lagrange's `q''`
 /// turned into the joints' relative accelerations.
 fn check_against_aba(aba: &Path, case: &Case) -> f64 {
-    let evaluated = generator::eval::evaluate(&case.model).expect("the model evaluates");
+    let evaluated = generator::evaluate(&case.model).expect("the model evaluates");
     let (t, params) = (1.3, &evaluated.default_params);
     let n = evaluated.coordinates.len();
     let kane = evaluated.formulation(seam::FormulationKind::Kane).expect("Kane's form");

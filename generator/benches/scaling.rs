@@ -20,7 +20,9 @@
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-use generator::emit::{Formulation, Options, generate};
+use generator::emit::{Formulation, Options};
+
+use generator::generate;
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart, planar_chain_absolute};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -263,7 +265,7 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         // The compiled module and the JIT's code timed in turn, each its best over the rounds:
         // one timing of each drifted by up to a third apart on this machine.
         let jit = jit::Jit::default();
-        let evaluated = generator::eval::evaluate_with_backend(&model, &Options::from_model(&model), &jit).expect("the benchmark models evaluate").0;
+        let evaluated = generator::evaluate_with_backend(&model, &Options::from_model(&model), &jit).expect("the benchmark models evaluate").0;
         // The long tapes' best code (compiled in the background) before anything is timed.
         jit::settle();
         for _ in 0..CALL_ROUNDS {
@@ -534,7 +536,7 @@ fn main() {
 /// `[-1, 1)`, mapped to `(q, q')` by Kane's `velocities` (so a velocity constraint holds); `q''`
 /// is Lagrange's right-hand side at that `(q, q')`.
 fn model_point(model: &generator::model::Model) -> serde_json::Value {
-    let evaluated = generator::eval::evaluate(model).expect("the model evaluates");
+    let evaluated = generator::evaluate(model).expect("the model evaluates");
     let t = 1.3;
     let mut draws = point::Draws::new();
     // Each parameter moved off the file's value by up to a quarter (a zero one, such as scene

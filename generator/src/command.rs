@@ -251,7 +251,7 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     }
     options.seam_path = args.seam_path.clone();
     options.module_name = args.module_name.clone();
-    let out = emit::generate(&model, &options)?;
+    let out = crate::pipeline::generate(&model, &options)?;
     match &args.output {
         // An unchanged file is left alone, so builds that depend on it stay fresh.
         Some(path) => {

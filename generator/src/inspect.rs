@@ -17,7 +17,7 @@ use std::fmt::Write;
 pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     crate::model::in_own_context(model, |model| {
         let d = crate::formulation::derive(model, &Request::all())?;
-        let assemblies = crate::emit::module::assemblies(model, &d, &crate::emit::Options::from_model(model))?;
+        let assemblies = crate::emit::assemblies(model, &d, &crate::emit::Options::from_model(model))?;
         Ok(report(model, &d, &assemblies, latex))
     })
 }

@@ -2,7 +2,9 @@
 //!
 //! The pipeline: [`model`] (parse and validate a RON model) → [`kinematics`] (frames, body
 //! velocities) → [`formulation`] (T, M, N, Q, constraints, ignorable coordinates, and the
-//! formulations) → [`emit`] (flat Rust). [`symbolic`] is the engine underneath.
+//! formulations) → [`emit`] (flat Rust) or [`eval`] (in-process tapes), the run owned by one place
+//! ([`generate`], [`evaluate`]); [`Builder`] for build scripts. [`symbolic`] is the engine
+//! underneath.
 
 pub mod symbolic;
 pub mod kinematics;
@@ -16,6 +18,9 @@ pub mod command;
 pub mod overwrite;
 pub mod emit;
 pub mod eval;
+mod pipeline;
+mod build_script;
 pub mod pose;
 
-pub use emit::Builder;
+pub use build_script::{BuildError, Builder, Built};
+pub use pipeline::{evaluate, evaluate_reporting, evaluate_with, evaluate_with_backend, generate};

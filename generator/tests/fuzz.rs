@@ -14,7 +14,9 @@
 //! `FUZZ_MUTANTS=20000 FUZZ_SEED=7 cargo test --release -p generator --test fuzz -- --nocapture`
 //! runs a longer one. The count of mutants is the budget: no wall-clock limit.
 
-use generator::emit::{Options, generate};
+use generator::emit::Options;
+
+use generator::generate;
 
 mod support {
     pub mod rustc;
@@ -198,7 +200,7 @@ fn has_control(text: &str) -> bool {
 /// The in-process evaluation of a generated mutant: every formulation's first right-hand side
 /// is finite or a typed failure (any panic is caught by the caller).
 fn evaluate_first_step(model: &generator::model::Model) -> Result<(), String> {
-    let Ok(evaluated) = generator::eval::evaluate(model) else { return Err("generated, but the in-process evaluation failed".into()) };
+    let Ok(evaluated) = generator::evaluate(model) else { return Err("generated, but the in-process evaluation failed".into()) };
     let Some((q0, qd0)) = evaluated.initial.clone() else { return Ok(()) };
     for form in &evaluated.formulations {
         let mut state = vec![0.0; form.states()];

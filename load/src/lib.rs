@@ -130,16 +130,16 @@ pub fn evaluate_only(
     let (evaluated, summary, interpreted) = match route {
         Route::Jit => {
             let jit = jit::Jit::default();
-            let (evaluated, summary) = match generator::eval::evaluate_with_backend(model, &options, &jit) {
-                Err(e) if fallback(&e) => generator::eval::evaluate_with_backend(model, &plain, &jit)?,
+            let (evaluated, summary) = match generator::evaluate_with_backend(model, &options, &jit) {
+                Err(e) if fallback(&e) => generator::evaluate_with_backend(model, &plain, &jit)?,
                 other => other?,
             };
             (evaluated, summary, jit.interpreted())
         }
         Route::Compiled => {
             // The module as `generate` writes it, and its tapes for the description.
-            let generated = match generator::emit::generate(model, &generator::emit::Options { tapes: true, ..options }) {
-                Err(e) if fallback(&e) => generator::emit::generate(model, &generator::emit::Options { tapes: true, ..plain })?,
+            let generated = match generator::generate(model, &generator::emit::Options { tapes: true, ..options }) {
+                Err(e) if fallback(&e) => generator::generate(model, &generator::emit::Options { tapes: true, ..plain })?,
                 other => other?,
             };
             let folder = native::cache::default_folder()?;

@@ -11,7 +11,7 @@
 //! ```no_run
 //! let model = generator::model::load("models/three_body.ron").unwrap();
 //! let options = generator::emit::Options { tapes: true, ..generator::emit::Options::from_model(&model) };
-//! let generated = generator::emit::generate(&model, &options).unwrap();
+//! let generated = generator::generate(&model, &options).unwrap();
 //! let description = generator::eval::model::Evaluated::model(generated.program.unwrap());
 //! let folder = native::cache::default_folder().unwrap();
 //! let library = native::build(&generated.code, &folder, &mut |_| eprintln!("compiling once...")).unwrap();

@@ -9,7 +9,7 @@ use std::path::Path;
 fn generated(file: &str) -> (String, seam::Model) {
     let model = generator::model::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("../models").join(file)).unwrap();
     let options = generator::emit::Options { tapes: true, ..generator::emit::Options::from_model(&model) };
-    let g = generator::emit::generate(&model, &options).unwrap();
+    let g = generator::generate(&model, &options).unwrap();
     (g.code, generator::eval::model::Evaluated::model(g.program.unwrap()))
 }
 

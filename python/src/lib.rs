@@ -526,7 +526,7 @@ impl Model {
                 }
             }
             let model = self.source.model().map_err(model_error)?;
-            let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(model_error)?;
+            let generated = py.detach(|| generator::generate(&model, &generator::emit::Options::from_model(&model))).map_err(model_error)?;
             files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
             Ok(())
         })

@@ -67,7 +67,7 @@ fn parameters_named_like_the_generator_s_own_symbols_do_not_alias_them() {
     let d = derive(&model, &Request::all()).unwrap();
     assert_eq!(d.ignorable, vec![2], "x stays ignorable");
     check_formulations_agree("cart_pendulum with u1 and G_x", &d, &model, 4, 23);
-    let code = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap().code;
+    let code = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap().code;
     assert!(code.contains("pub u1: f64") && code.contains("pub G_x: f64"), "the parameters keep their names");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -90,7 +90,7 @@ fn integrates_like_the_dense_one(links: usize, route: &str) {
     use runtime::compare::{Options, compare};
     use runtime::integrate::{Method, Settings};
     let model = floating_chain(links).build().unwrap();
-    let (evaluated, summary) = generator::eval::evaluate_reporting(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let (evaluated, summary) = generator::evaluate_reporting(&model, &generator::emit::Options::from_model(&model)).unwrap();
     for (name, how) in &summary.solves {
         let over_the_tree = name == "kane" || name == "reduced_volterra";
         assert_eq!(how.contains(route), over_the_tree, "{links} links, {name}: {how}");

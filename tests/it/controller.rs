@@ -15,8 +15,7 @@ const G: f64 = 9.81;
 
 fn model() -> seam::Model {
     let m = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/models/inverted_pendulum.ron")).unwrap();
-    generator::eval::evaluate_with(&m, &generator::emit::Options { jacobian: true, parameter_jacobian: true, ..generator::emit::Options::from_model(&m) })
-        .unwrap()
+    generator::evaluate_with(&m, &generator::emit::Options { jacobian: true, parameter_jacobian: true, ..generator::emit::Options::from_model(&m) }).unwrap()
 }
 
 /// At the upright pole, `x'' = (F + mp g th) / mc` and `th'' = (F + (mc + mp) g th) / (mc l)`: `B` and the
@@ -80,6 +79,6 @@ fn bad_inputs_get_located_errors() {
     }
     let m = generator::model::from_source("models/pole.ron", good).unwrap();
     let baked = generator::emit::Options { parameters: generator::emit::Parameters::Baked, ..generator::emit::Options::from_model(&m) };
-    let e = generator::emit::generate(&m, &baked).unwrap_err().to_string();
+    let e = generator::generate(&m, &baked).unwrap_err().to_string();
     assert!(e.contains("cannot bake its parameters in"), "{e}");
 }

@@ -184,7 +184,8 @@ fn every_model_inspects_in_text_and_latex() {
 
 #[test]
 fn inspect_and_the_drop_option_agree_on_every_model() {
-    use generator::emit::{Formulation, Options, generate};
+    use generator::emit::{Formulation, Options};
+    use generator::generate;
     for name in SCENES.iter().chain(OWN.iter()).chain(["pendulum_on_cart_5"].iter()) {
         let m = load(name);
         let text = generator::inspect::inspect(&m, false).unwrap();

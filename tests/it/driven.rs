@@ -67,7 +67,7 @@ const ROD: &str = r#"Model(
 
 fn evaluated(name: &str, text: &str) -> seam::Model {
     let model = generator::model::from_source(&format!("{name}.ron"), text).unwrap();
-    generator::eval::evaluate(&model).unwrap()
+    generator::evaluate(&model).unwrap()
 }
 
 /// The emitted energy function is Jacobi's integral in closed form.

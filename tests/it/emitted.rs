@@ -283,7 +283,7 @@ fn bad_states_are_reported_not_computed() {
 fn reduced_right_hand_side_solves_less_than_kane_and_does_less_work_on_scene_3() {
     for (scene, whole_less) in [("three_body", false), ("satellite_boom", true)] {
         let def = load(scene);
-        let out = generator::emit::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
+        let out = generator::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
         let (reduced, kane) = (out.summary.ops("reduced_volterra::rhs").unwrap(), out.summary.ops("kane::rhs").unwrap());
         assert!(reduced.solve.total() < kane.solve.total(), "{scene}: solve {} against Kane's {}", reduced.solve.total(), kane.solve.total());
         if whole_less {
@@ -298,7 +298,7 @@ fn inspect_and_the_generator_count_the_same_states_and_equations_and_solve_alike
     for name in MODELS {
         let def = load(name);
         let text = generator::inspect::inspect(&def, false).unwrap();
-        let out = generator::emit::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
+        let out = generator::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
         for (form, states, eqs) in &out.summary.formulations {
             let line = format!("  {form:<17} {states:>3} states, {eqs:>3} equations");
             assert!(text.contains(&line), "{name}: `{line}` missing from inspect");

@@ -33,7 +33,7 @@ fn evaluated_by(module: &str, file: &str, edit: fn(&mut Options), backend: &dyn 
     // The committed modules carry their Jacobians, as the regeneration test makes them.
     let mut options = Options { module_name: Some(module.to_string()), jacobian: true, ..Options::from_model(&m) };
     edit(&mut options);
-    generator::eval::evaluate_with_backend(&m, &options, backend).unwrap().0
+    generator::evaluate_with_backend(&m, &options, backend).unwrap().0
 }
 
 /// Both succeeded with outputs equal to 1e-13 relative, or both failed the same way.

@@ -93,7 +93,7 @@ fn the_bouncing_ball_meets_the_closed_form_compiled() {
 fn the_bouncing_ball_meets_the_closed_form_in_process() {
     let m = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/models/bouncing_ball.ron")).unwrap();
     let jit = jit::Jit::default();
-    let model = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit).unwrap().0;
+    let model = generator::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit).unwrap().0;
     assert_eq!(jit.interpreted(), 0);
     check(&model, "in-process");
 }
@@ -125,7 +125,7 @@ fn bad_events_get_located_errors() {
 #[test]
 fn a_released_pendulum_stops_at_the_bottom_after_a_quarter_period() {
     let m = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/released_pendulum.ron")).unwrap();
-    let model = generator::eval::evaluate(&m).unwrap();
+    let model = generator::evaluate(&m).unwrap();
     let quarter = (1.0f64 / 9.81).sqrt() * common::elliptic_k(0.5f64.sin().powi(2));
     let settings = Settings { method: Method::Dop853, rtol: 1e-14, atol: 1e-14, h_max: 0.5, ..Settings::default() };
     for form in &model.formulations {

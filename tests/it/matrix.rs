@@ -40,7 +40,7 @@ fn families() -> Vec<Case> {
 /// linearization differences them, as `load` does).
 fn routes(case: &Case) -> Option<[(&'static str, Model); 2]> {
     let options = Options { jacobian: true, tapes: true, max_lets_per_function: usize::MAX, ..Options::from_model(&case.model) };
-    let generated = match generator::emit::generate(&case.model, &options) {
+    let generated = match generator::generate(&case.model, &options) {
         Err(e) if e.kind == generator::model::ErrorKind::Budget => return None,
         other => other.unwrap_or_else(|e| panic!("{}: {e}", case.name)),
     };
@@ -158,7 +158,7 @@ fn the_compiled_route_on_the_families() {
         Case { name: "floating_chain(3)".into(), model: floating_chain(3).build().unwrap() },
     ] {
         let options = Options { jacobian: true, tapes: true, ..Options::from_model(&case.model) };
-        let generated = generator::emit::generate(&case.model, &options).unwrap();
+        let generated = generator::generate(&case.model, &options).unwrap();
         let description = generator::eval::model::Evaluated::model(generated.program.expect("tapes"));
         let library = native::build(&generated.code, cache.path(), &mut |_| {}).unwrap();
         let model = library.model(description).unwrap();

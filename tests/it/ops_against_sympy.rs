@@ -4,7 +4,9 @@
 //! `KanesMethod` on the same model, recorded in `docs/scaling/sympy.json` by the scaling
 //! benchmark (`cargo bench -p generator --bench scaling -- --sympy`).
 
-use generator::emit::{Formulation, Options, generate};
+use generator::emit::{Formulation, Options};
+
+use generator::generate;
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 
 /// `(model, n, SymPy's assembly operations)` from the committed record.

@@ -24,7 +24,7 @@ fn evaluated(file: &str, text: Option<&str>) -> Model {
         Some(t) => generator::model::from_source(&path, t).unwrap(),
         None => generator::model::load(&path).unwrap(),
     };
-    generator::eval::evaluate(&m).unwrap()
+    generator::evaluate(&m).unwrap()
 }
 
 /// `R(e)`, body to world, and the world-frame angular momentum `R I omega`.
@@ -388,7 +388,7 @@ fn the_quaternion_scene_drops_its_ignorable_coordinates() {
     let path = format!("{}/models/three_body_quaternion.ron", env!("CARGO_MANIFEST_DIR"));
     let file = generator::model::load(&path).unwrap();
     let options = Options { integrate_ignorable: false, formulations: vec![Formulation::ReducedVolterra], ..Options::from_model(&file) };
-    let dropped = generator::eval::evaluate_with(&file, &options).unwrap();
+    let dropped = generator::evaluate_with(&file, &options).unwrap();
     let full = generated::three_body_quaternion::model();
     let (q0, qd0) = full.initial.clone().unwrap();
     let times: Vec<f64> = (0..=50).map(|k| k as f64 * 0.1).collect();

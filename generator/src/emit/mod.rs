@@ -1,21 +1,21 @@
-//! Emission: the derived equations as a flat, specialized Rust module.
+//! Emission: derived equations as a flat, specialized Rust module.
 //!
-//! [`generate`] runs the whole pipeline on a model: mechanics, the ignorable coordinates, the
-//! requested formulations, then its private `module` writes the module as a syntax tree
-//! (quote), printed by prettyplease. Inside each function, `cse` picks one `let` per common
-//! subexpression, `lower` turns nodes into Rust expressions and `ops` counts what they cost
-//! ([`OpCount`]). The public face: [`generate`], [`Options`], [`Builder`], the [`Summary`], the
-//! solve plans ([`Solve`], [`LdlPlan`]) and the register tapes' compiler ([`tape`]).
+//! It derives nothing: the pipeline ([`crate::generate`]) hands it the mechanics, the ignorable
+//! coordinates and each formulation's equations, and its private `module` writes the module as
+//! a syntax tree (quote), printed by prettyplease, one part per reuse group of formulations.
+//! Inside each function, `cse` picks one `let` per common subexpression, `lower` turns nodes
+//! into Rust expressions and `ops` counts what they cost ([`OpCount`]). The public face:
+//! [`Options`], the [`Summary`] and [`Generated`], the solve plans ([`Solve`], [`LdlPlan`]) and
+//! the register tapes' compiler ([`tape`]).
 //!
 //! ```no_run
 //! let model = generator::model::load("models/cart_pendulum.ron").unwrap();
-//! let out = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+//! let out = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
 //! std::fs::write("cart_pendulum.rs", &out.code).unwrap();
 //! eprintln!("{}", out.summary);
 //! ```
 
 mod assembly;
-mod builder;
 mod cse;
 mod fma;
 mod form;
@@ -24,7 +24,7 @@ mod function;
 mod jacobian;
 mod ldl;
 mod lower;
-pub(crate) mod module;
+mod module;
 mod names;
 mod ops;
 mod optimize;
@@ -38,10 +38,10 @@ mod splice;
 mod syntax;
 pub mod tape;
 
+use crate::model::Model;
 pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
-use crate::model::{Model, ModelError};
-pub use builder::{BuildError, Builder, Built};
 pub use ldl::{LdlPlan, Solve};
+pub(crate) use module::{CONSTRAINT_TOLERANCE, Emission, Part, SINGULAR_TOLERANCE, assemblies, module, reuse_groups};
 pub use ops::OpCount;
 pub use solvers::spd_cost;
 use std::fmt;
@@ -216,22 +216,4 @@ impl fmt::Display for Summary {
             self.emit_time.as_secs_f64() * 1e3
         )
     }
-}
-
-/// Derives and emits the module of `model`, in an expression context of its own: everything the
-/// derivation builds is freed when it returns, so a process that generates many models holds
-/// only the models themselves.
-pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
-    if options.parameters == Parameters::Baked && !model.inputs.is_empty() {
-        return Err(model.error(
-            crate::model::ErrorKind::BadValue,
-            "emit.parameters",
-            "parameters",
-            "a model with inputs cannot bake its parameters in: the inputs are read from them at every call".into(),
-            "emit with runtime parameters (the default), or remove `inputs`".into(),
-        ));
-    }
-    crate::model::in_own_context(model, |model| {
-        crate::symbolic::expr::catch_budget(|| module::generate(model, options)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
-    })
 }

@@ -12,18 +12,15 @@ use super::solvers::PIVOT_TOLERANCE;
 use super::splice::Splices;
 use super::syntax::{doc, usize_lit};
 use super::{Function, FunctionCost, Generated, Options, Parameters, Summary};
-use crate::formulation::mechanics::{Mechanics, Quantities};
-use crate::formulation::{self, Equations, Request, ignorable};
+use crate::formulation::mechanics::Quantities;
+use crate::formulation::{self, Equations};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::number::rat_from_f64;
-use crate::symbolic::transfer::Parcel;
-use crate::symbolic::{Context, Expr, Symbol};
+use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
-use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Duration;
-use std::time::Instant;
 
 /// Absolute size below which a singular factor of `[Y; M'; a]` counts as zero.
 pub(crate) const SINGULAR_TOLERANCE: f64 = 1e-12;
@@ -77,278 +74,194 @@ pub(super) struct Placed {
     pub used_args: std::collections::BTreeSet<usize>,
 }
 
-/// Stack of the thread that emits the formulations: the recursive passes over expressions as
-/// deep as [`crate::symbolic::expr::MAX_DEPTH`] need more than a spawned thread's default.
-const EMITTER_STACK: usize = 64 << 20;
-
-/// What the deriving thread hands the second one, each packed for its context.
-enum Job {
-    /// The model and the mechanics' quantities (first, once).
-    Mechanics(Box<Parcel<(Model, Quantities)>>),
-    /// One formulation's equations.
-    Form(Box<Parcel<Equations>>),
-}
-
-/// Part of the module, printed, with what its functions cost.
-struct Part {
+/// Part of the module, printed, with what its functions cost: what one [`Emission`] wrote.
+pub(crate) struct Part {
     text: String,
     /// What the budgets cut on the thread that wrote it.
     cuts: crate::symbolic::report::Cuts,
     functions: Vec<FunctionCost>,
     forms: Vec<(String, usize, usize, String)>,
-    /// In-process evaluation: the part's tapes and formulation shapes, and (the head) the
-    /// module's description.
+    /// In-process evaluation: the part's tapes and formulation shapes, and (the head's part)
+    /// the module's description.
     program: super::program::Program,
 }
 
-impl Part {
-    fn empty() -> Part {
-        Part { text: String::new(), cuts: Default::default(), functions: Vec::new(), forms: Vec::new(), program: Default::default() }
+/// The formulations whose bodies one emitter shares ([`Bodies`]), from the requested kinds
+/// alone (in the order they are derived): the classical three together (Maggi's and Kane's
+/// `rhs` are Lagrange's up to the speeds' names on many models), the reduced form apart (keeping
+/// Kane's bodies for it costs memory: [`super::reuse`]). Whatever emits the groups, on
+/// whichever thread, each group's bytes are the same.
+///
+/// ```text
+/// [Lagrange, Maggi, Kane, ReducedVolterra] -> [[Lagrange, Maggi, Kane], [ReducedVolterra]]
+/// ```
+pub(crate) fn reuse_groups(kinds: &[seam::FormulationKind]) -> Vec<Vec<seam::FormulationKind>> {
+    let (reduced, classical): (Vec<_>, Vec<_>) = kinds.iter().partition(|k| **k == seam::FormulationKind::ReducedVolterra);
+    [classical, reduced].into_iter().filter(|g| !g.is_empty()).collect()
+}
+
+/// Writes one part of a module: the head (sizes, `Params`, the shared functions, the events),
+/// the formulations of one reuse group ([`reuse_groups`]) as their equations come, `model()`;
+/// each item printed as it is emitted (the items of one file, printed in order, are the items
+/// printed one by one). It derives nothing: what it writes comes from the mechanics, the
+/// ignorable coordinates and each formulation's [`Equations`].
+pub(crate) struct Emission<'a> {
+    em: Emitter<'a>,
+    shared: FromMechanics,
+    text: String,
+    /// The head is in this part (the program's description goes with it).
+    head: bool,
+}
+
+impl<'a> Emission<'a> {
+    /// An emission of the formulations `group` (in order) of `model`, whose mechanics are `mech`
+    /// and ignorable coordinates `ignorable`.
+    pub(crate) fn new(
+        model: &'a Model,
+        options: &'a Options,
+        mech: &Quantities,
+        ignorable: &[usize],
+        group: Vec<seam::FormulationKind>,
+    ) -> Result<Emission<'a>, ModelError> {
+        let shared = FromMechanics::new(mech, ignorable, &model.velocities, model.t);
+        let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
+        em.bodies = Bodies::new(group);
+        Ok(Emission { em, shared, text: String::new(), head: false })
+    }
+
+    /// The module's head: sizes, `Params`, the seam's `Failure`, the shared functions and the
+    /// events. The dense solves are `seam::solve`'s, called by the formulations: written once,
+    /// not carried by every module.
+    pub(crate) fn head(&mut self) -> Result<(), ModelError> {
+        let (em, shared) = (&mut self.em, &self.shared);
+        let mut items = vec![em.header(shared), em.params(), super::seam::failure_import(&em.seam)];
+        for f in &em.options.functions {
+            items.extend(em.shared_function(*f, shared)?);
+        }
+        if !em.model.events.is_empty() {
+            items.extend(em.event_functions()?);
+        }
+        self.text += &em.print(items)?;
+        self.head = true;
+        Ok(())
+    }
+
+    /// One formulation's submodule.
+    pub(crate) fn form(&mut self, eqs: &Equations) -> Result<(), ModelError> {
+        let item = self.em.form(eqs, &self.shared)?;
+        self.text += &self.em.print(vec![item])?;
+        Ok(())
+    }
+
+    /// `model()`, listing the formulations `names`.
+    pub(crate) fn model_fn(&mut self, names: Vec<String>) -> Result<(), ModelError> {
+        let em = &mut self.em;
+        let module_name = em.options.module_name.clone().unwrap_or_else(|| em.model.name.clone());
+        let item = super::seam::model_fn(&super::seam::SeamParts {
+            seam: &em.seam,
+            module: &module_name,
+            formulations: names,
+            functions: &em.options.functions,
+            has_initial: em.model.initial.is_some(),
+            has_run: em.model.simulation.is_some(),
+            has_events: !em.model.events.is_empty(),
+            has_gimbals: !em.model.gimbals().is_empty(),
+            has_inputs: !em.model.inputs.is_empty(),
+        });
+        self.text += &em.print(vec![item])?;
+        Ok(())
+    }
+
+    /// What this emission wrote, with what the budgets cut on this thread.
+    pub(crate) fn finish(mut self) -> Part {
+        let em = &mut self.em;
+        let mut program =
+            super::program::Program { description: Default::default(), tapes: em.tapes.take().unwrap_or_default(), forms: std::mem::take(&mut em.shapes) };
+        if self.head && em.options.tapes {
+            program.description = em.description(&self.shared);
+        }
+        Part {
+            text: self.text,
+            cuts: crate::symbolic::report::take(),
+            functions: std::mem::take(&mut em.functions),
+            forms: std::mem::take(&mut em.forms),
+            program,
+        }
     }
 }
 
-impl Emitter<'_> {
-    /// The part of the module this emitter wrote, printed as `text`.
-    fn part(&mut self, text: String) -> Part {
-        let program =
-            super::program::Program { description: Default::default(), tapes: self.tapes.take().unwrap_or_default(), forms: std::mem::take(&mut self.shapes) };
-        Part { text, cuts: crate::symbolic::report::take(), functions: std::mem::take(&mut self.functions), forms: std::mem::take(&mut self.forms), program }
+/// The module of `model` from its parts (in module order, the head's first) and what its
+/// derivation `d` found; `derive_time` and `emit_time` go to the summary.
+pub(crate) fn module(model: &Model, options: &Options, d: &formulation::Derivation, parts: Vec<Part>, derive_time: Duration, emit_time: Duration) -> Generated {
+    let mut cuts = d.cuts.clone();
+    let mut functions = Vec::new();
+    let mut forms: Vec<(String, usize, usize, String)> = Vec::new();
+    let mut text = String::new();
+    let mut program = super::program::Program::default();
+    for (k, part) in parts.into_iter().enumerate() {
+        cuts.merge(part.cuts);
+        functions.extend(part.functions);
+        forms.extend(part.forms);
+        text += &part.text;
+        if k == 0 {
+            program.description = part.program.description;
+        }
+        program.tapes.extend(part.program.tapes);
+        program.forms.extend(part.program.forms);
     }
-}
-
-/// Derives and emits, on two threads, each in an expression context of its own. This one
-/// derives ([`formulation::derive_with`]: the mechanics, then each formulation as soon as what
-/// it needs is there) and emits the last formulation and `model()` at the end. The second
-/// thread gets the mechanics as soon as they are derived: it decides the ignorable coordinates
-/// (handed back for the reduced form), emits the module's head (sizes, `Params`, the shared
-/// functions), then every formulation but the last as its equations arrive, while the next is
-/// derived. Each thread's input is fixed (the same parcels in the same order, whatever the
-/// timing), so the bytes are too. Errors are reported in the order the stages run alone: the
-/// derivation's, then the emitted functions' in module order.
-pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
-    let start = Instant::now();
-    let request = Request { formulations: options.formulations.clone(), integrate_ignorable: options.integrate_ignorable };
-    let seam = seam_path(model, options)?;
-    std::thread::scope(|scope| {
-        let (jobs, inbox) = channel::<Job>();
-        let (ignorable_back, ignorable_here) = channel::<Result<(Vec<usize>, Duration), ModelError>>();
-        let second = std::thread::Builder::new()
-            .name("emit".into())
-            .stack_size(EMITTER_STACK)
-            .spawn_scoped(scope, move || {
-                let part = Context::new().enter(|| analyze_and_emit(inbox, ignorable_back, options));
-                // This thread's spent budget is reported as the derivation's would be.
-                match crate::symbolic::expr::take_spent() {
-                    Some(spent) => Err(model.budget_error(spent)),
-                    None => part,
-                }
-            })
-            .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("cannot start the emitting thread: {e}"), String::new()))?;
-        // Every formulation derived but the last goes to the second thread.
-        let distinct = request.formulations.iter().collect::<std::collections::BTreeSet<_>>().len();
-        let mut to_second = ToSecond { model, jobs, ignorable: ignorable_here, to_send: distinct.saturating_sub(1) };
-        let derived = formulation::derive_with(model, &request, &mut to_second);
-        drop(to_second);
-        let derive_time = start.elapsed();
-        let emit_start = Instant::now();
-        let tail = derived.map(|d| {
-            let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
-            let mut em = Emitter::new(model, options, seam, &shared);
-            em.bodies = Bodies::new(split_between_emitters(d.equations.iter().map(|e| e.kind).collect()).1);
-            let names = d.equations.iter().map(|e| e.name().to_string()).collect();
-            (em.formulations_and_model_fn(d.equations.last(), names, &shared), d)
-        });
-        let head = second.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        let (tail, d) = tail?;
-        let (head, tail) = (head?, tail?);
-        let mut cuts = d.cuts.clone();
-        cuts.merge(head.cuts);
-        cuts.merge(tail.cuts);
-        let mut functions = head.functions;
-        functions.extend(tail.functions);
-        let forms: Vec<(String, usize, usize, String)> = head.forms.into_iter().chain(tail.forms).collect();
-        let formulations = forms.iter().map(|(name, states, eqs, _)| (name.clone(), *states, *eqs)).collect();
-        let solves = forms.into_iter().map(|(name, _, _, how)| (name, how)).collect();
-        let program = options.tapes.then(|| {
-            let mut p = head.program;
-            p.tapes.extend(tail.program.tapes);
-            p.forms.extend(tail.program.forms);
-            p.description.module = options.module_name.clone().unwrap_or_else(|| model.name.clone());
-            p
-        });
-        let code = format!(
-            "// Generated by `generator` from {} ({}). Do not edit: regenerate.\n\n{}{}",
-            one_line(&model_file_name(model)),
-            one_line(&model.name),
-            head.text,
-            tail.text
-        );
-        let summary = Summary {
-            model: model.name.clone(),
-            m: d.mechanics.m,
-            r: d.mechanics.r,
-            p: d.mechanics.p,
-            s: d.ignorable.len(),
-            formulations,
-            eliminations: d.equations.iter().map(|e| (e.name().to_string(), e.elimination.to_string())).collect(),
-            solves,
-            functions,
-            simplifier: d.mechanics.tidy.report(),
-            cuts,
-            stages: d.stages.clone(),
-            derive_time,
-            emit_time: emit_start.elapsed(),
-        };
-        Ok(Generated { code, summary, program })
-    })
+    program.description.module = options.module_name.clone().unwrap_or_else(|| model.name.clone());
+    let formulations = forms.iter().map(|(name, states, eqs, _)| (name.clone(), *states, *eqs)).collect();
+    let solves = forms.into_iter().map(|(name, _, _, how)| (name, how)).collect();
+    let code =
+        format!("// Generated by `generator` from {} ({}). Do not edit: regenerate.\n\n{text}", one_line(&model_file_name(model)), one_line(&model.name));
+    let summary = Summary {
+        model: model.name.clone(),
+        m: d.mechanics.m,
+        r: d.mechanics.r,
+        p: d.mechanics.p,
+        s: d.ignorable.len(),
+        formulations,
+        eliminations: d.equations.iter().map(|e| (e.name().to_string(), e.elimination.to_string())).collect(),
+        solves,
+        functions,
+        simplifier: d.mechanics.tidy.report(),
+        cuts,
+        stages: d.stages.clone(),
+        derive_time,
+        emit_time,
+    };
+    Generated { code, summary, program: options.tapes.then_some(program) }
 }
 
 /// Each formulation's solve and assembly of its right-hand side, `(name, description)`, as the
-/// summary describes them ([`super::assembly`]): the same bodies [`generate`] compares, built
-/// from a derivation by emitters that emit what [`generate`]'s two emit (every formulation but
-/// the last, and the last), so that a body reused there is reused here.
-pub fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
+/// summary describes them ([`super::assembly`]): the same bodies a module compares, built by
+/// one emitter per reuse group ([`reuse_groups`]), so that a body reused there is reused here.
+pub(crate) fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
     let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
-    let (sent, kept) = split_between_emitters(d.equations.iter().map(|e| e.kind).collect());
-    let last = sent.len();
-    let mut second = Emitter::new(model, options, seam_path(model, options)?, &shared);
-    second.bodies = Bodies::new(sent);
-    let mut here = Emitter::new(model, options, seam_path(model, options)?, &shared);
-    here.bodies = Bodies::new(kept);
+    let kinds: Vec<_> = d.equations.iter().map(|e| e.kind).collect();
     let mut out = Vec::new();
-    for (k, f) in d.equations.iter().enumerate() {
-        let (em, group) = if k < last { (&mut second, &d.equations[k + 1..last]) } else { (&mut here, &[][..]) };
-        em.start(f);
-        // Without a recursion there is nothing to compare; the dense body is built only where
-        // a later formulation of the same emitter takes it under its speeds' names.
-        let tree = |g: &formulation::Equations| g.recursion.is_some() || g.articulated.is_some();
-        let feeds = || f.kind.speeds() == seam::Speeds::Rates && group.iter().any(|g| tree(g) && !em.speeds_as_rates(g).is_empty());
-        let description = if !tree(f) && !feeds() {
-            super::assembly::summary_line(&super::ldl::Solve::for_equations(f), "assembly: dense entries")
-        } else {
-            let checks = em.runtime_factors(f);
-            let chosen = em.assembly(f, &shared, &checks)?;
-            super::assembly::summary_line(&chosen.solve, &chosen.description)
-        };
-        out.push((f.name().to_string(), description));
+    for group in reuse_groups(&kinds) {
+        let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
+        em.bodies = Bodies::new(group.clone());
+        let forms: Vec<&Equations> = d.equations.iter().filter(|e| group.contains(&e.kind)).collect();
+        for (k, f) in forms.iter().enumerate() {
+            let later = &forms[k + 1..];
+            em.start(f);
+            // Without a recursion there is nothing to compare; the dense body is built only
+            // where a later formulation of the same group takes it under its speeds' names.
+            let tree = |g: &formulation::Equations| g.recursion.is_some() || g.articulated.is_some();
+            let feeds = || f.kind.speeds() == seam::Speeds::Rates && later.iter().any(|g| tree(g) && !em.speeds_as_rates(g).is_empty());
+            let description = if !tree(f) && !feeds() {
+                super::assembly::summary_line(&super::ldl::Solve::for_equations(f), "assembly: dense entries")
+            } else {
+                let checks = em.runtime_factors(f);
+                let chosen = em.assembly(f, &shared, &checks)?;
+                super::assembly::summary_line(&chosen.solve, &chosen.description)
+            };
+            out.push((f.name().to_string(), description));
+        }
     }
     Ok(out)
-}
-
-/// The formulations `kinds` (in the order they are derived) as [`generate`]'s two emitters share
-/// them: every one but the last on the second thread, the last on the deriving thread.
-///
-/// ```text
-/// [Lagrange, Maggi, Kane, ReducedVolterra] -> ([Lagrange, Maggi, Kane], [ReducedVolterra])
-/// ```
-fn split_between_emitters(mut kinds: Vec<seam::FormulationKind>) -> (Vec<seam::FormulationKind>, Vec<seam::FormulationKind>) {
-    let last = kinds.pop();
-    (kinds, last.into_iter().collect())
-}
-
-/// The deriving thread's side of [`generate`]: the mechanics and every formulation but the
-/// last go to the second thread, the ignorable coordinates come back from it. A send fails
-/// only when the second thread stopped at an error, which its result reports.
-struct ToSecond<'a> {
-    model: &'a Model,
-    jobs: Sender<Job>,
-    ignorable: Receiver<Result<(Vec<usize>, Duration), ModelError>>,
-    /// Formulations still to send (the last stays here).
-    to_send: usize,
-}
-
-impl formulation::Stages for ToSecond<'_> {
-    fn mechanics(&mut self, mech: &Mechanics) {
-        let _ = self.jobs.send(Job::Mechanics(Box::new(Parcel::pack(&(self.model.clone(), mech.quantities.clone())))));
-    }
-
-    fn ignorable(&mut self, model: &Model, _: &Mechanics) -> Result<formulation::Ignorable, ModelError> {
-        match self.ignorable.recv() {
-            Ok(decided) => decided.map(|(chosen, time)| formulation::Ignorable { reports: Vec::new(), chosen, time }),
-            // The second thread panicked: joining it reports that.
-            Err(_) => Err(model.error(ErrorKind::Emission, "emit", "emit", "internal: the emitting thread stopped".into(), String::new())),
-        }
-    }
-
-    fn equations(&mut self, eqs: &Equations) {
-        if self.to_send > 0 {
-            self.to_send -= 1;
-            let _ = self.jobs.send(Job::Form(Box::new(Parcel::pack(eqs))));
-        }
-    }
-}
-
-/// The second thread (see [`generate`]): the ignorable coordinates, handed back with the time
-/// they took; the module's head; each formulation as its [`Job`] arrives.
-fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usize>, Duration), ModelError>>, options: &Options) -> Result<Part, ModelError> {
-    // No mechanics: the deriving thread stopped first, and reports why.
-    crate::symbolic::report::take();
-    let Ok(Job::Mechanics(parcel)) = inbox.recv() else { return Ok(Part::empty()) };
-    let (model, mech) = parcel.unpack();
-    let clock = Instant::now();
-    let chosen = ignorable::choose(&model, &ignorable::analyze(&model, &mech));
-    let _ = ignorable_back.send(chosen.clone().map(|c| (c, clock.elapsed())));
-    // An error here is the derivation's, which the deriving thread reports.
-    let Ok(chosen) = chosen else { return Ok(Part::empty()) };
-    let shared = FromMechanics::new(&mech, &chosen, &model.velocities, model.t);
-    let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
-    // The requested formulations in the order they are derived (the paper's).
-    let requested = seam::FormulationKind::ALL.into_iter().filter(|k| options.formulations.iter().any(|f| f.kind() == *k)).collect();
-    em.bodies = Bodies::new(split_between_emitters(requested).0);
-    let mut head = vec![em.header(&shared)];
-    head.push(em.params());
-    head.push(super::seam::failure_import(&em.seam));
-    // The dense solves are `seam::solve`'s, called by the formulations: written once, not
-    // carried by every module.
-    for f in &options.functions {
-        head.extend(em.shared_function(*f, &shared)?);
-    }
-    if !model.events.is_empty() {
-        head.extend(em.event_functions()?);
-    }
-    // Each submodule printed as it is emitted: the items of one file, printed in order,
-    // are the items printed one by one.
-    let mut text = em.print(head)?;
-    for job in inbox {
-        if let Job::Form(parcel) = job {
-            let item = em.form(&parcel.unpack(), &shared)?;
-            text += &em.print(vec![item])?;
-        }
-    }
-    let mut part = em.part(text);
-    if options.tapes {
-        part.program.description = em.description(&shared);
-    }
-    Ok(part)
-}
-
-impl Emitter<'_> {
-    /// `forms`' submodules and `model()` (listing the formulations `names`), printed.
-    fn formulations_and_model_fn<'e>(
-        &mut self,
-        forms: impl IntoIterator<Item = &'e Equations>,
-        names: Vec<String>,
-        shared: &FromMechanics,
-    ) -> Result<Part, ModelError> {
-        let mut items = Vec::new();
-        for eqs in forms {
-            items.push(self.form(eqs, shared)?);
-        }
-        let module_name = self.options.module_name.clone().unwrap_or_else(|| self.model.name.clone());
-        items.push(super::seam::model_fn(&super::seam::SeamParts {
-            seam: &self.seam,
-            module: &module_name,
-            formulations: names,
-            functions: &self.options.functions,
-            has_initial: self.model.initial.is_some(),
-            has_run: self.model.simulation.is_some(),
-            has_events: !self.model.events.is_empty(),
-            has_gimbals: !self.model.gimbals().is_empty(),
-            has_inputs: !self.model.inputs.is_empty(),
-        }));
-        let text = self.print(items)?;
-        Ok(self.part(text))
-    }
 }
 
 /// The seam crate's path in emitted code, from the options.
@@ -951,11 +864,12 @@ mod tests {
     }
 
     #[test]
-    fn every_formulation_but_the_last_goes_to_the_second_emitter() {
+    fn the_classical_formulations_share_bodies_and_the_reduced_form_keeps_its_own() {
         use seam::FormulationKind::{Kane, Lagrange, Maggi, ReducedVolterra};
-        assert_eq!(super::split_between_emitters(vec![Lagrange, Maggi, Kane, ReducedVolterra]), (vec![Lagrange, Maggi, Kane], vec![ReducedVolterra]));
-        assert_eq!(super::split_between_emitters(vec![Kane]), (vec![], vec![Kane]));
-        assert_eq!(super::split_between_emitters(vec![]), (vec![], vec![]));
+        assert_eq!(super::reuse_groups(&[Lagrange, Maggi, Kane, ReducedVolterra]), vec![vec![Lagrange, Maggi, Kane], vec![ReducedVolterra]]);
+        assert_eq!(super::reuse_groups(&[Lagrange, Kane]), vec![vec![Lagrange, Kane]]);
+        assert_eq!(super::reuse_groups(&[ReducedVolterra]), vec![vec![ReducedVolterra]]);
+        assert_eq!(super::reuse_groups(&[]), Vec::<Vec<seam::FormulationKind>>::new());
     }
 }
 
@@ -967,7 +881,7 @@ mod examples {
         use crate::{emit, formulation};
         let model = crate::model::load("../models/three_body.ron").unwrap();
         let d = formulation::derive(&model, &formulation::Request::all()).unwrap();
-        let chosen = emit::module::assemblies(&model, &d, &emit::Options::from_model(&model)).unwrap();
+        let chosen = emit::assemblies(&model, &d, &emit::Options::from_model(&model)).unwrap();
         assert_eq!(chosen.len(), 4);
         assert!(chosen.iter().all(|(_, how)| how.contains("; assembly: ")));
     }

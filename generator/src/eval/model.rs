@@ -12,7 +12,7 @@ use std::borrow::Cow;
 use std::sync::Arc;
 
 /// The tolerances of emitted modules (`generator::emit::module`), read from one place.
-use crate::emit::module::{CONSTRAINT_TOLERANCE, SINGULAR_TOLERANCE};
+use crate::emit::{CONSTRAINT_TOLERANCE, SINGULAR_TOLERANCE};
 
 /// The shared functions of a program (energy, work rate, momenta, residuals).
 pub struct Evaluated {

@@ -3,7 +3,7 @@
 //! four formulations, each a [`Method`] giving [`Equations`] (private modules: `lagrange`,
 //! `maggi`, `kane`, `reduced`; over a tree of frames, `composite` and `articulated`).
 //! [`derive`] runs them once for `inspect`; emission runs the same stages in the same order,
-//! spread over two threads ([`crate::emit::generate`]).
+//! spread over two threads ([`crate::generate`]).
 //!
 //! ```
 //! use generator::formulation::{derive, Request};
@@ -111,7 +111,7 @@ impl Derivation {
 /// Where [`derive_with`] hands its results as soon as they are ready, and where it has the
 /// ignorable coordinates decided: here by default ([`derive`]); generation hands the mechanics
 /// to a second thread that decides them meanwhile, and emits each formulation as it arrives
-/// ([`crate::emit::generate`]).
+/// ([`crate::generate`]).
 pub trait Stages {
     /// The mechanics are derived (first, once).
     fn mechanics(&mut self, _mech: &Mechanics) {}

@@ -25,7 +25,7 @@ fn both(f: &Formulation, q: &[f64], qdot: &[f64], p: &[f64], ignorable: usize) -
 /// The 20-link pendulum evaluated in-process, with the generator's summary of the same emission.
 fn pendulum() -> (Model, seam::Model, Summary) {
     let model = n_link_pendulum_on_cart(20).build().unwrap();
-    let (evaluated, summary) = generator::eval::evaluate_reporting(&model, &Options::from_model(&model)).unwrap();
+    let (evaluated, summary) = generator::evaluate_reporting(&model, &Options::from_model(&model)).unwrap();
     (model, evaluated, summary)
 }
 

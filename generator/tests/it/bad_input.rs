@@ -137,7 +137,7 @@ fn with_two_stages_failing_generation_reports_the_first_as_inspect_does() {
             text = text.replacen(from, to, 1);
         }
         let generated = from_source("models/broken.ron", &text)
-            .and_then(|m| generator::emit::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()))
+            .and_then(|m| generator::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()))
             .expect_err("refused");
         let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect::inspect(&m, false).map(|_| ())).expect_err("refused");
         assert_eq!(generated.kind, kind, "{edits:?}: {generated}");
@@ -157,8 +157,7 @@ fn inspect_and_generation_refuse_the_same_models_with_the_same_error() {
         let src = scene1();
         assert!(src.contains(from), "test edit `{from}` not found");
         let text = src.replacen(from, to, 1);
-        let generated =
-            from_source("models/broken.ron", &text).and_then(|m| generator::emit::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()));
+        let generated = from_source("models/broken.ron", &text).and_then(|m| generator::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()));
         let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect::inspect(&m, false).map(|_| ()));
         match (generated, inspected) {
             (Ok(()), Ok(())) => assert!(to.contains("\"_\""), "`{to}` should be refused"),
@@ -321,7 +320,7 @@ fn quasi_velocities_dependent_on_the_constraints_are_refused_naming_the_rows() {
     assert_ne!(src, scene1(), "test edit not applied");
     let model = from_source("models/broken.ron", &src).unwrap();
     let options = generator::emit::Options::from_model(&model);
-    let e = generator::emit::generate(&model, &options).expect_err("a singular choice must not generate");
+    let e = generator::generate(&model, &options).expect_err("a singular choice must not generate");
     check(
         &e,
         ErrorKind::SingularQuasiVelocities,
@@ -465,7 +464,7 @@ fn constants_beyond_f64_are_located_at_the_extreme_number() {
     let src = scene1();
     let text = src.replacen("com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-l/2*1e200\", \"0\"]", 1);
     let model = from_source("models/broken.ron", &text).unwrap();
-    let e = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap_err();
+    let e = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap_err();
     check(&e, ErrorKind::Emission, &["10^", "not a finite f64", "bodies[1].com[1]"]);
     let (line, col) = e.location.unwrap();
     assert_eq!(&text.lines().nth(line - 1).unwrap()[col - 1..col + 4], "1e200", "{e}");
@@ -479,7 +478,7 @@ fn an_expensive_expression_stays_within_the_simplifier_s_work_budget() {
     // (correct, only less compact), reports them, and generation finishes.
     let text = scene1().replacen("com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-l/2 + (theta1 + theta2)^30/1000\", \"0\"]", 1);
     let model = from_source("models/heavy.ron", &text).unwrap();
-    let out = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let out = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     let report = &out.summary.simplifier;
     let limits = generator::symbolic::fourier::FourierLimits::default();
     assert!(report.work <= limits.max_work + limits.max_terms as u64 * limits.max_terms as u64, "{report:?}");
@@ -585,7 +584,7 @@ fn a_model_too_large_to_derive_ends_with_the_budget_error() {
         }
         chained(info);
     }));
-    let e = generator::emit::generate(&huge, &generator::emit::Options::from_model(&huge)).unwrap_err();
+    let e = generator::generate(&huge, &generator::emit::Options::from_model(&huge)).unwrap_err();
     assert_eq!(panics.load(std::sync::atomic::Ordering::SeqCst), 0, "the budget unwound");
     assert_eq!(e.kind, ErrorKind::Budget, "{e}");
     let text = e.to_string();
@@ -613,7 +612,7 @@ fn a_coordinate_that_moves_no_body_is_refused_by_name() {
     let e = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap_err();
     check(&e, ErrorKind::SingularQuasiVelocities, &["coordinate `z` moves no body", "singular at every state", "coordinates[3]"]);
     assert_eq!(e.location.unwrap().0, 14, "{e}");
-    assert!(generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).is_err());
+    assert!(generator::generate(&model, &generator::emit::Options::from_model(&model)).is_err());
 }
 
 /// A model written on one line (minified, or by a script), its error past column 65535: the

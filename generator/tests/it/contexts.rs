@@ -11,7 +11,7 @@ fn generations_leave_only_their_models_in_the_caller_s_context() {
     let renamed = |i: usize| text.replace("\"m1\"", &format!("\"mass_{i}\"")).replace("m1*", &format!("mass_{i}*")).replace("m1 ", &format!("mass_{i} "));
     let run = |i: usize| {
         let model = generator::model::from_source("three_body.ron", &renamed(i)).unwrap();
-        generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+        generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     };
     let cx = Context::new();
     cx.enter(|| {

@@ -2,7 +2,9 @@
 //! committed ones do not cover (splitting every few statements, subsets of formulations,
 //! baked parameters) are compiled by rustc with warnings denied.
 
-use generator::emit::{Formulation, Options, Parameters, generate};
+use generator::emit::{Formulation, Options, Parameters};
+
+use generator::generate;
 
 use crate::support;
 

@@ -5,7 +5,9 @@
 
 use crate::support;
 
-use generator::emit::{Options, generate};
+use generator::emit::Options;
+
+use generator::generate;
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 
 /// The states both sides evaluate at (the same formula in the compiled program).
@@ -20,7 +22,7 @@ fn chains_evaluated_in_process_equal_their_compiled_modules() {
         let model = builder.build().unwrap();
         let code = generate(&model, &Options::from_model(&model)).unwrap().code;
         let printed = support::rustc::printed_rates(dir.path(), &model.name, &code, &["-C", "opt-level=1"]);
-        let evaluated = generator::eval::evaluate(&model).unwrap();
+        let evaluated = generator::evaluate(&model).unwrap();
         let mut compared = 0;
         for (name, k, rates) in printed {
             let name = name.as_str();
@@ -54,7 +56,7 @@ fn maggi_reusing_lagranges_body_gives_lagranges_rates() {
     let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
     let (lagrange, maggi) = (summary.ops("lagrange::rhs").unwrap(), summary.ops("maggi::rhs").unwrap());
     assert_eq!((lagrange.lets, &lagrange.ops), (maggi.lets, &maggi.ops));
-    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let evaluated = generator::evaluate(&model).unwrap();
     let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
     let (lagrange, maggi) = (form("lagrange"), form("maggi"));
     assert_eq!(lagrange.states(), maggi.states());
@@ -83,7 +85,7 @@ fn kane_reusing_lagranges_body_under_its_speeds_names_gives_lagranges_accelerati
     let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
     let (lagrange, kane) = (summary.ops("lagrange::rhs").unwrap(), summary.ops("kane::rhs").unwrap());
     assert_eq!((lagrange.lets, &lagrange.ops), (kane.lets, &kane.ops), "Kane's body is Lagrange's");
-    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let evaluated = generator::evaluate(&model).unwrap();
     let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
     let (lagrange, kane) = (form("lagrange"), form("kane"));
     let (m, p) = (model.m(), &evaluated.default_params);

@@ -5,7 +5,9 @@
 
 use crate::support;
 
-use generator::emit::{Options, generate};
+use generator::emit::Options;
+
+use generator::generate;
 
 #[test]
 fn fused_modules_give_the_plain_modules_rates_to_round_off() {

@@ -23,13 +23,13 @@ fn an_undecided_dependence_keeps_the_coordinate_and_is_reported() {
     let section = inspected.split("Budgets and undecided questions:").nth(1).expect("inspect lists the undecided questions");
     assert!(section.contains(NOTE), "{section}");
 
-    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let generated = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     // The automatic choice left x out for want of an answer: a warning the user can act on.
     let warned = "`x` is not taken as ignorable: whether the equations depend on it could not be decided exactly";
     assert!(generated.summary.warnings().iter().any(|w| w.starts_with(warned)), "{:?}", generated.summary.warnings());
     assert!(generated.summary.notes().iter().any(|w| w.starts_with(NOTE)), "{:?}", generated.summary.notes());
     assert!(generated.summary.to_string().contains(NOTE));
-    let (_, summary) = generator::eval::evaluate_reporting(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let (_, summary) = generator::evaluate_reporting(&model, &generator::emit::Options::from_model(&model)).unwrap();
     assert_eq!(summary.warnings(), generated.summary.warnings());
 }
 
@@ -37,7 +37,7 @@ fn an_undecided_dependence_keeps_the_coordinate_and_is_reported() {
 #[test]
 fn a_decided_model_reports_no_cuts() {
     let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
-    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let generated = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     assert_eq!(generated.summary.warnings(), Vec::<String>::new());
     assert!(!generator::inspect::inspect(&model, false).unwrap().contains("Budgets and undecided questions"));
 }
@@ -48,7 +48,7 @@ fn a_decided_model_reports_no_cuts() {
 #[test]
 fn the_bicycle_reports_what_its_budgets_cut() {
     let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/bicycle.ron")).unwrap();
-    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let generated = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     let warnings = generated.summary.notes();
     assert!(generated.summary.warnings().is_empty(), "a built-in model loads without warnings: {:?}", generated.summary.warnings());
     assert!(

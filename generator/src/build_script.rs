@@ -12,8 +12,9 @@
 //! opt-level = 3
 //! ```
 
-use super::{Formulation, Generated, Options, Parameters, Summary, generate};
+use crate::emit::{Formulation, Generated, Options, Parameters, Summary};
 use crate::model::ModelError;
+use crate::pipeline::generate;
 use std::path::{Path, PathBuf};
 
 /// Generates the modules of model files, for a build script.
@@ -89,7 +90,7 @@ impl Builder {
             jacobian: None,
             parameter_jacobian: None,
             fma: false,
-            seam_path: super::DEFAULT_SEAM_PATH.to_string(),
+            seam_path: crate::emit::DEFAULT_SEAM_PATH.to_string(),
             cargo_metadata: true,
         }
     }
