@@ -60,17 +60,17 @@ fn ident(name: &str) -> proc_macro2::Ident {
 impl Emitter<'_> {
     /// The identifier of a state or input symbol.
     fn symbol_ident(&self, s: Symbol) -> String {
-        self.names.of.get(&s).cloned().unwrap_or_else(|| s.name())
+        self.scope.names.of.get(&s).cloned().unwrap_or_else(|| s.name())
     }
 
     /// Inputs of the functions of a state: `t`, kept coordinates and speeds from `state`
     /// (argument 1), parameters (argument 2), `G_I` (argument 3).
     pub(super) fn state_inputs(&self, f: &Equations) -> Vec<Input> {
-        let model = self.model;
+        let model = self.scope.model;
         let mut inputs = vec![self.time_input()];
         for (pos, &j) in f.kept.iter().enumerate() {
             let l = usize_lit(pos);
-            inputs.push(Input::new(model.coordinates[j], &self.names.coordinates[j], 1, quote!(state[#l])));
+            inputs.push(Input::new(model.coordinates[j], &self.scope.names.coordinates[j], 1, quote!(state[#l])));
         }
         for (k, s) in f.speeds.iter().enumerate() {
             let l = usize_lit(f.kept.len() + k);
@@ -86,11 +86,11 @@ impl Emitter<'_> {
 
     /// The factors of the elimination's pivots that vary with the state: checked at runtime.
     pub(super) fn runtime_factors(&mut self, f: &Equations) -> Vec<Expr> {
-        let model = self.model;
+        let model = self.scope.model;
         let varying: BTreeSet<Symbol> = model.coordinates.iter().chain(&f.speeds).chain(&f.momenta).chain([&model.t]).copied().collect();
         let mut out: Vec<Expr> = Vec::new();
         for s in &f.singular {
-            let p = self.prep.prepare(*s);
+            let p = self.workshop.prep.prepare(*s);
             if p.free_symbols().iter().any(|x| varying.contains(x)) && !out.contains(s) {
                 out.push(*s);
             }
@@ -102,13 +102,13 @@ impl Emitter<'_> {
     /// (where they are).
     pub(super) fn start(&mut self, f: &Equations) {
         let relabel = self.speeds_as_rates(f);
-        self.bodies.start(f.kind, relabel);
+        self.workshop.bodies.start(f.kind, relabel);
     }
 
     /// `f`'s speeds named as the coordinates' rates, where they are those rates in another
     /// order ([`super::reuse::speeds_as_rates`]).
     pub(super) fn speeds_as_rates(&self, f: &Equations) -> std::collections::HashMap<Symbol, Expr> {
-        let rates: Vec<Symbol> = f.kept.iter().map(|&j| self.model.velocities[j]).collect();
+        let rates: Vec<Symbol> = f.kept.iter().map(|&j| self.scope.model.velocities[j]).collect();
         let qdot: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
         super::reuse::speeds_as_rates(&f.speeds, &qdot, &rates)
     }
@@ -116,10 +116,10 @@ impl Emitter<'_> {
     /// A formulation's submodule (see the module docs).
     pub(super) fn form(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
         self.start(f);
-        let model = self.model;
+        let model = self.scope.model;
         let m = model.m();
         let name = f.name();
-        let work = self.work;
+        let work = self.scope.work;
         let n_states = f.states(work);
         let mut state_names: Vec<String> = f.kept.iter().map(|&j| model.coordinates[j].name()).collect();
         state_names.extend(f.speeds.iter().map(|s| s.name()));
@@ -131,19 +131,20 @@ impl Emitter<'_> {
         let init = self.initial_state(f, shared)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
-        let jacobian = if self.options.jacobian { self.jacobian_fn(f, shared, &checks, Wrt::State)? } else { TokenStream::new() };
+        let jacobian = if self.scope.options.jacobian { self.jacobian_fn(f, shared, &checks, Wrt::State)? } else { TokenStream::new() };
         let parameter_jacobian = if self.emits_parameter_jacobian() { self.jacobian_fn(f, shared, &checks, Wrt::Parameters)? } else { TokenStream::new() };
         let module = ident(name);
         let states_l = usize_lit(n_states);
         let eqs = usize_lit(f.equations);
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
-        self.forms.push((name.to_string(), n_states, f.equations, super::assembly::summary_line(&solve, &assembly)));
-        let seam_const = super::seam::formulation_const(&self.seam, f.kind, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
+        self.record.forms.push((name.to_string(), n_states, f.equations, super::assembly::summary_line(&solve, &assembly)));
+        let seam_const =
+            super::seam::formulation_const(&self.scope.seam, f.kind, f.stabilization.is_some(), self.scope.options.jacobian, self.emits_parameter_jacobian());
         let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));
-        if self.tapes.is_some() {
-            self.shapes.push(super::program::FormShape {
+        if self.record.tapes.is_some() {
+            self.record.shapes.push(super::program::FormShape {
                 kind: f.kind,
                 kept: f.kept.clone(),
                 speeds: f.speeds.len(),
@@ -215,7 +216,7 @@ impl Emitter<'_> {
             outputs.extend(w.data.iter().copied());
             outputs.extend(c.iter().copied());
         }
-        if self.work {
+        if self.scope.work {
             let offset = f.constraint_power.as_ref().map_or(Expr::zero(), |(_, offset)| *offset);
             outputs.push(self.power_output(shared, qdot) + offset);
             if let Some((weights, _)) = &f.constraint_power {
@@ -227,7 +228,7 @@ impl Emitter<'_> {
 
     /// The power `Q . q'` of the applied forces with the rates `qdot`.
     fn power_output(&self, shared: &FromMechanics, qdot: &[Expr]) -> Expr {
-        let to_qdot: HashMap<Symbol, Expr> = self.model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
+        let to_qdot: HashMap<Symbol, Expr> = self.scope.model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
         shared.power.subs(&to_qdot)
     }
 
@@ -280,7 +281,7 @@ impl Emitter<'_> {
         let inputs = self.state_inputs(f);
         let mut rates: Vec<Expr> = f.kept.iter().map(|&j| a.qdot[j]).collect();
         rates.extend(a.accelerations.iter().copied());
-        if self.work {
+        if self.scope.work {
             rates.push(self.power_output(shared, &a.qdot));
         }
         let all_checks: Vec<Expr> = checks.iter().chain(&a.pivots).copied().collect();
@@ -353,9 +354,9 @@ impl Emitter<'_> {
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`,
     /// whether the right-hand side reads `t` (decided on the same outputs), and how it solves.
     fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<RhsItems, ModelError> {
-        let model = self.model;
+        let model = self.scope.model;
         let name = f.name();
-        let work = self.work;
+        let work = self.scope.work;
         let n_states = f.states(work);
         let nq = f.kept.len();
         let n_speeds = f.speeds.len();
@@ -364,7 +365,7 @@ impl Emitter<'_> {
         let rhs_name = format!("{name}::rhs");
         let Assembled { body: b, reads, description: assembly, solve: plan } = self.assembly(f, shared, checks)?;
         let t = model.t;
-        let prepared = self.prep.prepare_all(&reads);
+        let prepared = self.workshop.prep.prepare_all(&reads);
         let depends_on_time = any_contains(&prepared, t);
         let b = self.record_body(&rhs_name, b, &args)?;
         let mut solve = plan.cost();
@@ -373,7 +374,7 @@ impl Emitter<'_> {
             solve.add += n;
             solve.mul += n;
         }
-        self.functions.last_mut().expect("just pushed").solve = solve;
+        self.record.functions.last_mut().expect("just pushed").solve = solve;
         let o = &b.outputs;
         let mut at = 0;
         let mut take = |k: usize| {
@@ -463,12 +464,12 @@ impl Emitter<'_> {
                 values.push(quote!(residuals: [#(#res),*]));
                 values.push(quote!(positions: [#(#pos),*]));
                 let m_l = usize_lit(model.m());
-                let seam = &self.seam;
+                let seam = &self.scope.seam;
                 let extra = OpCount { add: 2 * r, mul: 4 * r + 1, ..OpCount::default() };
-                let mut cost = self.functions.last().expect("rhs").clone();
+                let mut cost = self.record.functions.last().expect("rhs").clone();
                 cost.name = format!("{name}::rhs_baumgarte");
                 cost.ops.merge(&extra);
-                self.functions.push(cost);
+                self.record.functions.push(cost);
                 quote! {
                     #[doc = "Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`."]
                     pub fn rhs_baumgarte(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], alpha: f64, beta: f64) -> Result<(), Failure> {
@@ -511,9 +512,11 @@ impl Emitter<'_> {
                 }
             }
         };
-        let seam = self.seam.clone();
+        let seam = self.scope.seam.clone();
         let (solve_stmts, solve_item) = match (plan.sparse(), &plan) {
-            (Some(sparse), _) => (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.splices, self.options.fma)),
+            (Some(sparse), _) => {
+                (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.workshop.splices, self.scope.options.fma))
+            }
             (None, Solve::Ldl(_)) => (solve_with(quote!(#seam::solve::solve_spd_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
             (None, Solve::Lu(_)) => (solve_with(quote!(#seam::solve::solve_dense_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
             (None, Solve::Articulated { .. }) => (quote!(let (qdot, force) = (a.qdot, a.force);), TokenStream::new()),
@@ -582,11 +585,11 @@ impl Emitter<'_> {
 
     /// Whether `initial_state` takes `G_I` from the module's `momenta` (emitted, and not empty).
     fn momenta_by_function(&self) -> bool {
-        self.num_ignorable > 0 && self.options.functions.contains(&Function::Momenta)
+        self.scope.num_ignorable > 0 && self.scope.options.functions.contains(&Function::Momenta)
     }
 
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
-        let work = self.work;
+        let work = self.scope.work;
         let name = f.name();
         let (args, inputs) = self.q_qdot_inputs(true);
         let u = &f.speeds_from_qdot;
@@ -619,7 +622,7 @@ impl Emitter<'_> {
         let calls: &[usize] = if by_function { &[0, 1, 2, 3] } else { &[0, 1, 2] };
         let used: BTreeSet<usize> = b.used_args.iter().copied().chain(calls.iter().copied()).collect();
         let fn_args = arg_list(&args, &used);
-        let seam = &self.seam;
+        let seam = &self.scope.seam;
         let g_i = if by_function { quote!(momenta(t, q, qdot, params)) } else { quote!([#(#g_out),*]) };
         Ok(quote! {
             #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
@@ -640,7 +643,7 @@ impl Emitter<'_> {
     }
 
     fn velocities_fn(&mut self, f: &Equations, checks: &[Expr]) -> Result<TokenStream, ModelError> {
-        let model = self.model;
+        let model = self.scope.model;
         let m = model.m();
         let name = f.name();
         let args = state_args();
@@ -674,7 +677,7 @@ impl Emitter<'_> {
         let stmts = &b.stmts;
         let helpers = &b.helpers;
         let fn_args = arg_list(&args, &b.used_args.iter().copied().chain([0, 1]).collect());
-        let seam = &self.seam;
+        let seam = &self.scope.seam;
         Ok(quote! {
             #[doc = "Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0."]
             #[allow(non_snake_case, clippy::all)]

@@ -43,9 +43,9 @@ impl Emitter<'_> {
     /// `jacobian` (`jac[i][k] = d dstate_i / d state_k`) or `parameter_jacobian`
     /// (`jac[i][k] = d dstate_i / d params_k`), each with the right-hand side `dstate`.
     pub(super) fn jacobian_fn(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr], wrt: Wrt) -> Result<TokenStream, ModelError> {
-        let seam = self.seam.clone();
+        let seam = self.scope.seam.clone();
         let name = f.name();
-        let work = self.work;
+        let work = self.scope.work;
         let n_states = f.states(work);
         let nq = f.kept.len();
         let n_speeds = f.speeds.len();
@@ -53,8 +53,8 @@ impl Emitter<'_> {
         let (rw, cw) = f.post.as_ref().map(|(w, _)| (w.rows, w.cols)).unwrap_or((0, 0));
         let rates = self.rate_outputs(f, shared);
         let variables: Vec<_> = match wrt {
-            Wrt::State => f.kept.iter().map(|&j| self.model.coordinates[j]).chain(f.speeds.iter().copied()).collect(),
-            Wrt::Parameters => self.model.parameters.iter().map(|(s, _)| *s).collect(),
+            Wrt::State => f.kept.iter().map(|&j| self.scope.model.coordinates[j]).chain(f.speeds.iter().copied()).collect(),
+            Wrt::Parameters => self.scope.model.parameters.iter().map(|(s, _)| *s).collect(),
         };
         let (function, structure, assemble) = match wrt {
             Wrt::State => ("jacobian", "Derivatives", "assemble_derivatives"),
@@ -78,7 +78,7 @@ impl Emitter<'_> {
             solve.add += n * (2 * nv + 1);
             solve.mul += n * (2 * nv + 1);
         }
-        self.functions.last_mut().expect("just pushed").solve = solve;
+        self.record.functions.last_mut().expect("just pushed").solve = solve;
         let mut it = b.outputs.iter().cloned();
         let dims = Dims { nq, n, rw, cw, work, weighted };
         let (qd0, m0, f0, w0, c0, (p0, pw0)) = dims.block(&mut it);

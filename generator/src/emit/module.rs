@@ -38,31 +38,51 @@ pub(super) struct SymbolNames {
     pub of: HashMap<Symbol, String>,
 }
 
+/// Writes a module's items, in three parts by role: what the module is written for
+/// ([`Scope`]), what builds and shares the function bodies ([`Workshop`]), and what has been
+/// written ([`Record`]). Its methods are in this file (the module's own functions), `form.rs`
+/// (a formulation's submodule) and `jacobian.rs` (its exact Jacobians).
 pub(super) struct Emitter<'a> {
+    pub scope: Scope<'a>,
+    pub workshop: Workshop,
+    pub record: Record,
+}
+
+/// What every function of a module is written for; fixed once the emitter is made.
+pub(super) struct Scope<'a> {
     pub model: &'a Model,
     pub options: &'a Options,
-    pub prep: Preparer,
     pub names: SymbolNames,
-    pub functions: Vec<FunctionCost>,
-    /// Per emitted formulation: name, states, equations, and how its `rhs` solves (the plan it
-    /// was emitted with, described once).
-    pub forms: Vec<(String, usize, usize, String)>,
+    /// The seam crate's path in emitted code.
+    pub seam: syn::Path,
     /// The states end with the work integral `W`.
     pub work: bool,
+    /// Number of ignorable coordinates (the length of `g_i`).
+    pub num_ignorable: usize,
+}
+
+/// What builds the function bodies, with what it shares between them.
+pub(super) struct Workshop {
+    pub prep: Preparer,
     /// Horner forms, shared by every function of the module.
     pub horner: rustc_hash::FxHashMap<Expr, Expr>,
     /// The bodies built so far, for functions with the same outputs.
     pub bodies: Bodies,
-    /// The seam crate's path in emitted code.
-    pub seam: syn::Path,
     /// The bodies' syntax trees, placed into the parsed module at the end.
     pub splices: Splices,
+}
+
+/// What has been written: for the summary and for in-process evaluation.
+#[derive(Default)]
+pub(super) struct Record {
+    pub functions: Vec<FunctionCost>,
+    /// Per emitted formulation: name, states, equations, and how its `rhs` solves (the plan it
+    /// was emitted with, described once).
+    pub forms: Vec<(String, usize, usize, String)>,
     /// Each function's tape, by name, when [`Options::tapes`] asks for them.
     pub tapes: Option<HashMap<String, super::tape::Tape>>,
     /// Each formulation's shape around its tapes (in-process evaluation).
     pub shapes: Vec<super::program::FormShape>,
-    /// Number of ignorable coordinates (the length of `g_i`).
-    pub num_ignorable: usize,
 }
 
 /// A [`Body`] whose trees wait in the module's [`Splices`]: each field holds placeholders to
@@ -125,7 +145,7 @@ impl<'a> Emission<'a> {
     ) -> Result<Emission<'a>, ModelError> {
         let shared = FromMechanics::new(mech, ignorable, &model.velocities, model.t);
         let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
-        em.bodies = Bodies::new(group);
+        em.workshop.bodies = Bodies::new(group);
         Ok(Emission { em, shared, text: String::new(), head: false })
     }
 
@@ -134,11 +154,11 @@ impl<'a> Emission<'a> {
     /// not carried by every module.
     pub(crate) fn head(&mut self) -> Result<(), ModelError> {
         let (em, shared) = (&mut self.em, &self.shared);
-        let mut items = vec![em.header(shared), em.params(), super::seam::failure_import(&em.seam)];
-        for f in &em.options.functions {
+        let mut items = vec![em.header(shared), em.params(), super::seam::failure_import(&em.scope.seam)];
+        for f in &em.scope.options.functions {
             items.extend(em.shared_function(*f, shared)?);
         }
-        if !em.model.events.is_empty() {
+        if !em.scope.model.events.is_empty() {
             items.extend(em.event_functions()?);
         }
         self.text += &em.print(items)?;
@@ -156,17 +176,17 @@ impl<'a> Emission<'a> {
     /// `model()`, listing the formulations `names`.
     pub(crate) fn model_fn(&mut self, names: Vec<String>) -> Result<(), ModelError> {
         let em = &mut self.em;
-        let module_name = em.options.module_name.clone().unwrap_or_else(|| em.model.name.clone());
+        let module_name = em.scope.options.module_name.clone().unwrap_or_else(|| em.scope.model.name.clone());
         let item = super::seam::model_fn(&super::seam::SeamParts {
-            seam: &em.seam,
+            seam: &em.scope.seam,
             module: &module_name,
             formulations: names,
-            functions: &em.options.functions,
-            has_initial: em.model.initial.is_some(),
-            has_run: em.model.simulation.is_some(),
-            has_events: !em.model.events.is_empty(),
-            has_gimbals: !em.model.gimbals().is_empty(),
-            has_inputs: !em.model.inputs.is_empty(),
+            functions: &em.scope.options.functions,
+            has_initial: em.scope.model.initial.is_some(),
+            has_run: em.scope.model.simulation.is_some(),
+            has_events: !em.scope.model.events.is_empty(),
+            has_gimbals: !em.scope.model.gimbals().is_empty(),
+            has_inputs: !em.scope.model.inputs.is_empty(),
         });
         self.text += &em.print(vec![item])?;
         Ok(())
@@ -175,16 +195,19 @@ impl<'a> Emission<'a> {
     /// What this emission wrote, with what the budgets cut on this thread.
     pub(crate) fn finish(mut self) -> Part {
         let em = &mut self.em;
-        let mut program =
-            super::program::Program { description: Default::default(), tapes: em.tapes.take().unwrap_or_default(), forms: std::mem::take(&mut em.shapes) };
-        if self.head && em.options.tapes {
+        let mut program = super::program::Program {
+            description: Default::default(),
+            tapes: em.record.tapes.take().unwrap_or_default(),
+            forms: std::mem::take(&mut em.record.shapes),
+        };
+        if self.head && em.scope.options.tapes {
             program.description = em.description(&self.shared);
         }
         Part {
             text: self.text,
             cuts: crate::symbolic::report::take(),
-            functions: std::mem::take(&mut em.functions),
-            forms: std::mem::take(&mut em.forms),
+            functions: std::mem::take(&mut em.record.functions),
+            forms: std::mem::take(&mut em.record.forms),
             program,
         }
     }
@@ -242,7 +265,7 @@ pub(crate) fn assemblies(model: &Model, d: &formulation::Derivation, options: &O
     let mut out = Vec::new();
     for group in reuse_groups(&kinds) {
         let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
-        em.bodies = Bodies::new(group.clone());
+        em.workshop.bodies = Bodies::new(group.clone());
         let forms: Vec<&Equations> = d.equations.iter().filter(|e| group.contains(&e.kind)).collect();
         for (k, f) in forms.iter().enumerate() {
             let later = &forms[k + 1..];
@@ -301,36 +324,27 @@ fn symbol_names(model: &Model, shared: &FromMechanics) -> SymbolNames {
 
 impl<'a> Emitter<'a> {
     fn new(model: &'a Model, options: &'a Options, seam: syn::Path, shared: &FromMechanics) -> Emitter<'a> {
-        let mut em = Emitter {
-            model,
-            options,
-            prep: Preparer::new(model, options.parameters == Parameters::Baked),
-            names: symbol_names(model, shared),
-            functions: Vec::new(),
-            forms: Vec::new(),
-            work: false,
-            horner: Default::default(),
-            bodies: Bodies::default(),
-            seam,
-            splices: Splices::default(),
-            tapes: options.tapes.then(HashMap::new),
-            shapes: Vec::new(),
-            num_ignorable: shared.ignorable.len(),
-        };
+        let mut prep = Preparer::new(model, options.parameters == Parameters::Baked);
         // Applied non-potential forces can do work (Q not identically zero once prepared): every
         // formulation then carries the work integral W as its last state.
         // So can moving constraints (their power joins W after each solve).
-        em.work = !em.prep.prepare(shared.power).is_zero() || shared.energy_balance == seam::EnergyBalance::MovingConstraints;
-        em
+        let work = !prep.prepare(shared.power).is_zero() || shared.energy_balance == seam::EnergyBalance::MovingConstraints;
+        Emitter {
+            scope: Scope { model, options, names: symbol_names(model, shared), seam, work, num_ignorable: shared.ignorable.len() },
+            workshop: Workshop { prep, horner: Default::default(), bodies: Bodies::default(), splices: Splices::default() },
+            record: Record { tapes: options.tapes.then(HashMap::new), ..Record::default() },
+        }
     }
 
     /// `items` as a formatted file, the bodies' trees in their places.
     fn print(&mut self, items: Vec<TokenStream>) -> Result<String, ModelError> {
-        let model = self.model;
+        let model = self.scope.model;
         let tokens = quote!(#(#items)*);
         let mut file: syn::File = syn::parse2(tokens)
             .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("internal: emitted tokens do not parse: {e}"), String::new()))?;
-        std::mem::take(&mut self.splices).apply(&mut file).map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", e.to_string(), String::new()))?;
+        std::mem::take(&mut self.workshop.splices)
+            .apply(&mut file)
+            .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", e.to_string(), String::new()))?;
         Ok(prettyplease::unparse(&file))
     }
 }
@@ -399,7 +413,7 @@ pub(super) fn f64_lit(x: f64) -> TokenStream {
 impl Emitter<'_> {
     pub(super) fn emission_error(&self, what: &str, e: impl std::fmt::Display) -> ModelError {
         let message = format!("cannot emit {what}: {e}");
-        let source = &self.model.source;
+        let source = &self.scope.model.source;
         // A constant beyond f64 comes from the model's own extreme numbers: point at the first.
         if message.contains("is not a finite f64")
             && let Some(span) = extreme_literal(source)
@@ -407,7 +421,7 @@ impl Emitter<'_> {
             let place = crate::model::spans::Spans::new(source).path_at(span.start).unwrap_or_default();
             return ModelError::at(
                 ErrorKind::Emission,
-                &self.model.file,
+                &self.scope.model.file,
                 source,
                 Some(span),
                 &place,
@@ -415,7 +429,7 @@ impl Emitter<'_> {
                 "scale the model (other units) so that its numbers and their products stay within about 1e-150 to 1e150".into(),
             );
         }
-        self.model.error(
+        self.scope.model.error(
             ErrorKind::Emission,
             "emit",
             "emit",
@@ -425,7 +439,7 @@ impl Emitter<'_> {
     }
 
     fn header(&self, m: &FromMechanics) -> TokenStream {
-        let model = self.model;
+        let model = self.scope.model;
         let name = &model.name;
         let description = doc(&format!("Model `{}`: {}", model.name, model.description));
         let (nm, nr, np, ns, nh) =
@@ -487,7 +501,7 @@ impl Emitter<'_> {
             seam::EnergyBalance::Jacobi => quote!(Jacobi),
             seam::EnergyBalance::MovingConstraints => quote!(MovingConstraints),
         };
-        let seam = &self.seam;
+        let seam = &self.scope.seam;
         let balance_doc = m.energy_balance.describe();
         out.extend(quote! {
             #[doc = "What `energy` computes, and what its balance with the work state means:"]
@@ -536,7 +550,7 @@ impl Emitter<'_> {
     /// `event_values` (each event's `g(t, q, q')`) and `event_resets` (each event's new `q` and
     /// `q'`, the values before it where its reset leaves them).
     fn event_functions(&mut self) -> Result<Vec<TokenStream>, ModelError> {
-        let model = self.model;
+        let model = self.scope.model;
         let (args, inputs) = self.q_qdot_inputs(true);
         let values: Vec<Expr> = model.events.iter().map(|e| e.when).collect();
         let b = self.body("event_values", &values, &inputs, &args)?;
@@ -569,8 +583,8 @@ impl Emitter<'_> {
     /// What `model()` says of the module, for in-process evaluation (its `module` name is set
     /// by [`generate`]).
     fn description(&self, m: &FromMechanics) -> super::program::Description {
-        let model = self.model;
-        let baked = self.options.parameters == Parameters::Baked;
+        let model = self.scope.model;
+        let baked = self.scope.options.parameters == Parameters::Baked;
         super::program::Description {
             module: String::new(),
             name: model.name.clone(),
@@ -591,11 +605,11 @@ impl Emitter<'_> {
     }
 
     fn params(&self) -> TokenStream {
-        let baked = self.options.parameters == Parameters::Baked;
-        let model = self.model;
+        let baked = self.scope.options.parameters == Parameters::Baked;
+        let model = self.scope.model;
         let k = if baked { 0 } else { model.parameters.len() };
         let kl = usize_lit(k);
-        let fields: Vec<proc_macro2::Ident> = if baked { vec![] } else { self.names.parameters.iter().map(|n| ident(n)).collect() };
+        let fields: Vec<proc_macro2::Ident> = if baked { vec![] } else { self.scope.names.parameters.iter().map(|n| ident(n)).collect() };
         let names: Vec<String> = if baked { vec![] } else { model.parameters.iter().map(|(s, _)| s.name()).collect() };
         let values: Vec<TokenStream> = if baked { vec![] } else { model.parameters.iter().map(|(_, v)| f64_lit(*v)).collect() };
         let docs: Vec<TokenStream> = names.iter().zip(&values).map(|(n, v)| doc(&format!("`{n}` (model value {v})"))).collect();
@@ -641,13 +655,14 @@ impl Emitter<'_> {
 
     /// Inputs for the parameters (runtime mode only), read from argument `arg`.
     pub(super) fn parameter_inputs(&self, arg: usize) -> Vec<Input> {
-        if self.options.parameters == Parameters::Baked {
+        if self.scope.options.parameters == Parameters::Baked {
             return vec![];
         }
-        self.model
+        self.scope
+            .model
             .parameters
             .iter()
-            .zip(&self.names.parameters)
+            .zip(&self.scope.names.parameters)
             .map(|((s, _), n)| {
                 let f = ident(n);
                 Input::new(*s, n, arg, quote!(params.#f))
@@ -656,20 +671,20 @@ impl Emitter<'_> {
     }
 
     pub(super) fn time_input(&self) -> Input {
-        Input::new(self.model.t, "t", 0, TokenStream::new())
+        Input::new(self.scope.model.t, "t", 0, TokenStream::new())
     }
 
     /// Inputs `t`, `q[j]`, `qdot[j]`, `params`: the signature of the shared functions.
     pub(super) fn q_qdot_inputs(&self, with_velocities: bool) -> (Vec<Arg>, Vec<Input>) {
         let mut args = vec![Arg::new("t", quote!(f64)), Arg::new("q", quote!(&[f64; NUM_COORDINATES]))];
         let mut inputs = vec![self.time_input()];
-        for (j, (s, n)) in self.model.coordinates.iter().zip(&self.names.coordinates).enumerate() {
+        for (j, (s, n)) in self.scope.model.coordinates.iter().zip(&self.scope.names.coordinates).enumerate() {
             let l = usize_lit(j);
             inputs.push(Input::new(*s, n, 1, quote!(q[#l])));
         }
         if with_velocities {
             args.push(Arg::new("qdot", quote!(&[f64; NUM_COORDINATES])));
-            for (j, (s, n)) in self.model.velocities.iter().zip(&self.names.velocities).enumerate() {
+            for (j, (s, n)) in self.scope.model.velocities.iter().zip(&self.scope.names.velocities).enumerate() {
                 let l = usize_lit(j);
                 inputs.push(Input::new(*s, n, 2, quote!(qdot[#l])));
             }
@@ -696,25 +711,25 @@ impl Emitter<'_> {
         inputs: &[Input],
         args: &[Arg],
     ) -> Result<Body, ModelError> {
-        let prepared = self.prep.prepare_all(outputs);
-        let defined: Vec<(Symbol, Expr)> = definitions.iter().map(|(s, e)| (*s, self.prep.prepare(*e))).collect();
+        let prepared = self.workshop.prep.prepare_all(outputs);
+        let defined: Vec<(Symbol, Expr)> = definitions.iter().map(|(s, e)| (*s, self.workshop.prep.prepare(*e))).collect();
         let short = name.rsplit("::").next().unwrap_or(name);
-        let signature = Signature::new(short, &defined, inputs, args, self.options.max_lets_per_function);
-        if let Some(reused) = self.bodies.find(&signature, &prepared) {
+        let signature = Signature::new(short, &defined, inputs, args, self.scope.options.max_lets_per_function);
+        if let Some(reused) = self.workshop.bodies.find(&signature, &prepared) {
             return reused.map_err(|e| self.emission_error(name, e));
         }
-        let body = body_with_definitions(short, &defined, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner)
+        let body = body_with_definitions(short, &defined, &prepared, inputs, args, self.scope.options.max_lets_per_function, &mut self.workshop.horner)
             .map_err(|e| self.emission_error(name, e))?;
-        self.bodies.remember(signature, &prepared, &body);
+        self.workshop.bodies.remember(signature, &prepared, &body);
         Ok(body)
     }
 
     /// Records `b`'s cost under `name` (and its tape), and places it.
     pub(super) fn record_body(&mut self, name: &str, b: Body, args: &[Arg]) -> Result<Placed, ModelError> {
-        self.functions.push(FunctionCost { name: name.to_string(), lets: b.lets, ops: b.ops.clone(), solve: Default::default() });
-        if self.tapes.is_some() {
+        self.record.functions.push(FunctionCost { name: name.to_string(), lets: b.lets, ops: b.ops.clone(), solve: Default::default() });
+        if self.record.tapes.is_some() {
             let tape = self.tape(&b, args).map_err(|e| self.emission_error(name, e))?;
-            if let Some(tapes) = &mut self.tapes {
+            if let Some(tapes) = &mut self.record.tapes {
                 tapes.insert(name.to_string(), tape);
             }
         }
@@ -726,14 +741,14 @@ impl Emitter<'_> {
     /// [`crate::eval::model`] packs them. A split body's helpers are read in call order.
     fn tape(&self, b: &Body, args: &[Arg]) -> Result<super::tape::Tape, super::tape::TapeError> {
         use super::tape::{Slots, compile};
-        let m = self.model.m();
-        let np = if self.options.parameters == Parameters::Baked { 0 } else { self.model.parameters.len() };
+        let m = self.scope.model.m();
+        let np = if self.scope.options.parameters == Parameters::Baked { 0 } else { self.scope.model.parameters.len() };
         let layout: Vec<(&str, usize)> = if args.iter().any(|a| a.name == "state") {
-            vec![("t", 1), ("params", np), ("g_i", self.num_ignorable), ("state", usize::MAX >> 8)]
+            vec![("t", 1), ("params", np), ("g_i", self.scope.num_ignorable), ("state", usize::MAX >> 8)]
         } else {
             vec![("t", 1), ("params", np), ("q", m), ("qdot", m)]
         };
-        let slots = Slots::new(&layout).with_fields(&self.names.parameters);
+        let slots = Slots::new(&layout).with_fields(&self.scope.names.parameters);
         let mut stmts: Vec<syn::Stmt> = Vec::with_capacity(b.stmts.len());
         for s in &b.stmts {
             match s {
@@ -755,21 +770,21 @@ impl Emitter<'_> {
     /// True when the formulations get `parameter_jacobian`: asked for, and the parameters
     /// are `Params` fields (not baked) and there are some.
     pub(super) fn emits_parameter_jacobian(&self) -> bool {
-        self.options.parameter_jacobian && self.options.parameters == Parameters::Runtime && !self.model.parameters.is_empty()
+        self.scope.options.parameter_jacobian && self.scope.options.parameters == Parameters::Runtime && !self.scope.model.parameters.is_empty()
     }
 
     /// Leaves `b`'s trees in the splices, returning their placeholders.
     fn place(&mut self, b: Body) -> Placed {
         let Body { mut stmts, mut outputs, mut helpers, used_args, .. } = b;
-        if self.options.fma {
+        if self.scope.options.fma {
             super::fma::fuse_stmts(&mut stmts);
             outputs.iter_mut().for_each(super::fma::fuse);
             helpers.iter_mut().for_each(super::fma::fuse_item);
         }
         Placed {
-            stmts: self.splices.stmts(stmts),
-            outputs: outputs.into_iter().map(|e| self.splices.expr(e)).collect(),
-            helpers: self.splices.items(helpers),
+            stmts: self.workshop.splices.stmts(stmts),
+            outputs: outputs.into_iter().map(|e| self.workshop.splices.expr(e)).collect(),
+            helpers: self.workshop.splices.items(helpers),
             used_args,
         }
     }
