@@ -65,6 +65,19 @@ pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
     (half, std::array::from_fn(|k| v[(k / 3, k % 3)]))
 }
 
+/// How far a shape reaches from `center` (in the body's frame): its origin's distance plus the
+/// radius of the sphere that holds it.
+fn shape_reach(s: &generator::pose::ShapeValues, center: &[f64; 3]) -> f64 {
+    let bound = match s.solid {
+        "box" => 0.5 * s.sizes.iter().map(|x| x * x).sum::<f64>().sqrt(),
+        "sphere" => s.sizes[0],
+        // A cylinder's or capsule's radius, then its length along its axis.
+        _ => s.sizes[0] * if s.solid == "capsule" { 1.0 } else { std::f64::consts::SQRT_2 } + 0.5 * s.sizes[1],
+    };
+    let d = (0..3).map(|i| (s.origin[i] - center[i]).powi(2)).sum::<f64>().sqrt();
+    d + bound
+}
+
 /// The page showing `motion` of `model` with parameters `params` (the model's order).
 pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String, AnimateError> {
     page_overlaid(model, params, std::slice::from_ref(motion))
@@ -107,7 +120,12 @@ pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> R
                 }
                 _ => ([0.0; 3], [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], true),
             };
-            serde_json::json!({ "name": b.name, "frame": b.frame, "center": b.com, "half": half, "axes": axes, "point": point })
+            // A body drawn as its shapes: its size is the farthest reach of a shape from its
+            // centre of mass (the page frames the view with it).
+            let reach = b.shapes.iter().fold(0.0f64, |m, s| m.max(shape_reach(s, &b.com)));
+            let shapes: Vec<serde_json::Value> =
+                b.shapes.iter().map(|s| serde_json::json!({ "solid": s.solid, "sizes": s.sizes, "o": s.origin, "r": s.rotation })).collect();
+            serde_json::json!({ "name": b.name, "frame": b.frame, "center": b.com, "half": half, "axes": axes, "point": point, "shapes": shapes, "reach": reach })
         })
         .collect();
     // The vertical of the drawing: against gravity where the model has it, else z.
@@ -265,6 +283,30 @@ mod tests {
         // A model whose centres stay put carries none.
         let (model, params) = cart_pendulum();
         assert!(!page(&model, &params, &Motion { formulation: "kane", times: &[0.0], q: &[0.0; 3] }).unwrap().contains("\"centers\":["));
+    }
+
+    /// A body's shapes reach the page with their sizes evaluated at the run's parameters (a bar
+    /// `l` long is drawn `l` long), and a body without one has none (its inertia box is drawn).
+    #[test]
+    fn shapes_are_drawn_at_the_runs_parameters() {
+        let (model, mut params) = cart_pendulum();
+        let l = model.parameters.iter().position(|(p, _)| p.name() == "l").unwrap();
+        params[l] = 1.7;
+        let html = page(&model, &params, &Motion { formulation: "kane", times: &[0.0], q: &[0.0; 3] }).unwrap();
+        let json = html.split(r#"id="data">"#).nth(1).unwrap().split("</script>").next().unwrap();
+        let data: serde_json::Value = serde_json::from_str(json).unwrap();
+        let bar1 = &data["bodies"][1]["shapes"][0];
+        assert_eq!(bar1["solid"], "cylinder");
+        assert_eq!(bar1["sizes"], serde_json::json!([0.03, 1.7]));
+        assert!((bar1["o"][1].as_f64().unwrap() + 0.85).abs() < 1e-15, "{bar1}");
+        // Reaching from the centre of mass (the rod's middle): half its length and a bit.
+        let reach = data["bodies"][1]["reach"].as_f64().unwrap();
+        assert!(reach > 0.85 && reach < 0.9, "{reach}");
+        let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/three_body.ron")).unwrap();
+        let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+        let q = vec![0.0; model.coordinates.len()];
+        let html = page(&model, &params, &Motion { formulation: "kane", times: &[0.0], q: &q }).unwrap();
+        assert!(html.contains(r#""shapes":[]"#) && !html.contains(r#""solid""#));
     }
 
     /// The wrong shape, no samples or a NaN is refused, naming why.

@@ -40,6 +40,20 @@ pub struct BodyValues {
     pub moving: bool,
     /// Inertia about the centre of mass in frame components, row-major (`None`: a point mass).
     pub inertia: Option<[f64; 9]>,
+    /// How it is drawn (empty: as its equivalent-inertia box).
+    pub shapes: Vec<ShapeValues>,
+}
+
+/// One solid of a body's drawn geometry, as numbers, in the body's frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeValues {
+    /// `box`, `cylinder`, `sphere` or `capsule` ([`crate::model::shape::Solid::sizes`]).
+    pub solid: &'static str,
+    /// Its sizes: a box's three sides; a radius, then a length.
+    pub sizes: Vec<f64>,
+    pub origin: [f64; 3],
+    /// Its axes in the frame's, row-major (columns the solid's axes).
+    pub rotation: [f64; 9],
 }
 
 /// The model's frame poses as functions of `t` and `q`, with its parameters set.
@@ -64,6 +78,8 @@ impl Poser {
         for ((symbol, _), value) in model.parameters.iter().zip(params) {
             env.set(*symbol, *value);
         }
+        // `pi` as the model's expressions read it (a frame turned by `pi/2`, a shape's `rpy`).
+        env.set(crate::symbolic::Symbol::new("pi"), std::f64::consts::PI);
         for (name, body) in &model.time_functions {
             env.define(*name, model.t, *body);
         }
@@ -93,7 +109,22 @@ impl Poser {
                 };
                 let moving = b.com.iter().any(|c| c.eval(&env).is_err());
                 let com = Expr::eval_all(&b.com, if moving { &start } else { &env })?;
-                Ok(BodyValues { name: b.name.clone(), frame: b.frame, mass: number(b.mass)?, com: [com[0], com[1], com[2]], moving, inertia })
+                let shapes = b
+                    .shapes
+                    .iter()
+                    .map(|shape| {
+                        let (solid, sizes) = shape.solid.sizes();
+                        let origin = Expr::eval_all(&shape.origin, &env)?;
+                        let [r, p, y] = Expr::eval_all(&shape.rpy, &env)?[..] else { unreachable!("three angles") };
+                        Ok(ShapeValues {
+                            solid,
+                            sizes: Expr::eval_all(&sizes, &env)?,
+                            origin: [origin[0], origin[1], origin[2]],
+                            rotation: crate::model::shape::rpy_rotation(r, p, y),
+                        })
+                    })
+                    .collect::<Result<_, EvalError>>()?;
+                Ok(BodyValues { name: b.name.clone(), frame: b.frame, mass: number(b.mass)?, com: [com[0], com[1], com[2]], moving, inertia, shapes })
             })
             .collect::<Result<_, EvalError>>()?;
         let gravity = model

@@ -70,7 +70,9 @@ def test_the_page_shows_the_bodies_where_the_trajectory_puts_them(tmp_path):
     names = ["cart", "bar1", "bar2"]
     for t in [0.5, 2.5]:
         i = int(np.argmin(np.abs(run["t"] - t)))
-        url = path.as_uri() + f"#t={run['t'][i]}&size=800x520"
+        # Each body as its inertia box, the cart a point (its shape, a box that the bars pierce
+        # at its centre, is tested below).
+        url = path.as_uri() + f"#t={run['t'][i]}&size=800x520&inertia=1"
         state = page_state(tmp_path, url)
         assert state["index"] == i and math.isclose(state["t"], run["t"][i])
         x, a, b = run["x"][i], run["theta1"][i], run["theta2"][i]
@@ -271,3 +273,44 @@ def test_runs_overlaid_are_drawn_where_their_coordinates_put_them(tmp_path):
     px, py = px + state["offset"][0], py + state["offset"][1]
     dark = [image.getpixel((int(px) + i, int(py) + j)) for i in range(-2, 3) for j in range(-2, 3)]
     assert sum(1 for r, g, b in dark if max(r, g, b) < 90) >= 10, dark
+
+
+def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
+    from PIL import Image, ImageChops
+
+    # cart_pendulum gives its bodies shapes: the cart a box, the bars cylinders.
+    m = multibody.load("cart_pendulum")
+    run = m.simulate("kane", t_end=1.0, dt_out=0.05, frame=False)
+    path = tmp_path / "shapes.html"
+    m.animate(run, path)
+    url = path.as_uri() + "#t=0.5&size=800x520&follow=0"
+    state = page_state(tmp_path, url)
+    assert state["shaped"] == 3 and state["shadows"] > 0, state
+    # Asked for the inertia boxes, no shape is drawn.
+    assert page_state(tmp_path, url + "&inertia=1")["shaped"] == 0
+    shots = {}
+    for name, extra in [("shadow", ""), ("none", "&shadow=0")]:
+        shot = tmp_path / f"{name}.png"
+        chromium(tmp_path, f"--screenshot={shot}", url + extra)
+        shots[name] = Image.open(shot).convert("RGB")
+    # The shadows only darken, and there is some: every pixel that differs is darker with them.
+    diff = ImageChops.difference(shots["shadow"], shots["none"]).convert("L")
+    changed = [(i, j) for j in range(diff.height) for i in range(diff.width) if diff.getpixel((i, j)) > 8]
+    assert len(changed) > 300, len(changed)
+    assert all(sum(shots["shadow"].getpixel(p)) < sum(shots["none"].getpixel(p)) for p in changed)
+    # Each body's shadow lies where its centre drops onto the ground (unless a body hides it).
+    near = 0
+    for x, y in state["ground"]:
+        x, y = x + state["offset"][0], y + state["offset"][1]
+        near += any(diff.getpixel((int(x) + di, int(y) + dj)) > 8 for di in range(-3, 4) for dj in range(-3, 4))
+    assert near >= 2, (near, state["ground"])
+    # Lit by a light: the cart's faces (its hue, 30 degrees) show at clearly different values.
+    values = []
+    image = shots["none"]
+    for j in range(60, 560):
+        for i in range(0, 700):
+            r, g, b = image.getpixel((i, j))
+            h, s, v = colorsys.rgb_to_hsv(r / 255, g / 255, b / 255)
+            if s > 0.35 and min(abs(360 * h - 30), 360 - abs(360 * h - 30)) < 6:
+                values.append(v)
+    assert len(values) > 200 and max(values) - min(values) > 0.15, (len(values), min(values or [0]), max(values or [0]))

@@ -41,6 +41,11 @@ pub struct Invariants {
 
 /// 2-norm condition number of a square matrix given row-major.
 pub fn condition_number(n: usize, a: &[f64]) -> f64 {
+    // No equations (every coordinate ignorable, the reduced form of a free rotor): nothing to
+    // solve, nothing ill-conditioned (nalgebra's SVD refuses an empty matrix).
+    if n == 0 {
+        return 1.0;
+    }
     let m = nalgebra::DMatrix::from_row_slice(n, n, a);
     let sv = m.singular_values();
     let (lo, hi) = sv.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), s| (lo.min(*s), hi.max(*s)));

@@ -512,3 +512,46 @@ fn a_quaternion_scene_simulates_and_inspects() {
     assert!(text.contains("u1 = -2*e0'*e1 + 2*e0*e1' + 2*e2'*e3 - 2*e2*e3'"), "{text}");
     assert!(text.contains("[Y; M'; a] with orthogonal rows, inverted as its transpose"), "{text}");
 }
+
+/// A free rotor whose only coordinate is ignorable: the reduced form has no equation at all
+/// (p - s = 0; once a panic in emission and in the condition monitor). Every formulation runs;
+/// the rotor turns at its initial rate (theta = t), its momentum I theta' = 0.74 kept exactly.
+#[test]
+fn a_rotor_whose_every_coordinate_is_ignorable_runs_in_every_formulation() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = |name: &str, x: &str, y: &str| {
+        format!(
+            r#"Body(name: "{name}", frame: "disk", mass: "1", com: ["{x}", "{y}", "0"], inertia: Diagonal(["0.01", "0.01", "0.01"]), shape: Sphere(radius: "0.06", origin: ["{x}", "{y}", "0"])),"#
+        )
+    };
+    let model = format!(
+        r#"Model(name: "rotor", parameters: {{"g": 9.81}}, coordinates: ["theta"],
+  frames: [Frame(name: "disk", parent: "world", rotation: [Z("theta")])],
+  bodies: [{} {}],
+  forces: [Gravity(vector: ["0", "0", "-g"])],
+  quasi_velocities: QuasiVelocities(full: ["theta'"], reduced: []),
+  initial: Initial(q: {{"theta": "0"}}, qdot: {{"theta": "1"}}),
+)"#,
+        body("a", "0.6", "0"),
+        body("b", "0", "0.6")
+    );
+    std::fs::write(dir.path().join("rotor.ron"), model).unwrap();
+    let json = ok(&multibody(dir.path(), &["compare", "rotor.ron", "--t-end", "1", "--dt-out", "0.5", "--repeats", "1", "--json", "-"]));
+    let records: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let shapes: Vec<(String, u64, u64)> = records
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| (r["method"].as_str().unwrap().to_string(), r["states"].as_u64().unwrap(), r["equations"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(shapes, [("lagrange".into(), 2, 1), ("maggi".into(), 2, 1), ("kane".into(), 2, 1), ("reduced_volterra".into(), 1, 0)]);
+    assert!(records.as_array().unwrap().iter().all(|r| r["momentum_error_norm"].as_f64().unwrap() < 1e-12), "{json}");
+    for form in ["reduced_volterra", "lagrange"] {
+        ok(&multibody(dir.path(), &["simulate", "rotor.ron", "--formulation", form, "--out", "run", "--t-end", "1", "--dt-out", "0.5"]));
+        let csv = std::fs::read_to_string(dir.path().join(format!("run/rotor_{form}.csv"))).unwrap();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let last: Vec<f64> = csv.lines().last().unwrap().split(',').map(|x| x.parse().unwrap()).collect();
+        let at = |name: &str| last[header.iter().position(|h| *h == name).unwrap()];
+        assert!((at("t") - 1.0).abs() < 1e-15 && (at("theta") - 1.0).abs() < 1e-9 && (at("momentum:theta") - 0.74).abs() < 1e-12, "{form}: {csv}");
+    }
+}

@@ -73,6 +73,23 @@ fn the_watch_figures_are_the_benchmark_file() {
     assert_quoted(&docs, &format!("under one second from a save: {}", if met { "met" } else { "missed" }), "docs/benchmarks/watch.json");
 }
 
+/// The page's frame times in docs/tool.md are the page benchmark's file, and the goal's verdict
+/// follows from it.
+#[test]
+fn the_page_figures_are_the_benchmark_file() {
+    let file = json("docs/benchmarks/page.json");
+    // Lines wrap where they will: the figures are read as words.
+    let docs = read("docs/tool.md").split_whitespace().collect::<Vec<_>>().join(" ");
+    let said = |name: &str| {
+        let r = &file["results"][name];
+        format!("{:.1} ms a frame ({:.0} frames per second)", r["median_frame_ms"].as_f64().unwrap(), r["frames_per_second"].as_f64().unwrap())
+    };
+    assert_quoted(&docs, &format!("40 capsules {}", said("carousel_40_capsules")), "docs/benchmarks/page.json");
+    assert_quoted(&docs, &format!("40 inertia cubes {}", said("pendulum_on_cart_39")), "docs/benchmarks/page.json");
+    let met = file["results"]["carousel_40_capsules"]["frames_per_second"].as_f64().unwrap() >= 60.0;
+    assert_quoted(&docs, &format!("60 frames per second for 40 bodies: {}", if met { "met" } else { "missed" }), "docs/benchmarks/page.json");
+}
+
 #[test]
 fn durations_read_as_minutes() {
     assert_eq!(minutes(178.4), "2 min 58 s");

@@ -188,11 +188,53 @@ fn the_builder_includes_a_urdf_and_adds_to_it() {
     assert!(err.to_string().contains("/nonexistent/robot.urdf"), "{err}");
 }
 
+/// Each link's visuals become its body's drawn shapes, placed in the body's frame: the torso's
+/// box; the head's sphere, merged with the torso, where the fixed neck puts it; the upper arm's
+/// cylinder turned a quarter about x; the hand's STL mesh as the box that bounds it (millimetres
+/// scaled to metres); the forearm's mesh, whose file is not there, not drawn (its inertia box
+/// is, on the page).
+#[test]
+fn visuals_become_shapes_in_their_body_frames() {
+    let model = robot("tree.urdf", &UrdfOptions::default());
+    let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+    let poser = generator::pose::Poser::new(&model, &params).unwrap();
+    let body = |name: &str| poser.bodies.iter().find(|b| b.name == name).unwrap().shapes.clone();
+    let close = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+    let identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let torso = body("torso");
+    assert_eq!(torso.iter().map(|s| s.solid).collect::<Vec<_>>(), ["box", "sphere"]);
+    assert!(close(&torso[0].sizes, &[0.2, 0.3, 0.5]) && close(&torso[0].origin, &[0.0, 0.0, 0.3]) && close(&torso[0].rotation, &identity), "{torso:?}");
+    // The neck: (0, 0, 0.55) turned by 0.4 about z; the sphere at (0.02, 0, 0.1) in the head.
+    let head = [0.02 * 0.4f64.cos(), 0.02 * 0.4f64.sin(), 0.65];
+    assert!(close(&torso[1].sizes, &[0.08]) && close(&torso[1].origin, &head), "{torso:?}");
+    let arm = body("left_upper");
+    assert_eq!(arm.len(), 1);
+    assert!(arm[0].solid == "cylinder" && close(&arm[0].sizes, &[0.04, 0.3]) && close(&arm[0].origin, &[0.0, 0.15, 0.0]), "{arm:?}");
+    // Roll pi/2 about x: its axis (the third column) along -y, its y along z.
+    let r = arm[0].rotation;
+    assert!(close(&[r[2], r[5], r[8]], &[0.0, -1.0, 0.0]) && close(&[r[1], r[4], r[7]], &[0.0, 0.0, 1.0]), "{r:?}");
+    // The STL spans (-20, -50, -10) to (20, 10, 10) mm: a box 0.04 x 0.06 x 0.02 m centred at
+    // (0, -0.02, 0) in the visual's frame, itself at (0, -0.05, 0).
+    let hand = body("right_hand");
+    assert!(hand[0].solid == "box" && close(&hand[0].sizes, &[0.04, 0.06, 0.02]) && close(&hand[0].origin, &[0.0, -0.07, 0.0]), "{hand:?}");
+    assert!(body("left_lower").is_empty());
+    // The shapes reach the page, with the bodies' other data.
+    let motion = animate::Motion { formulation: "kane", times: &[0.0], q: &vec![0.0; model.coordinates.len()] };
+    let html = animate::page(&model, &params, &motion).unwrap();
+    let json = html.split(r#"id="data">"#).nth(1).unwrap().split("</script>").next().unwrap();
+    let data: serde_json::Value = serde_json::from_str(json).unwrap();
+    let drawn = data["bodies"].as_array().unwrap().iter().find(|b| b["name"] == "torso").unwrap()["shapes"].clone();
+    assert_eq!(
+        (drawn[0]["solid"].clone(), drawn[0]["sizes"].clone(), drawn[1]["solid"].clone()),
+        ("box".into(), serde_json::json!([0.2, 0.3, 0.5]), "sphere".into())
+    );
+}
+
 /// Every refusal names the file, the line and column of the element at fault, and the fix.
 #[test]
 fn refusals_are_located_in_the_xml() {
     let tree = std::fs::read_to_string(fixture("tree.urdf")).unwrap();
-    let cases: [(&str, &str, &str); 8] = [
+    let cases: [(&str, &str, &str); 10] = [
         (r#"<joint name="waist" type="continuous">"#, r#"<joint name="waist" type="floating">"#, "joint `waist` is floating"),
         (r#"<joint name="waist" type="continuous">"#, r#"<joint name="waist" type="screw">"#, "joint `waist` has type `screw`"),
         (r#"<child link="left_lower"/>"#, r#"<child link="right_hand"/>"#, "closes a loop"),
@@ -201,6 +243,8 @@ fn refusals_are_located_in_the_xml() {
         (r#"ixx="0.0008" iyy="0.0004" izz="0.0008""#, r#"ixx="0.0008" iyy="0.0004" izz="0.008""#, "no rigid body's"),
         (r#"<axis xyz="0 -1 0"/>"#, r#"<axis xyz="0 0 0"/>"#, "zero axis"),
         (r#"<robot name="tree">"#, r#"<robot name="tree"><link name="stray"/>"#, "2 roots"),
+        (r#"<sphere radius="0.08"/>"#, r#"<sphere radius="-0.08"/>"#, "visual sphere has radius -0.08"),
+        (r#"<box size="0.2 0.3 0.5"/>"#, r#"<box size="0.2 0 0.5"/>"#, "visual box has a side 0"),
     ];
     for (from, to, words) in cases {
         assert!(tree.contains(from), "{from}");

@@ -383,7 +383,7 @@ impl Emitter<'_> {
             s
         };
         let qd_out = take(nq);
-        let rows: Vec<TokenStream> = take(if plan.reads_matrix() { n * n } else { 0 }).chunks(n).map(|r| quote!([#(#r),*])).collect();
+        let rows = if plan.reads_matrix() { super::syntax::matrix_rows(take(n * n), n, n) } else { Vec::new() };
         let force_out = take(n);
         let mut conditions = conditions(checks);
         if let Solve::Articulated { pivots } = &plan {
@@ -410,7 +410,7 @@ impl Emitter<'_> {
                 let w_out = take(rw * cw);
                 let c_out = take(rw);
                 let (rw_l, cw_l) = (usize_lit(rw), usize_lit(cw));
-                let w_rows: Vec<TokenStream> = w_out.chunks(cw).map(|r| quote!([#(#r),*])).collect();
+                let w_rows = super::syntax::matrix_rows(w_out, rw, cw);
                 fields.push(quote!(w: [[f64; #cw_l]; #rw_l]));
                 fields.push(quote!(c: [f64; #rw_l]));
                 values.push(quote!(w: [#(#w_rows),*]));
@@ -532,7 +532,7 @@ impl Emitter<'_> {
             let m = self.matrix_body(f)?;
             let (stmts, helpers) = (&m.stmts, &m.helpers);
             let fn_args = arg_list(&args, &m.used_args);
-            let rows: Vec<TokenStream> = m.outputs.chunks(n).map(|r| quote!([#(#r),*])).collect();
+            let rows = super::syntax::matrix_rows(&m.outputs, n, n);
             quote! {
                 #matrix_doc
                 #[allow(non_snake_case, clippy::all)]

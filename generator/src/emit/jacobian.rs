@@ -304,9 +304,9 @@ impl Dims {
     fn block(&self, it: &mut impl Iterator<Item = TokenStream>) -> Block {
         let mut take = |k: usize| -> Vec<TokenStream> { it.by_ref().take(k).collect() };
         let qd = take(self.nq);
-        let rows: Vec<TokenStream> = take(self.n * self.n).chunks(self.n.max(1)).map(|r| quote!([#(#r),*])).collect();
+        let rows = super::syntax::matrix_rows(&take(self.n * self.n), self.n, self.n);
         let force = take(self.n);
-        let w_rows: Vec<TokenStream> = take(self.rw * self.cw).chunks(self.cw.max(1)).map(|r| quote!([#(#r),*])).collect();
+        let w_rows = super::syntax::matrix_rows(&take(self.rw * self.cw), self.rw, self.cw);
         let c = take(self.rw);
         let power = if self.work { take(1).remove(0) } else { quote!(0.0) };
         let weights = if self.weighted { take(self.n) } else { Vec::new() };

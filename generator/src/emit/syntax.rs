@@ -137,3 +137,14 @@ mod examples {
         assert_eq!(quote::ToTokens::to_token_stream(&e).to_string(), "- a * (b)");
     }
 }
+
+/// `values` (row-major) as `rows` array literals of `cols` entries each: `[[a, b], [c, d]]`'s
+/// rows. Every row is written, empty ones too (`[f64; 0]` rows where `cols` is 0).
+pub fn matrix_rows<T: quote::ToTokens>(values: &[T], rows: usize, cols: usize) -> Vec<TokenStream> {
+    (0..rows)
+        .map(|i| {
+            let row = &values[i * cols..(i + 1) * cols];
+            quote!([#(#row),*])
+        })
+        .collect()
+}

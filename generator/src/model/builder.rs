@@ -90,7 +90,7 @@ pub struct Body(BodyDef);
 impl Body {
     /// A point mass `mass` (an expression in the parameters) at the origin of `frame`.
     pub fn new(name: impl Into<String>, frame: impl Into<String>, mass: impl Into<String>) -> Body {
-        Body(BodyDef { name: name.into(), frame: frame.into(), mass: mass.into(), com: None, inertia: InertiaDef::PointMass })
+        Body(BodyDef { name: name.into(), frame: frame.into(), mass: mass.into(), com: None, inertia: InertiaDef::PointMass, shape: None })
     }
 
     /// The centre of mass in the frame's components.
@@ -107,6 +107,18 @@ impl Body {
     /// Any inertia about the centre of mass.
     pub fn inertia(mut self, inertia: InertiaDef) -> Body {
         self.0.inertia = inertia;
+        self
+    }
+
+    /// How the body is drawn (the animation only).
+    ///
+    /// ```
+    /// use generator::model::{builder::Body, ShapeDef};
+    /// let rod = Body::new("rod", "rod", "m").shape(ShapeDef::Cylinder { radius: "0.02".into(), length: "l".into(), origin: None, rpy: None });
+    /// assert!(rod.into_def().shape.is_some());
+    /// ```
+    pub fn shape(mut self, shape: ShapeDef) -> Body {
+        self.0.shape = Some(shape);
         self
     }
 

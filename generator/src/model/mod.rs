@@ -12,6 +12,7 @@ mod built_in;
 pub mod error;
 pub mod examples;
 pub mod schema;
+pub mod shape;
 pub mod spans;
 pub mod urdf;
 
@@ -38,6 +39,8 @@ pub struct Body {
     pub com: [Expr; 3],
     /// Inertia about the centre of mass, frame components (`None` for a point mass).
     pub inertia: Option<Matrix>,
+    /// How it is drawn (empty: as its equivalent-inertia box).
+    pub shapes: Vec<shape::Shape>,
 }
 
 /// A resolved constraint.
@@ -132,6 +135,9 @@ impl Transfer for Body {
         self.mass.visit(v);
         self.com.visit(v);
         self.inertia.visit(v);
+        for s in &mut self.shapes {
+            s.visit(v);
+        }
     }
 }
 
@@ -801,7 +807,11 @@ impl<'a> Builder<'a> {
             let com = self.vec3(b.com.as_ref().unwrap_or(&zero()), &format!("{place}.com"), Scope::Position)?;
             let inertia = self.inertia(&b.inertia, &place, &env)?;
             self.body_omega.insert(b.name.clone(), frames[frame].omega);
-            bodies.push(Body { name: b.name.clone(), frame, mass, com, inertia });
+            let mut shapes = Vec::new();
+            if let Some(def) = &b.shape {
+                self.shapes(def, &format!("{place}.shape"), &env, &mut shapes)?;
+            }
+            bodies.push(Body { name: b.name.clone(), frame, mass, com, inertia, shapes });
         }
         if bodies.is_empty() {
             return Err(self.err(ErrorKind::Dimension, "bodies", "bodies", "the model has no bodies".into(), "add at least one body"));
@@ -1270,6 +1280,61 @@ impl<'a> Builder<'a> {
             pending = still;
         }
         Ok(done)
+    }
+
+    /// The solids of `def` (at `place`), sizes positive, each one pushed onto `out`.
+    fn shapes(&self, def: &ShapeDef, place: &str, env: &Env, out: &mut Vec<shape::Shape>) -> Result<(), ModelError> {
+        use shape::Solid;
+        let size = |src: &String, at: &str| -> Result<Expr, ModelError> {
+            let e = self.expr(src, &format!("{place}.{at}"), Scope::Parameters)?;
+            let value = e.eval(env).unwrap_or(f64::NAN);
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(self.err(
+                    ErrorKind::BadValue,
+                    &format!("{place}.{at}"),
+                    &format!("\"{src}\""),
+                    format!("the shape's {at} is {src} = {value}, which is not a positive number"),
+                    "give every size of a shape a positive value",
+                ));
+            }
+            Ok(e)
+        };
+        let zero = || vec!["0".to_string(), "0".to_string(), "0".to_string()];
+        let placed = |origin: &Option<Vec<String>>, rpy: &Option<Vec<String>>| -> Result<([Expr; 3], [Expr; 3]), ModelError> {
+            let o = self.vec3(origin.as_ref().unwrap_or(&zero()), &format!("{place}.origin"), Scope::Parameters)?;
+            let r = self.vec3(rpy.as_ref().unwrap_or(&zero()), &format!("{place}.rpy"), Scope::Parameters)?;
+            Ok((o, r))
+        };
+        let (solid, (origin, rpy)) = match def {
+            ShapeDef::Compound(parts) => {
+                for (k, part) in parts.iter().enumerate() {
+                    self.shapes(part, &format!("{place}[{k}]"), env, out)?;
+                }
+                return Ok(());
+            }
+            ShapeDef::Box { size: sides, origin, rpy } => {
+                if sides.len() != 3 {
+                    return Err(self.err(
+                        ErrorKind::Dimension,
+                        &format!("{place}.size"),
+                        &sides.first().map(|s| format!("\"{s}\"")).unwrap_or_default(),
+                        format!("a box has three sides; {} were given", sides.len()),
+                        "write size: [\"x\", \"y\", \"z\"]",
+                    ));
+                }
+                let s = [size(&sides[0], "size[0]")?, size(&sides[1], "size[1]")?, size(&sides[2], "size[2]")?];
+                (Solid::Box { size: s }, placed(origin, rpy)?)
+            }
+            ShapeDef::Cylinder { radius, length, origin, rpy } => {
+                (Solid::Cylinder { radius: size(radius, "radius")?, length: size(length, "length")? }, placed(origin, rpy)?)
+            }
+            ShapeDef::Capsule { radius, length, origin, rpy } => {
+                (Solid::Capsule { radius: size(radius, "radius")?, length: size(length, "length")? }, placed(origin, rpy)?)
+            }
+            ShapeDef::Sphere { radius, origin } => (Solid::Sphere { radius: size(radius, "radius")? }, placed(origin, &None)?),
+        };
+        out.push(shape::Shape { solid, origin, rpy });
+        Ok(())
     }
 
     fn inertia(&self, def: &InertiaDef, place: &str, env: &Env) -> Result<Option<Matrix>, ModelError> {

@@ -254,6 +254,53 @@ pub struct BodyDef {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub com: Option<Vec<String>>,
     pub inertia: InertiaDef,
+    /// How the body is drawn (the animation only: the dynamics take the mass and inertia);
+    /// without one it is drawn as its equivalent-inertia box.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape: Option<ShapeDef>,
+}
+
+/// A body's drawn geometry, in its frame: each solid placed at `origin` (default the frame's
+/// origin) and turned by `rpy` (roll, pitch, yaw about the fixed x, y, z axes, URDF's
+/// convention; default none). Sizes are expressions in the parameters, positive.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeDef {
+    /// A box of full sides `size` along the placed x, y and z axes.
+    Box {
+        size: Vec<String>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        origin: Option<Vec<String>>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rpy: Option<Vec<String>>,
+    },
+    /// A cylinder along the placed z axis, centred on the origin.
+    Cylinder {
+        radius: String,
+        length: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        origin: Option<Vec<String>>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rpy: Option<Vec<String>>,
+    },
+    /// A sphere centred on the origin.
+    Sphere {
+        radius: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        origin: Option<Vec<String>>,
+    },
+    /// A cylinder along the placed z axis with a hemisphere on each end: `length` between the
+    /// hemispheres' centres.
+    Capsule {
+        radius: String,
+        length: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        origin: Option<Vec<String>>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rpy: Option<Vec<String>>,
+    },
+    /// Several solids (a URDF link's visuals, and those of the links merged into it).
+    Compound(Vec<ShapeDef>),
 }
 
 /// Inertia about the centre of mass, in the body frame.

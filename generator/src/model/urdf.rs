@@ -15,7 +15,8 @@
 //!   (no coordinate of its own); `floating` and `planar` joints, closed loops and several roots
 //!   are refused, located;
 //! - links' `inertial` (mass, the centre of mass `origin` with its own rotation, the inertia
-//!   tensor); `visual` and `collision` are not read;
+//!   tensor); `visual` boxes, cylinders and spheres become the body's drawn shape (a mesh: the box
+//!   that bounds its STL file, where found), `collision` is not read;
 //! - `limit` (lower, upper) becomes events on request ([`LimitAction`]); `dynamics` `damping`
 //!   a generalized force `-damping q'` (its friction is not modelled, and said so);
 //! - the parameters are each moving body's mass (`mass_<link>`) and each damped joint's
@@ -127,8 +128,8 @@ fn add(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
 
 /// URDF's `rpy`: fixed-axis roll about x, pitch about y, yaw about z, `R = Rz Ry Rx`.
 fn rpy(r: f64, p: f64, y: f64) -> M3 {
-    let (cr, sr, cp, sp, cy, sy) = (r.cos(), r.sin(), p.cos(), p.sin(), y.cos(), y.sin());
-    [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]]
+    let m = super::shape::rpy_rotation(r, p, y);
+    std::array::from_fn(|i| std::array::from_fn(|j| m[3 * i + j]))
 }
 
 /// A pose: the rotation (components of the child's axes in the parent's, columns) and the
@@ -276,6 +277,70 @@ impl<'a> Reader<'a> {
         let p = self.numbers(o, "xyz", [0.0; 3], &format!("{place}.origin"))?;
         let [r, pi, y] = self.numbers(o, "rpy", [0.0; 3], &format!("{place}.origin"))?;
         Ok(Pose { r: rpy(r, pi, y), p })
+    }
+
+    /// A `<visual>` of link `link`, whose frame is at `at` in its model frame, as a shape in that
+    /// frame: a box, cylinder or sphere as given; a mesh as the box that bounds it, where its
+    /// file is an STL found beside the URDF (`package://NAME/...` is looked for in the folders
+    /// above it); `None` for a mesh not found or of another format, and for geometry of another
+    /// kind.
+    fn visual(&self, visual: roxmltree::Node, link: &str, at: &Pose, folder: &std::path::Path) -> Result<Option<ShapeDef>, ModelError> {
+        let place = format!("link `{link}`.visual");
+        let Some(geometry) = child(visual, "geometry") else { return Ok(None) };
+        let Some(g) = geometry.children().find(|c| c.is_element()) else { return Ok(None) };
+        let pose = at.then(&self.origin(visual, &place)?);
+        let positive = |name: &str| -> Result<f64, ModelError> {
+            match self.number(g, name, &place)? {
+                Some(v) if v > 0.0 && v.is_finite() => Ok(v),
+                v => Err(self.err(
+                    ErrorKind::BadValue,
+                    g,
+                    &place,
+                    format!("link `{link}`'s visual {} has {name} {}", g.tag_name().name(), v.map_or("missing".to_string(), |v| v.to_string())),
+                    &format!("give the {} a positive {name}", g.tag_name().name()),
+                )),
+            }
+        };
+        let placed = |p: &Pose| (Some(p.p.iter().map(|x| num(*x)).collect()), Some(rpy_of(&p.r).iter().map(|x| num(*x)).collect()));
+        let shape = match g.tag_name().name() {
+            "box" => {
+                let size = self.numbers(g, "size", [0.0; 3], &place)?;
+                if let Some(bad) = size.iter().find(|x| !(**x > 0.0 && x.is_finite())) {
+                    return Err(self.err(
+                        ErrorKind::BadValue,
+                        g,
+                        &place,
+                        format!("link `{link}`'s visual box has a side {bad}"),
+                        "give the box three positive sides",
+                    ));
+                }
+                let (origin, rpy) = placed(&pose);
+                ShapeDef::Box { size: size.iter().map(|x| num(*x)).collect(), origin, rpy }
+            }
+            "cylinder" => {
+                let (origin, rpy) = placed(&pose);
+                ShapeDef::Cylinder { radius: num(positive("radius")?), length: num(positive("length")?), origin, rpy }
+            }
+            "sphere" => ShapeDef::Sphere { radius: num(positive("radius")?), origin: placed(&pose).0 },
+            "mesh" => {
+                let scale = self.numbers(g, "scale", [1.0; 3], &place)?;
+                let Some((lo, hi)) = g.attribute("filename").and_then(|name| mesh_file(name, folder)).and_then(|bytes| stl_bounds(&bytes)) else {
+                    return Ok(None);
+                };
+                let size: [f64; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) * scale[i]).abs());
+                let largest = size.iter().fold(0.0f64, |m, x| m.max(*x));
+                if !(largest > 0.0 && largest.is_finite()) {
+                    return Ok(None);
+                }
+                // A flat mesh (a plate) keeps a thousandth of its largest side as its thickness.
+                let size = size.map(|x| x.max(1e-3 * largest));
+                let centre: [f64; 3] = std::array::from_fn(|i| 0.5 * (hi[i] + lo[i]) * scale[i]);
+                let (origin, rpy) = placed(&pose.then(&Pose { r: IDENTITY, p: centre }));
+                ShapeDef::Box { size: size.iter().map(|x| num(*x)).collect(), origin, rpy }
+            }
+            _ => return Ok(None),
+        };
+        Ok(Some(shape))
     }
 
     fn inertial(&self, link: roxmltree::Node, name: &str) -> Result<Option<Inertial>, ModelError> {
@@ -559,6 +624,18 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
         bodies.entry(frame.clone()).and_modify(|(_, b)| *b = b.combined(&moved)).or_insert((k, moved));
     }
 
+    // What each body looks like: its links' visuals, placed in its model frame.
+    let mut looks: BTreeMap<String, Vec<ShapeDef>> = BTreeMap::new();
+    let folder = std::path::Path::new(file).parent().unwrap_or(std::path::Path::new(""));
+    for (link, (node, _)) in &links {
+        let (frame, pose) = &frame_of[link];
+        for visual in node.children().filter(|c| c.has_tag_name("visual")) {
+            if let Some(shape) = reader.visual(visual, link, pose, folder)? {
+                looks.entry(frame.clone()).or_default().push(shape);
+            }
+        }
+    }
+
     // Each body (the links merged into it) is a rigid body's.
     for (frame, (first, b)) in &bodies {
         if let Some(why) = not_a_body(&b.inertia) {
@@ -783,6 +860,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
             mass: p,
             com: Some(b.com.iter().map(|x| num(*x)).collect()),
             inertia: InertiaDef::Matrix(b.inertia.iter().map(|row| row.iter().map(|x| num(*x)).collect()).collect()),
+            shape: looks.remove(frame).map(|mut v| if v.len() == 1 { v.remove(0) } else { ShapeDef::Compound(v) }),
         });
     }
     // The bodies in the frames' order (a parent before its children).
@@ -878,4 +956,69 @@ pub fn include(file: &str, def: ModelFile) -> Result<ModelFile, ModelError> {
     out.emit = def.emit.clone();
     out.urdf = None;
     Ok(out)
+}
+
+/// URDF's `rpy` of a rotation (`R = Rz(yaw) Ry(pitch) Rx(roll)`), roll taken as zero where the
+/// pitch is a right angle.
+fn rpy_of(r: &M3) -> [f64; 3] {
+    let pitch = (-r[2][0]).clamp(-1.0, 1.0).asin();
+    if r[2][0].abs() > 1.0 - 1e-12 {
+        return [0.0, pitch, (-r[0][1]).atan2(r[1][1])];
+    }
+    [r[2][1].atan2(r[2][2]), pitch, r[1][0].atan2(r[0][0])]
+}
+
+/// The bytes of a mesh's STL file named `name` in a URDF in `folder` (`file://` absolute,
+/// `package://NAME/PATH` looked for as `NAME/PATH` and as `PATH` in `folder` and the folders
+/// above it, or relative to `folder`); `None` where it is not an STL or is not found.
+fn mesh_file(name: &str, folder: &std::path::Path) -> Option<Vec<u8>> {
+    const MAX_MESH_BYTES: u64 = 64 << 20;
+    if !name.to_ascii_lowercase().ends_with(".stl") {
+        return None;
+    }
+    let candidates: Vec<std::path::PathBuf> = if let Some(path) = name.strip_prefix("file://") {
+        vec![path.into()]
+    } else if let Some(rest) = name.strip_prefix("package://") {
+        let inside = rest.split_once('/').map_or("", |(_, path)| path);
+        folder.ancestors().flat_map(|dir| [dir.join(rest), dir.join(inside)]).collect()
+    } else {
+        vec![folder.join(name)]
+    };
+    candidates.into_iter().filter(|p| p.is_file()).find_map(|p| files::read_bounded(&p, MAX_MESH_BYTES).ok())
+}
+
+/// The box that bounds an STL mesh's vertices, binary or text: its lowest and highest corners.
+/// Written by hand: only the bounds are needed, a few lines of either format.
+fn stl_bounds(bytes: &[u8]) -> Option<([f64; 3], [f64; 3])> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut take = |v: [f64; 3]| {
+        for i in 0..3 {
+            lo[i] = lo[i].min(v[i]);
+            hi[i] = hi[i].max(v[i]);
+        }
+    };
+    let count = bytes.get(80..84).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize);
+    if count.is_some_and(|n| bytes.len() == 84 + 50 * n) {
+        for triangle in bytes[84..].chunks_exact(50) {
+            for k in 0..3 {
+                let at = 12 + 12 * k;
+                let f =
+                    |i: usize| f32::from_le_bytes([triangle[at + 4 * i], triangle[at + 4 * i + 1], triangle[at + 4 * i + 2], triangle[at + 4 * i + 3]]) as f64;
+                take([f(0), f(1), f(2)]);
+            }
+        }
+    } else {
+        let text = std::str::from_utf8(bytes).ok()?;
+        for line in text.lines() {
+            let mut words = line.split_whitespace();
+            if words.next() == Some("vertex") {
+                let v: Vec<f64> = words.filter_map(|w| w.parse().ok()).collect();
+                if v.len() == 3 {
+                    take([v[0], v[1], v[2]]);
+                }
+            }
+        }
+    }
+    (lo.iter().chain(&hi).all(|x| x.is_finite())).then_some((lo, hi))
 }

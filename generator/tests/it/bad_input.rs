@@ -84,6 +84,19 @@ fn non_positive_mass() {
     check(&e, ErrorKind::NonPositiveMass, &["bar2", "not positive"]);
 }
 
+/// A shape's size that is not positive, a box without three sides, a coordinate in a size:
+/// each located at its place in the body's `shape`.
+#[test]
+fn bad_shapes() {
+    let e = broken(&scene1(), r#"Cylinder(radius: "0.03""#, r#"Cylinder(radius: "0.03 - l""#);
+    check(&e, ErrorKind::BadValue, &["bodies[1] (bar1).shape.radius", "0.03 - l = -0.97", "not a positive number"]);
+    assert_eq!(e.location.map(|(line, _)| line), Some(line_of(&scene1(), r#"Cylinder(radius: "0.03""#)), "{e}");
+    let e = broken(&scene1(), r#"Box(size: ["0.4", "0.2", "0.2"])"#, r#"Box(size: ["0.4", "0.2"])"#);
+    check(&e, ErrorKind::Dimension, &["bodies[0] (cart).shape.size", "three sides; 2 were given"]);
+    let e = broken(&scene1(), r#"Box(size: ["0.4", "0.2", "0.2"])"#, r#"Box(size: ["0.4", "x", "0.2"])"#);
+    assert!(e.to_string().contains("bodies[0] (cart).shape.size[1]") && e.location.is_some(), "{e}");
+}
+
 #[test]
 fn inertia_not_positive_semi_definite() {
     let e = broken(&scene2(), "\"Ixy\": 0.05", "\"Ixy\": 5.0");

@@ -1,0 +1,125 @@
+"""The animation page's frame time, outside CI: writes docs/benchmarks/page.json (docs/tool.md
+quotes it).
+
+    python python/benchmarks/page_frames.py        # with the wheel and Debian's chromium
+
+Two models of 40 bodies, each simulated for 2 s and written as a page: a carousel of 40
+capsules (40 shaped bodies, 84 faces each: the page's heaviest solid) on one turning frame,
+and the pendulum on a cart with 39 links (40 bodies drawn as inertia cubes, linked by rods).
+Each page is opened in headless Chromium at 1280 x 720 with `&measure=300`: the page draws 300
+frames one after another through the run, each made to reach the canvas's pixels (a one-pixel
+read waits for the drawing), and keeps their times; three such rounds, pages alternated, the
+round with the lowest median kept (as the other benchmarks keep the least disturbed round: this
+machine's speed varies from minute to minute), every round's median recorded. Headless
+Chromium draws in software (`--disable-gpu`); a laptop's browser draws the canvas on its GPU.
+The median frame and the slowest are recorded, and frames per second as 1000 / median.
+"""
+
+import json
+import math
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import multibody
+
+ROOT = Path(__file__).resolve().parents[2]
+OUT = ROOT / "docs" / "benchmarks" / "page.json"
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+FRAMES = 300
+ROUNDS = 3
+
+
+def carousel(bodies=40):
+    """A RON model: `bodies` capsules around a frame turning about the vertical."""
+    rows = []
+    for k in range(bodies):
+        ring, slot = divmod(k, 10)
+        angle = 2 * math.pi * slot / 10
+        radius = 0.6 + 0.4 * ring
+        x, y = radius * math.cos(angle), radius * math.sin(angle)
+        rows.append(
+            f'Body(name: "b{k}", frame: "disk", mass: "1", com: ["{x:.6f}", "{y:.6f}", "0"], '
+            f'inertia: Diagonal(["0.01", "0.01", "0.01"]), '
+            f'shape: Capsule(radius: "0.06", length: "0.2", origin: ["{x:.6f}", "{y:.6f}", "0"])),'
+        )
+    return (
+        'Model(name: "carousel", parameters: {"g": 9.81}, coordinates: ["theta"],\n'
+        '  frames: [Frame(name: "disk", parent: "world", rotation: [Z("theta")])],\n'
+        "  bodies: [\n    " + "\n    ".join(rows) + "\n  ],\n"
+        '  forces: [Gravity(vector: ["0", "0", "-g"])],\n'
+        '  quasi_velocities: QuasiVelocities(full: ["theta\'"], reduced: []),\n'
+        '  initial: Initial(q: {"theta": "0"}, qdot: {"theta": "1"}),\n'
+        ")\n"
+    )
+
+
+def measure(page):
+    profile = tempfile.mkdtemp()
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--window-size=1280,800", f"--user-data-dir={profile}"]
+    url = page.as_uri() + f"#t=0&size=1280x720&measure={FRAMES}"
+    out = subprocess.run([CHROMIUM, *flags, "--dump-dom", url], capture_output=True, text=True, timeout=600)
+    errors = re.search(r'<pre id="errors">(.*?)</pre>', out.stdout, re.S).group(1)
+    assert errors.strip() == "", errors
+    state = json.loads(re.search(r'<pre id="state">(.*?)</pre>', out.stdout, re.S).group(1).replace("&quot;", '"'))
+    frames = state["frames"]
+    assert frames["count"] == FRAMES
+    return {
+        "bodies": len(state["bodies"]),
+        "shaped_bodies": state["shaped"],
+        "faces_drawn": state["polygons"],
+        "median_frame_ms": round(frames["median"], 2),
+        "slowest_frame_ms": round(frames["slowest"], 2),
+        "frames_per_second": round(1000 / frames["median"], 1),
+    }
+
+
+def main():
+    if not CHROMIUM:
+        sys.exit("needs Debian's chromium (apt install chromium)")
+    chromium_version = subprocess.run([CHROMIUM, "--version"], capture_output=True, text=True).stdout.strip()
+    results = {}
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        (folder / "carousel.ron").write_text(carousel())
+        cases = {
+            "carousel_40_capsules": multibody.load(str(folder / "carousel.ron")),
+            "pendulum_on_cart_39": multibody.pendulum_on_cart(39),
+        }
+        pages = {}
+        for name, m in cases.items():
+            print(f"{name}: simulating", flush=True)
+            run = m.simulate("kane", t_end=2.0, dt_out=0.01, frame=False)
+            pages[name] = folder / f"{name}.html"
+            m.animate(run, pages[name])
+        rounds = {name: [] for name in cases}
+        for k in range(ROUNDS):
+            for name, page in pages.items():
+                print(f"{name}: round {k + 1}, drawing {FRAMES} frames", flush=True)
+                rounds[name].append(measure(page))
+        for name, measured in rounds.items():
+            results[name] = dict(min(measured, key=lambda r: r["median_frame_ms"]))
+            results[name]["round_medians_ms"] = [r["median_frame_ms"] for r in measured]
+            print(f"  {name}: {results[name]}", flush=True)
+    OUT.write_text(
+        json.dumps(
+            {
+                "command": "python python/benchmarks/page_frames.py",
+                "browser": chromium_version + " (headless, --disable-gpu: software drawing)",
+                "size": "1280x720",
+                "frames": FRAMES,
+                "rounds": ROUNDS,
+                "results": results,
+            },
+            indent=2,
+        )
+        + "\n"
+    )
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()
