@@ -152,7 +152,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         }
     }
     if let Some(dir) = &args.plots {
-        for p in plot::write_plots(&model, &runs, dir)? {
+        for p in plot::write_plots(&model, &source, &runs, dir)? {
             eprintln!("wrote {}", files::printable_path(&p));
         }
     }

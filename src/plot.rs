@@ -130,7 +130,8 @@ fn legend_row<'a>(area: &DrawingArea<SVGBackend, plotters::coord::Shift>, names:
 /// Writes `<scene>_coordinates.svg` and `<scene>_errors.svg` into `dir`; returns their paths.
 /// Error panels are `|error|` on logarithmic axes; a panel with nothing to show (no
 /// constraints, no ignorable coordinates) is left out.
-pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+/// `source` gives the coordinates' units (`x [m]` on the axes).
+pub fn write_plots(model: &Model, source: &generator::model::Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let Some(first) = runs.first() else { return Ok(vec![]) };
     let scene = &first.record.scene;
     let times = &first.solution.times;
@@ -144,7 +145,7 @@ pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBu
     for (j, area) in root.split_evenly((rows, 2)).iter().enumerate().take(m) {
         let series: Vec<(&str, Vec<f64>)> = runs.iter().map(|r| (r.record.method.as_str(), r.invariants.coordinates.iter().map(|q| q[j]).collect())).collect();
         let name = model.coordinates.get(j).cloned().unwrap_or_else(|| format!("q{j}"));
-        panel(area, &name, &name, times, &series).map_err(|e| err(&path, e))?;
+        panel(area, &name, &source.labelled(&name), times, &series).map_err(|e| err(&path, e))?;
     }
     root.present().map_err(|e| err(&path, e))?;
     drop(root);
@@ -178,7 +179,15 @@ pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBu
 /// A simulation's plots: `<base>_coordinates.svg` (each coordinate over time) and
 /// `<base>_invariants.svg` (|energy error|, the momenta's drift and the constraint residual,
 /// where the model has them, on logarithmic axes).
-pub fn write_trajectory(model: &Model, form: &seam::Formulation, times: &[f64], inv: &Invariants, base: &Path) -> Result<Vec<PathBuf>, PlotError> {
+/// `source` gives the coordinates' units (`x [m]` on the axes).
+pub fn write_trajectory(
+    model: &Model,
+    source: &generator::model::Model,
+    form: &seam::Formulation,
+    times: &[f64],
+    inv: &Invariants,
+    base: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
     let stem = base.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let path = base.with_file_name(format!("{stem}_coordinates.svg"));
     let m = model.coordinates.len();
@@ -189,7 +198,7 @@ pub fn write_trajectory(model: &Model, form: &seam::Formulation, times: &[f64], 
     for (j, area) in root.split_evenly((rows, 2)).iter().enumerate().take(m) {
         let name = &model.coordinates[j];
         let series = [(form.name(), inv.coordinates.iter().map(|q| q[j]).collect::<Vec<f64>>())];
-        panel(area, name, name, times, &series).map_err(|e| err(&path, e))?;
+        panel(area, name, &source.labelled(name), times, &series).map_err(|e| err(&path, e))?;
     }
     root.present().map_err(|e| err(&path, e))?;
     drop(root);

@@ -145,11 +145,13 @@ pub fn run(args: &SimulateArgs) -> Result<Option<runtime::integrate::RunError>, 
         "stopped_by_event": solution.stopped,
         "stopped_by_error": failed.as_ref().map(|e| e.to_string()),
         "events": run.events.iter().map(|e| serde_json::json!({ "event": e.name, "action": e.action.name(), "t": e.t, "q": e.q, "qdot": e.qdot })).collect::<Vec<_>>(),
+        // The model file's units of its coordinates and parameters (`units`), for what reads the file.
+        "units": source.def.units,
         "columns": header,
         "rows": rows,
     });
     write_file(&base.with_extension("json"), serde_json::to_string(&json).expect("plain data").as_bytes())?;
-    let plots = plot::write_trajectory(&model, &sys.form, &solution.times, inv, &base)?;
+    let plots = plot::write_trajectory(&model, &source, &sys.form, &solution.times, inv, &base)?;
     let end = match (solution.stopped, solution.events.last(), &failed) {
         (_, _, Some(e)) => format!(
             "{} (the last output before the run stopped at t = {}: see the error below)",

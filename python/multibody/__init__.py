@@ -100,13 +100,14 @@ class Trajectory(Mapping):
     rate ``q'``, ``state:...``, the energy and its error, ``momentum:...``, the constraint
     residuals), with the events (name, time, coordinates) and where it came from."""
 
-    def __init__(self, columns, table, events, model, formulation, params):
+    def __init__(self, columns, table, events, model, formulation, params, units=None):
         self.columns = list(columns)
         self._table = table
         self.events = list(events)
         self.model = model
         self.formulation = formulation
         self.params = dict(params)
+        self.units = dict(units or {})
 
     def __getitem__(self, name):
         try:
@@ -131,11 +132,11 @@ class Trajectory(Mapping):
 
     def to_pandas(self):
         """The same table as a pandas DataFrame (``attrs`` hold the model, the formulation, the
-        events and the parameters)."""
+        events, the parameters and the units)."""
         import pandas as pd
 
         frame = pd.DataFrame(self._table, columns=self.columns)
-        frame.attrs.update(model=self.model, formulation=self.formulation, events=self.events, params=self.params)
+        frame.attrs.update(model=self.model, formulation=self.formulation, events=self.events, params=self.params, units=self.units)
         return frame
 
     def __repr__(self):
@@ -172,6 +173,7 @@ class Model:
     coordinates = property(lambda self: self._native.coordinates, doc="The generalized coordinates, in order.")
     formulations = property(lambda self: self._native.formulations, doc="The formulations it has.")
     params = property(lambda self: self._native.params, doc="The parameters and their defaults (a dict in order).")
+    units = property(lambda self: dict(self._native.units), doc="The units the file gives its coordinates and parameters (`units`).")
     ignorable = property(lambda self: self._native.ignorable, doc="The ignorable coordinates.")
     initial = property(lambda self: self._native.initial, doc="The file's initial (q, qdot).")
     run = property(lambda self: self._native.run, doc="The file's run (t_start, t_end, dt_out), or None.")
@@ -251,7 +253,7 @@ class Model:
         kind, columns, table, events, used = self._native.simulate_columns(
             formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start
         )
-        result = Trajectory(columns, table, events, self.name, kind, zip(self.params, used))
+        result = Trajectory(columns, table, events, self.name, kind, zip(self.params, used), self.units)
         if frame is None:
             frame = _has_pandas()
         return result.to_pandas() if frame else result

@@ -17,6 +17,14 @@ def _column(run, name):
     return np.asarray(run[name], dtype=float)
 
 
+def _units(run):
+    """The units of a run's coordinates and parameters (``units`` in the model file)."""
+    attrs = getattr(run, "attrs", None)
+    if isinstance(attrs, dict) and "model" in attrs:
+        return attrs.get("units", {}) or {}
+    return getattr(run, "units", {}) or {}
+
+
 def _origin(run):
     """(model, formulation) of a DataFrame (its ``attrs``) or a ``Trajectory``."""
     attrs = getattr(run, "attrs", None)
@@ -29,7 +37,8 @@ def plot(run, coordinates=None, *, title=None):
     """Draws a run of ``Model.simulate`` (a DataFrame or a ``Trajectory``) and returns the
     matplotlib ``Figure``, three panels over time:
 
-    - the ``coordinates`` named (default: every coordinate of the model, at most eight);
+    - the ``coordinates`` named (default: every coordinate of the model, at most eight), each
+      labelled with its unit where the model gives one (``x [m]``);
     - the invariants' errors on a logarithmic axis: ``|energy error|`` (the energy balance
       ``E - E(0)``, work of non-potential forces included), each conserved momentum's drift
       ``|p(t) - p(0)|``, and the constraint residuals; a series that is zero throughout has
@@ -57,8 +66,9 @@ def plot(run, coordinates=None, *, title=None):
     model, formulation = _origin(run)
     fig.suptitle(title if title is not None else f"{model} ({formulation})".strip())
 
+    units = _units(run)
     for c in coordinates:
-        ax_q.plot(t, _column(run, c), label=c)
+        ax_q.plot(t, _column(run, c), label=f"{c} [{units[c]}]" if c in units else c)
     ax_q.set_ylabel("coordinates")
     if coordinates:
         ax_q.legend(loc="best", fontsize="small", ncol=min(4, len(coordinates)))

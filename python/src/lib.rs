@@ -115,13 +115,16 @@ struct Model {
     /// The same model with its exact Jacobians, derived at the first `jacobian` or `linearize`.
     exact: OnceLock<seam::Model>,
     warnings: Vec<String>,
+    /// The model file's `units`, by coordinate or parameter.
+    units: Vec<(String, String)>,
 }
 
 impl Model {
     fn open(source: ::load::Source) -> PyResult<Model> {
         let model = source.model().map_err(model_error)?;
         let loaded = ::load::evaluate(&model, ::load::Jacobians::Differenced, ::load::Route::Jit, &mut |_| {}).map_err(model_error)?;
-        Ok(Model { source, evaluated: loaded.model, exact: OnceLock::new(), warnings: loaded.warnings })
+        let units = model.def.units.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        Ok(Model { source, evaluated: loaded.model, exact: OnceLock::new(), warnings: loaded.warnings, units })
     }
 
     fn kind(&self, formulation: Option<&str>) -> PyResult<FormulationKind> {
@@ -285,6 +288,12 @@ impl Model {
     #[getter]
     fn coordinates(&self) -> Vec<String> {
         self.evaluated.coordinates.clone()
+    }
+
+    /// The units the model file gives its coordinates and parameters (`units`), in file order.
+    #[getter]
+    fn units(&self) -> Vec<(String, String)> {
+        self.units.clone()
     }
 
     /// The formulations the model has, by name (`lagrange`, `maggi`, `kane`, `reduced_volterra`).

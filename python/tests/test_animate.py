@@ -314,3 +314,4 @@ def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
             if s > 0.35 and min(abs(360 * h - 30), 360 - abs(360 * h - 30)) < 6:
                 values.append(v)
     assert len(values) > 200 and max(values) - min(values) > 0.15, (len(values), min(values or [0]), max(values or [0]))
+

@@ -63,3 +63,19 @@ def test_an_unknown_coordinate_names_the_known_ones():
     m = multibody.load("cart_pendulum")
     with pytest.raises(KeyError, match="no coordinate 'theta3'.*theta1, theta2, x"):
         multibody.plot(m.simulate("kane", t_end=1), coordinates=["theta3"])
+
+
+def test_units_label_the_plot():
+    m = multibody.load("cart_pendulum")
+    assert m.units["x"] == "m" and m.units["theta1"] == "rad" and m.units["g"] == "m/s^2"
+    run = m.simulate("kane", t_end=0.5, dt_out=0.1, frame=False)
+    assert run.units == m.units and run.to_pandas().attrs["units"] == m.units
+    for drawn in [run, run.to_pandas()]:
+        fig = multibody.plot(drawn)
+        labels = fig.axes[0].get_legend_handles_labels()[1]
+        assert labels == ["theta1 [rad]", "theta2 [rad]", "x [m]"], labels
+    # A model without units: the bare names.
+    three = multibody.load("three_body")
+    assert three.units == {}
+    fig = multibody.plot(three.simulate("kane", t_end=0.2, dt_out=0.1, frame=False), coordinates=["psi"])
+    assert fig.axes[0].get_legend_handles_labels()[1] == ["psi"]

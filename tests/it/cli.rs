@@ -555,3 +555,14 @@ fn a_rotor_whose_every_coordinate_is_ignorable_runs_in_every_formulation() {
         assert!((at("t") - 1.0).abs() < 1e-15 && (at("theta") - 1.0).abs() < 1e-9 && (at("momentum:theta") - 0.74).abs() < 1e-12, "{form}: {csv}");
     }
 }
+
+/// The model file's units label the plots' axes and reach the run's JSON.
+#[test]
+fn simulate_labels_the_plots_with_the_model_s_units() {
+    let dir = tempfile::tempdir().unwrap();
+    ok(&multibody(dir.path(), &["simulate", "cart_pendulum", "--out", "run", "--t-end", "0.5"]));
+    let svg = std::fs::read_to_string(dir.path().join("run/cart_pendulum_reduced_volterra_coordinates.svg")).unwrap();
+    assert!(svg.contains("x [m]") && svg.contains("theta1 [rad]"), "the axes' labels");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("run/cart_pendulum_reduced_volterra.json")).unwrap()).unwrap();
+    assert_eq!((json["units"]["x"].as_str(), json["units"]["tau"].as_str()), (Some("m"), Some("N m")));
+}

@@ -218,6 +218,8 @@ fn visuals_become_shapes_in_their_body_frames() {
     let hand = body("right_hand");
     assert!(hand[0].solid == "box" && close(&hand[0].sizes, &[0.04, 0.06, 0.02]) && close(&hand[0].origin, &[0.0, -0.07, 0.0]), "{hand:?}");
     assert!(body("left_lower").is_empty());
+    // URDF is in SI units: angles in radians, a prismatic joint's travel in metres, masses in kg.
+    assert_eq!((model.unit("waist"), model.unit("right_wrist"), model.unit("mass_torso")), (Some("rad"), Some("m"), Some("kg")));
     // The shapes reach the page, with the bodies' other data.
     let motion = animate::Motion { formulation: "kane", times: &[0.0], q: &vec![0.0; model.coordinates.len()] };
     let html = animate::page(&model, &params, &motion).unwrap();

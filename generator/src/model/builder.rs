@@ -163,6 +163,7 @@ impl ModelBuilder {
                 initial: None,
                 simulation: None,
                 events: Vec::new(),
+                units: IndexMap::new(),
                 emit: EmitDef::default(),
             },
         }
@@ -201,6 +202,12 @@ impl ModelBuilder {
     /// A parameter with its value.
     pub fn parameter(mut self, name: impl Into<String>, value: f64) -> ModelBuilder {
         self.def.parameters.insert(name.into(), value);
+        self
+    }
+
+    /// The unit of a coordinate or a parameter, for plots and tables (`units` in RON).
+    pub fn unit(mut self, name: impl Into<String>, unit: impl Into<String>) -> ModelBuilder {
+        self.def.units.insert(name.into(), unit.into());
         self
     }
 

@@ -265,6 +265,25 @@ impl Model {
         s
     }
 
+    /// The unit the model file gives a coordinate or a parameter (`units`), if any.
+    pub fn unit(&self, name: &str) -> Option<&str> {
+        self.def.units.get(name).map(String::as_str)
+    }
+
+    /// `name`, with its unit where the model gives one: `x [m]`, for axes and legends.
+    ///
+    /// ```
+    /// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+    /// assert_eq!(model.labelled("x"), "x [m]");
+    /// assert_eq!(model.labelled("nothing"), "nothing");
+    /// ```
+    pub fn labelled(&self, name: &str) -> String {
+        match self.unit(name) {
+            Some(unit) => format!("{name} [{unit}]"),
+            None => name.to_string(),
+        }
+    }
+
     /// Number of coordinates, m.
     pub fn m(&self) -> usize {
         self.coordinates.len()
@@ -669,6 +688,36 @@ impl<'a> Builder<'a> {
         ])
     }
 
+    /// Each unit names a coordinate or a parameter, and is short printable text: no markup,
+    /// no control character (it is shown in plots and pages).
+    fn units(&self, def: &ModelFile) -> Result<(), ModelError> {
+        const MAX_UNIT_CHARS: usize = 24;
+        for (name, unit) in &def.units {
+            let place = format!("units.{name}");
+            if !def.coordinates.contains(name) && !def.parameters.contains_key(name) && !def.inputs.contains_key(name) {
+                let known: Vec<&str> = def.coordinates.iter().map(String::as_str).chain(def.parameters.keys().map(String::as_str)).collect();
+                return Err(self.err(
+                    ErrorKind::UnknownName,
+                    &place,
+                    &format!("\"{name}\""),
+                    format!("`{name}` has a unit but is neither a coordinate nor a parameter (known: {})", known.join(", ")),
+                    "give units to the model's coordinates and parameters, by their names",
+                ));
+            }
+            let plain = |c: char| !c.is_control() && !"<>&\"'`\\".contains(c);
+            if unit.trim().is_empty() || unit.chars().count() > MAX_UNIT_CHARS || !unit.chars().all(plain) {
+                return Err(self.err(
+                    ErrorKind::BadValue,
+                    &place,
+                    &format!("\"{}\"", unit.escape_debug()),
+                    format!("the unit of `{name}` is not short plain text: {:?}", unit),
+                    &format!("write a unit of 1 to {MAX_UNIT_CHARS} characters, without <, >, &, quotes or control characters, such as \"m\" or \"N m\""),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     fn check_name(&self, seen: &mut HashSet<String>, name: &str, place: &str, what: &str) -> Result<(), ModelError> {
         let valid = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_') && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
         if !valid {
@@ -746,6 +795,7 @@ impl<'a> Builder<'a> {
             self.coords.push(name.clone());
             coordinates.push(s);
         }
+        self.units(&def)?;
         self.names.insert("t".into(), self.t.expr());
         self.names.insert("pi".into(), Symbol::new("pi").expr());
         for name in def.time_functions.keys() {

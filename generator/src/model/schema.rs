@@ -85,6 +85,10 @@ pub struct ModelFile {
     /// happens there.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<EventDef>,
+    /// The unit of a coordinate or a parameter, for plots and tables: `{"x": "m", "theta":
+    /// "rad", "M": "kg"}` (text shown as given; the equations do not read it).
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty", deserialize_with = "unique_keys")]
+    pub units: IndexMap<String, String>,
     /// What the generated module contains (default: everything, runtime parameters).
     #[serde(default)]
     pub emit: EmitDef,

@@ -686,6 +686,9 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
     // The model.
     let mut parameters: IndexMap<String, f64> = IndexMap::new();
     let mut coordinates: Vec<String> = Vec::new();
+    // URDF is in SI units: a revolute joint's angle in radians, a prismatic one's travel and the
+    // base's position in metres, the masses in kilograms.
+    let mut units: IndexMap<String, String> = IndexMap::new();
     let mut frames: Vec<FrameDef> = Vec::new();
     let mut full: Vec<String> = Vec::new();
     let mut ignorable: Vec<String> = Vec::new();
@@ -695,6 +698,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
     if options.base == Base::Floating {
         let (b, e) = (BASE_POSITION, BASE_ATTITUDE);
         coordinates.extend(b.iter().chain(&e).map(|s| s.to_string()));
+        units.extend(b.iter().map(|s| (s.to_string(), "m".to_string())));
         frames.push(FrameDef {
             name: root_frame.clone(),
             parent: "world".into(),
@@ -807,6 +811,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
         // A mimic joint adds no coordinate: its angle is its master's.
         let Some(q) = own else { continue };
         coordinates.push(q.clone());
+        units.insert(q.clone(), if j.kind == "prismatic" { "m" } else { "rad" }.to_string());
         full.push(format!("{q}'"));
         let start = match j.limit {
             Some((lo, hi)) if !(lo..=hi).contains(&0.0) => 0.5 * (lo + hi),
@@ -854,6 +859,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
         }
         let p = format!("mass_{frame}");
         mass_parameters.insert(p.clone(), b.mass);
+        units.insert(p.clone(), "kg".to_string());
         body_defs.push(BodyDef {
             name: frame.clone(),
             frame: frame.clone(),
@@ -901,6 +907,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
         initial: Some(InitialDef { q: q0, qdot: qdot0 }),
         simulation: Some(SimulationDef { t_start: 0.0, t_end: 1.0, dt_out: 0.01, paper: false }),
         events,
+        units,
         emit: EmitDef::default(),
     })
 }
@@ -928,6 +935,7 @@ pub fn include(file: &str, def: ModelFile) -> Result<ModelFile, ModelError> {
     out.bodies.extend(def.bodies.iter().cloned());
     out.constraints.extend(def.constraints.iter().cloned());
     out.forces.extend(def.forces.iter().cloned());
+    out.units.extend(def.units.clone());
     out.events.extend(def.events.iter().cloned());
     out.quasi_velocities = if def.quasi_velocities.is_empty() {
         let own: Vec<String> = def.coordinates.iter().map(|c| format!("{c}'")).collect();

@@ -97,6 +97,20 @@ fn bad_shapes() {
     assert!(e.to_string().contains("bodies[0] (cart).shape.size[1]") && e.location.is_some(), "{e}");
 }
 
+/// A unit for a name the model does not have, and a unit that is not short plain text (it is
+/// shown in plots and pages): each located at its entry of `units`.
+#[test]
+fn bad_units() {
+    let e = broken(&scene1(), r#""x": "m", "M": "kg""#, r#""y": "m", "M": "kg""#);
+    check(&e, ErrorKind::UnknownName, &["units.y", "`y` has a unit but is neither a coordinate nor a parameter"]);
+    assert!(e.location.is_some(), "{e}");
+    let e = broken(&scene1(), r#""x": "m", "M": "kg""#, r#""x": "<script>", "M": "kg""#);
+    check(&e, ErrorKind::BadValue, &["units.x", "not short plain text"]);
+    assert_eq!(e.location.map(|(line, _)| line), Some(line_of(&scene1(), r#""x": "m", "M": "kg""#)), "{e}");
+    let model = generator::model::from_source("models/cart_pendulum.ron", &scene1()).unwrap();
+    assert_eq!((model.labelled("x"), model.labelled("g"), model.unit("theta1")), ("x [m]".to_string(), "g [m/s^2]".to_string(), Some("rad")));
+}
+
 #[test]
 fn inertia_not_positive_semi_definite() {
     let e = broken(&scene2(), "\"Ixy\": 0.05", "\"Ixy\": 5.0");
