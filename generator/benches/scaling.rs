@@ -336,7 +336,7 @@ fn main() {
         let model = generator::model::load(&path).expect("the scene loads");
         match args.get(2).map(String::as_str) {
             Some("inspect") => {
-                generator::inspect::inspect(&model, false).expect("the scene inspects");
+                generator::inspect(&model, false).expect("the scene inspects");
             }
             Some("kane") => {
                 // Kane's form alone, derived and emitted.

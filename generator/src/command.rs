@@ -205,7 +205,7 @@ pub fn inspect(model: &Path, latex: bool) -> Result<(), Failure> {
 
 /// What is derived from a loaded model, printed (text, or LaTeX with `latex`).
 pub fn print_inspection(model: &crate::model::Model, latex: bool) -> Result<(), Failure> {
-    let text = crate::inspect::inspect(model, latex)?;
+    let text = crate::pipeline::inspect(model, latex)?;
     print_stdout(&text)
 }
 

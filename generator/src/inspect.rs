@@ -1,30 +1,15 @@
-//! The `inspect` report: what was derived from a model, as text or LaTeX.
-//!
-//! ```
-//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-//! let text = generator::inspect::inspect(&model, false).unwrap();
-//! assert!(text.contains("s = 1"));
-//! ```
+//! The `inspect` report: what was derived from a model, as text or LaTeX ([`crate::inspect`]
+//! derives and writes it).
 
-use crate::formulation::{Derivation, Request, ignorable};
-use crate::model::{Model, ModelError};
+use crate::formulation::{Derivation, ignorable};
+use crate::model::Model;
 use crate::symbolic::Expr;
 use crate::symbolic::print::render_shared;
 use std::fmt::Write;
 
-/// Renders the derivation report for a model: one derivation of all four formulations, the
-/// same one the generator emits from.
-pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
-    crate::model::in_own_context(model, |model| {
-        let d = crate::formulation::derive(model, &Request::all())?;
-        let assemblies = crate::emit::assemblies(model, &d, &crate::emit::Options::from_model(model))?;
-        Ok(report(model, &d, &assemblies, latex))
-    })
-}
-
 /// The report of a derivation, as text or LaTeX, with each formulation's assembly as
 /// the emitter's assemblies give it.
-pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], latex: bool) -> String {
+pub(crate) fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], latex: bool) -> String {
     let mech = &d.mechanics;
     let reports = &d.reports;
     let chosen = &d.ignorable;

@@ -10,7 +10,7 @@ pub mod symbolic;
 pub mod kinematics;
 pub mod model;
 pub mod formulation;
-pub mod inspect;
+mod inspect;
 /// The `generate` and `inspect` command lines (clap), shared by the `generator` binary and the
 /// `multibody` tool: only with the `cli` feature, so that a build script compiles no clap.
 #[cfg(feature = "cli")]
@@ -23,4 +23,4 @@ mod build_script;
 pub mod pose;
 
 pub use build_script::{BuildError, Builder, Built};
-pub use pipeline::{evaluate, evaluate_reporting, evaluate_with, evaluate_with_backend, generate};
+pub use pipeline::{evaluate, evaluate_reporting, evaluate_with, evaluate_with_backend, generate, inspect};

@@ -1,5 +1,6 @@
 //! One run of the generator, owned here: a model is derived ([`crate::formulation`]), then
-//! emitted as Rust ([`crate::emit`]) or evaluated in-process ([`crate::eval`]). The threads and
+//! emitted as Rust ([`crate::emit`]), evaluated in-process ([`crate::eval`]) or reported
+//! ([`inspect`]). The threads and
 //! the channels between them are in this file alone; the stages below it are functions of what
 //! they are handed and never call back up.
 //!
@@ -74,6 +75,23 @@ pub fn evaluate_with_backend(model: &Model, options: &Options, backend: &dyn ker
     let generated = generate(model, &options)?;
     let program = generated.program.ok_or_else(|| model.error(ErrorKind::Emission, "emit", "emit", "internal error: no tapes".into(), String::new()))?;
     Ok((Evaluated::model_with(program, backend), generated.summary))
+}
+
+/// The derivation report of `model` (`inspect`), as text or LaTeX: one derivation of all four
+/// formulations, the same one the generator emits from, with each formulation's assembly as
+/// the emitter chooses it.
+///
+/// ```
+/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+/// let text = generator::inspect(&model, false).unwrap();
+/// assert!(text.contains("s = 1"));
+/// ```
+pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
+    crate::model::in_own_context(model, |model| {
+        let d = formulation::derive(model, &Request::all())?;
+        let assemblies = emit::assemblies(model, &d, &Options::from_model(model))?;
+        Ok(crate::inspect::report(model, &d, &assemblies, latex))
+    })
 }
 
 /// Stack of the emitting thread: the recursive passes over expressions as deep as

@@ -351,7 +351,7 @@ impl Model {
     fn inspect(&self, py: Python<'_>, latex: bool) -> PyResult<String> {
         guarded(|| {
             let model = self.source.model().map_err(model_error)?;
-            py.detach(|| generator::inspect::inspect(&model, latex)).map_err(model_error)
+            py.detach(|| generator::inspect(&model, latex)).map_err(model_error)
         })
     }
 

@@ -175,9 +175,9 @@ fn scene1_energy_matches_the_reference_initial_value() {
 fn every_model_inspects_in_text_and_latex() {
     for name in SCENES.iter().chain(OWN.iter()) {
         let m = load(name);
-        let text = generator::inspect::inspect(&m, false).unwrap();
+        let text = generator::inspect(&m, false).unwrap();
         assert!(text.contains("mass matrix M"), "{name}");
-        let tex = generator::inspect::inspect(&m, true).unwrap();
+        let tex = generator::inspect(&m, true).unwrap();
         assert!(tex.contains("\\begin{aligned}") && tex.contains("M_{11}"), "{name}");
     }
 }
@@ -188,7 +188,7 @@ fn inspect_and_the_drop_option_agree_on_every_model() {
     use generator::generate;
     for name in SCENES.iter().chain(OWN.iter()).chain(["pendulum_on_cart_5"].iter()) {
         let m = load(name);
-        let text = generator::inspect::inspect(&m, false).unwrap();
+        let text = generator::inspect(&m, false).unwrap();
         let says_can = text.contains("it can leave the integrated state");
         let says_cannot = text.contains("it must stay in the integrated state");
         let options = Options { integrate_ignorable: false, formulations: vec![Formulation::ReducedVolterra], ..Options::from_model(&m) };

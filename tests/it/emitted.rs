@@ -297,7 +297,7 @@ fn reduced_right_hand_side_solves_less_than_kane_and_does_less_work_on_scene_3()
 fn inspect_and_the_generator_count_the_same_states_and_equations_and_solve_alike() {
     for name in MODELS {
         let def = load(name);
-        let text = generator::inspect::inspect(&def, false).unwrap();
+        let text = generator::inspect(&def, false).unwrap();
         let out = generator::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
         for (form, states, eqs) in &out.summary.formulations {
             let line = format!("  {form:<17} {states:>3} states, {eqs:>3} equations");

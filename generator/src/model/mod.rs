@@ -298,7 +298,7 @@ impl Model {
 }
 
 /// Runs `f` on a copy of `model` in a new expression context, dropped when `f` returns: the
-/// library's entry points ([`crate::generate`], [`crate::inspect::inspect`]) derive there,
+/// library's entry points ([`crate::generate`], [`crate::inspect()`]) derive there,
 /// so what a derivation builds never stays in the caller's context. `f`'s result must not hold
 /// expressions (it cannot: they would belong to a context that is gone).
 ///

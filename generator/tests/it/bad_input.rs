@@ -166,7 +166,7 @@ fn with_two_stages_failing_generation_reports_the_first_as_inspect_does() {
         let generated = from_source("models/broken.ron", &text)
             .and_then(|m| generator::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()))
             .expect_err("refused");
-        let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect::inspect(&m, false).map(|_| ())).expect_err("refused");
+        let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect(&m, false).map(|_| ())).expect_err("refused");
         assert_eq!(generated.kind, kind, "{edits:?}: {generated}");
         assert_eq!(generated.to_string(), inspected.to_string(), "{edits:?}");
     }
@@ -185,7 +185,7 @@ fn inspect_and_generation_refuse_the_same_models_with_the_same_error() {
         assert!(src.contains(from), "test edit `{from}` not found");
         let text = src.replacen(from, to, 1);
         let generated = from_source("models/broken.ron", &text).and_then(|m| generator::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()));
-        let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect::inspect(&m, false).map(|_| ()));
+        let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect(&m, false).map(|_| ()));
         match (generated, inspected) {
             (Ok(()), Ok(())) => assert!(to.contains("\"_\""), "`{to}` should be refused"),
             (Err(g), Err(i)) => assert_eq!(g.to_string(), i.to_string(), "`{to}`"),

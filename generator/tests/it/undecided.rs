@@ -19,7 +19,7 @@ fn an_undecided_dependence_keeps_the_coordinate_and_is_reported() {
     assert!(derivation.cuts.notes.iter().any(|n| n.starts_with(NOTE)), "{:?}", derivation.cuts);
     assert!(derivation.cuts.undecided.values().sum::<usize>() >= 1, "{:?}", derivation.cuts);
 
-    let inspected = generator::inspect::inspect(&model, false).unwrap();
+    let inspected = generator::inspect(&model, false).unwrap();
     let section = inspected.split("Budgets and undecided questions:").nth(1).expect("inspect lists the undecided questions");
     assert!(section.contains(NOTE), "{section}");
 
@@ -39,7 +39,7 @@ fn a_decided_model_reports_no_cuts() {
     let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
     let generated = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     assert_eq!(generated.summary.warnings(), Vec::<String>::new());
-    assert!(!generator::inspect::inspect(&model, false).unwrap().contains("Budgets and undecided questions"));
+    assert!(!generator::inspect(&model, false).unwrap().contains("Budgets and undecided questions"));
 }
 
 /// The bicycle's Kane form: the simplifier's cuts are in the summary (the nodes over the term
