@@ -56,9 +56,11 @@ fn parameters_named_like_the_generator_s_own_symbols_do_not_alias_them() {
     let renamed = text
         .replace("\"M\": 2.0", "\"u1\": 2.0")
         .replace("mass: \"M\"", "mass: \"u1\"")
+        .replace("\"M\": \"kg\"", "\"u1\": \"kg\"")
         .replace("\"tau\": 0.0", "\"G_x\": 0.3")
+        .replace("\"tau\": \"N m\"", "\"G_x\": \"N m\"")
         .replace("{\"theta1\": \"tau\", \"theta2\": \"-tau\"}", "{\"theta1\": \"G_x\", \"theta2\": \"-G_x\"}");
-    assert_eq!(renamed.matches("u1").count(), 2, "both places renamed");
+    assert_eq!(renamed.matches("u1").count(), 3, "the three places renamed (parameter, mass, unit)");
     let dir = std::env::temp_dir().join(format!("aliases-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("cart_pendulum.ron");
