@@ -315,3 +315,24 @@ def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
                 values.append(v)
     assert len(values) > 200 and max(values) - min(values) > 0.15, (len(values), min(values or [0]), max(values or [0]))
 
+
+
+def test_the_view_moves_and_plays_faster_when_asked(tmp_path):
+    m = multibody.load("cart_pendulum")
+    run = m.simulate("kane", t_end=10.0, dt_out=0.01, frame=False)
+    path = tmp_path / "view.html"
+    m.animate(run, path)
+    # Moved on the page (shift-drag; `&pan=` in the address): every body by the same pixels.
+    still = page_state(tmp_path, path.as_uri() + "#t=1&size=800x520")
+    moved = page_state(tmp_path, path.as_uri() + "#t=1&size=800x520&pan=40,-20")
+    assert moved["pan"] == [40, -20]
+    assert np.allclose(np.subtract(moved["screen"], still["screen"]), [[40, -20]] * 3, atol=1e-9)
+    # Played at four times the motion's own pace, the same wall time reaches further into the
+    # run (the browser's virtual clock: the same budget for both).
+    reached = {}
+    for speed in ["1", "4"]:
+        dom = chromium(tmp_path, "--virtual-time-budget=2000", "--dump-dom", path.as_uri() + f"#size=800x520&speed={speed}")
+        state = json.loads(re.search(r'<pre id="state">(.*?)</pre>', dom, re.S).group(1).replace("&quot;", '"'))
+        assert state["speed"] == float(speed)
+        reached[speed] = state["t"]
+    assert reached["1"] > 0 and reached["4"] > 1.5 * reached["1"], reached
