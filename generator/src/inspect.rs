@@ -26,7 +26,7 @@ pub(crate) fn report(model: &Model, d: &Derivation, assemblies: &[(String, Strin
     let _ = writeln!(w, "m = {}, r = {}, p = {}, s = {}, p - s = {}", mech.m, mech.r, mech.p, s, mech.p.saturating_sub(s));
     let _ = writeln!(w, "coordinates q = [{}]", names.join(", "));
     if !model.def.units.is_empty() {
-        let units: Vec<String> = model.def.units.iter().map(|(name, unit)| format!("{name} [{unit}]")).collect();
+        let units: Vec<String> = model.def.units.keys().map(|name| model.labelled(name)).collect();
         let _ = writeln!(w, "units: {}", units.join(", "));
     }
     let ign: Vec<&str> = chosen.iter().map(|&j| names[j].as_str()).collect();

@@ -221,7 +221,9 @@ fn decide_and_emit(
     let _ = ignorable_back.send(chosen.clone().map(|c| (c, clock.elapsed())));
     // An error here is the derivation's, which the deriving thread reports.
     let Ok(chosen) = chosen else { return Ok(Vec::new()) };
-    // The head goes with the first group (or alone); each group's formulations arrive in order.
+    // The head goes with the first group (alone, where every formulation stays on the deriving
+    // thread); each group's formulations arrive in order.
+    let groups = if groups.is_empty() { vec![Vec::new()] } else { groups };
     let mut parts = Vec::new();
     let mut inbox = inbox.into_iter().filter_map(|job| match job {
         Job::Form(parcel) => Some(parcel),
@@ -236,11 +238,6 @@ fn decide_and_emit(
         for parcel in inbox.by_ref().take(group.len()) {
             emission.form(&parcel.unpack())?;
         }
-        parts.push(emission.finish());
-    }
-    if groups.is_empty() {
-        let mut emission = Emission::new(&model, options, &mech, &chosen, Vec::new())?;
-        emission.head()?;
         parts.push(emission.finish());
     }
     Ok(parts)

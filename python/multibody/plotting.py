@@ -17,20 +17,22 @@ def _column(run, name):
     return np.asarray(run[name], dtype=float)
 
 
-def _units(run):
-    """The units of a run's coordinates and parameters (``units`` in the model file)."""
+def _meta(run, key, default):
+    """What a run says of itself: a DataFrame's ``attrs`` or a ``Trajectory``'s attribute."""
     attrs = getattr(run, "attrs", None)
     if isinstance(attrs, dict) and "model" in attrs:
-        return attrs.get("units", {}) or {}
-    return getattr(run, "units", {}) or {}
+        return attrs.get(key, default)
+    return getattr(run, key, default)
+
+
+def _units(run):
+    """The units of a run's coordinates and parameters (``units`` in the model file)."""
+    return _meta(run, "units", {}) or {}
 
 
 def _origin(run):
     """(model, formulation) of a DataFrame (its ``attrs``) or a ``Trajectory``."""
-    attrs = getattr(run, "attrs", None)
-    if isinstance(attrs, dict) and "model" in attrs:
-        return attrs.get("model", ""), attrs.get("formulation", "")
-    return getattr(run, "model", ""), getattr(run, "formulation", "")
+    return _meta(run, "model", ""), _meta(run, "formulation", "")
 
 
 def plot(run, coordinates=None, *, title=None):
