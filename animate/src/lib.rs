@@ -65,12 +65,29 @@ pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
     (half, std::array::from_fn(|k| v[(k / 3, k % 3)]))
 }
 
+/// A mesh shape's vertices in its own axes, scaled, flat (x, y, z, x, ...); none for a solid.
+fn mesh_points(s: &generator::pose::ShapeValues) -> Vec<f64> {
+    s.mesh.iter().flat_map(|m| m.vertices.iter()).flat_map(|v| (0..3).map(move |i| v[i] * s.sizes[i])).collect()
+}
+
+/// A shape as the page reads it: its solid, sizes and placement; a mesh's scaled vertices and
+/// its triangles, flat.
+fn shape_json(s: &generator::pose::ShapeValues) -> serde_json::Value {
+    let mut json = serde_json::json!({ "solid": s.solid, "sizes": s.sizes, "o": s.origin, "r": s.rotation });
+    if let Some(m) = &s.mesh {
+        json["points"] = mesh_points(s).into();
+        json["triangles"] = m.triangles.iter().flatten().copied().collect::<Vec<u32>>().into();
+    }
+    json
+}
+
 /// How far a shape reaches from `center` (in the body's frame): its origin's distance plus the
 /// radius of the sphere that holds it.
 fn shape_reach(s: &generator::pose::ShapeValues, center: &[f64; 3]) -> f64 {
     let bound = match s.solid {
         "box" => 0.5 * s.sizes.iter().map(|x| x * x).sum::<f64>().sqrt(),
         "sphere" => s.sizes[0],
+        "mesh" => mesh_points(s).chunks(3).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
         // A cylinder's or capsule's radius, then its length along its axis.
         _ => s.sizes[0] * if s.solid == "capsule" { 1.0 } else { std::f64::consts::SQRT_2 } + 0.5 * s.sizes[1],
     };
@@ -123,8 +140,7 @@ pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> R
             // A body drawn as its shapes: its size is the farthest reach of a shape from its
             // centre of mass (the page frames the view with it).
             let reach = b.shapes.iter().fold(0.0f64, |m, s| m.max(shape_reach(s, &b.com)));
-            let shapes: Vec<serde_json::Value> =
-                b.shapes.iter().map(|s| serde_json::json!({ "solid": s.solid, "sizes": s.sizes, "o": s.origin, "r": s.rotation })).collect();
+            let shapes: Vec<serde_json::Value> = b.shapes.iter().map(shape_json).collect();
             serde_json::json!({ "name": b.name, "frame": b.frame, "center": b.com, "half": half, "axes": axes, "point": point, "shapes": shapes, "reach": reach })
         })
         .collect();
@@ -147,6 +163,7 @@ pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> R
         "up": up,
         "gravity": poser.gravity,
         "overlays": overlays,
+        "scenery": poser.scenery.iter().map(shape_json).collect::<Vec<_>>(),
     });
     Ok(TEMPLATE.replacen("/*DATA*/", &script_json(&data), 1))
 }

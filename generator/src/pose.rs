@@ -47,13 +47,32 @@ pub struct BodyValues {
 /// One solid of a body's drawn geometry, as numbers, in the body's frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShapeValues {
-    /// `box`, `cylinder`, `sphere` or `capsule` ([`crate::model::shape::Solid::sizes`]).
+    /// `box`, `cylinder`, `sphere`, `capsule` or `mesh` ([`crate::model::shape::Solid::sizes`]).
     pub solid: &'static str,
-    /// Its sizes: a box's three sides; a radius, then a length.
+    /// Its sizes: a box's three sides; a radius, then a length; a mesh's scale along x, y, z.
     pub sizes: Vec<f64>,
+    /// A mesh's triangles (in its own units, before the scale).
+    pub mesh: Option<std::sync::Arc<crate::model::mesh::TriangleMesh>>,
     pub origin: [f64; 3],
     /// Its axes in the frame's, row-major (columns the solid's axes).
     pub rotation: [f64; 9],
+}
+
+/// A shape's sizes and placement at the parameters in `env`.
+fn shape_values(shape: &crate::model::shape::Shape, env: &Env) -> Result<ShapeValues, EvalError> {
+    let (solid, sizes) = shape.solid.sizes();
+    let origin = Expr::eval_all(&shape.origin, env)?;
+    let [r, p, y] = Expr::eval_all(&shape.rpy, env)?[..] else { unreachable!("three angles") };
+    Ok(ShapeValues {
+        solid,
+        sizes: Expr::eval_all(&sizes, env)?,
+        mesh: match &shape.solid {
+            crate::model::shape::Solid::Mesh { mesh, .. } => Some(mesh.clone()),
+            _ => None,
+        },
+        origin: [origin[0], origin[1], origin[2]],
+        rotation: crate::model::shape::rpy_rotation(r, p, y),
+    })
 }
 
 /// The model's frame poses as functions of `t` and `q`, with its parameters set.
@@ -63,6 +82,8 @@ pub struct Poser {
     pub bodies: Vec<BodyValues>,
     /// The gravity vector of the model's `Gravity` force, if it has one.
     pub gravity: Option<[f64; 3]>,
+    /// The shapes drawn fixed to the world, placed in its frame ([`Model::scenery`]).
+    pub scenery: Vec<ShapeValues>,
     model: Model,
     env: Env,
     /// Per frame, its 12 expressions: origin, then rotation row-major.
@@ -109,21 +130,7 @@ impl Poser {
                 };
                 let moving = b.com.iter().any(|c| c.eval(&env).is_err());
                 let com = Expr::eval_all(&b.com, if moving { &start } else { &env })?;
-                let shapes = b
-                    .shapes
-                    .iter()
-                    .map(|shape| {
-                        let (solid, sizes) = shape.solid.sizes();
-                        let origin = Expr::eval_all(&shape.origin, &env)?;
-                        let [r, p, y] = Expr::eval_all(&shape.rpy, &env)?[..] else { unreachable!("three angles") };
-                        Ok(ShapeValues {
-                            solid,
-                            sizes: Expr::eval_all(&sizes, &env)?,
-                            origin: [origin[0], origin[1], origin[2]],
-                            rotation: crate::model::shape::rpy_rotation(r, p, y),
-                        })
-                    })
-                    .collect::<Result<_, EvalError>>()?;
+                let shapes = b.shapes.iter().map(|shape| shape_values(shape, &env)).collect::<Result<_, EvalError>>()?;
                 Ok(BodyValues { name: b.name.clone(), frame: b.frame, mass: number(b.mass)?, com: [com[0], com[1], com[2]], moving, inertia, shapes })
             })
             .collect::<Result<_, EvalError>>()?;
@@ -137,7 +144,17 @@ impl Poser {
             .map(|v| Ok::<_, EvalError>([number(v[0])?, number(v[1])?, number(v[2])?]))
             .transpose()?;
         let centers = model.bodies.iter().flat_map(|b| b.com).collect();
-        Ok(Poser { frame_names: model.frames.iter().map(|f| f.name.clone()).collect(), bodies, gravity, model: model.clone(), env, expressions, centers })
+        let scenery = model.scenery.iter().map(|shape| shape_values(shape, &env)).collect::<Result<_, EvalError>>()?;
+        Ok(Poser {
+            frame_names: model.frames.iter().map(|f| f.name.clone()).collect(),
+            bodies,
+            gravity,
+            scenery,
+            model: model.clone(),
+            env,
+            expressions,
+            centers,
+        })
     }
 
     /// The bodies' centres of mass (each in its frame) at time `t` and coordinates `q`.

@@ -190,9 +190,9 @@ fn the_builder_includes_a_urdf_and_adds_to_it() {
 
 /// Each link's visuals become its body's drawn shapes, placed in the body's frame: the torso's
 /// box; the head's sphere, merged with the torso, where the fixed neck puts it; the upper arm's
-/// cylinder turned a quarter about x; the hand's STL mesh as the box that bounds it (millimetres
-/// scaled to metres); the forearm's mesh, whose file is not there, not drawn (its inertia box
-/// is, on the page).
+/// cylinder turned a quarter about x; the hand's STL mesh (millimetres scaled to metres); the
+/// forearm's mesh, whose file is not there, not drawn (its inertia box is, on the page); the
+/// base's cylinder, on a fixed base, as scenery.
 #[test]
 fn visuals_become_shapes_in_their_body_frames() {
     let model = robot("tree.urdf", &UrdfOptions::default());
@@ -213,11 +213,21 @@ fn visuals_become_shapes_in_their_body_frames() {
     // Roll pi/2 about x: its axis (the third column) along -y, its y along z.
     let r = arm[0].rotation;
     assert!(close(&[r[2], r[5], r[8]], &[0.0, -1.0, 0.0]) && close(&[r[1], r[4], r[7]], &[0.0, 0.0, 1.0]), "{r:?}");
-    // The STL spans (-20, -50, -10) to (20, 10, 10) mm: a box 0.04 x 0.06 x 0.02 m centred at
-    // (0, -0.02, 0) in the visual's frame, itself at (0, -0.05, 0).
+    // The STL's two triangles, in millimetres: the mesh scaled by a thousandth, at the visual's
+    // origin (0, -0.05, 0).
     let hand = body("right_hand");
-    assert!(hand[0].solid == "box" && close(&hand[0].sizes, &[0.04, 0.06, 0.02]) && close(&hand[0].origin, &[0.0, -0.07, 0.0]), "{hand:?}");
+    assert!(hand[0].solid == "mesh" && close(&hand[0].sizes, &[0.001; 3]) && close(&hand[0].origin, &[0.0, -0.05, 0.0]), "{hand:?}");
+    let mesh = hand[0].mesh.as_ref().unwrap();
+    assert_eq!(mesh.vertices, [[-20.0, -50.0, -10.0], [20.0, -50.0, -10.0], [20.0, 10.0, 10.0], [-20.0, 10.0, 10.0]]);
+    assert_eq!(mesh.triangles, [[0, 1, 2], [0, 2, 3]]);
     assert!(body("left_lower").is_empty());
+    // On a fixed base, the base link's cylinder is scenery, fixed to the world where it is.
+    assert!(poser.scenery.len() == 1 && poser.scenery[0].solid == "cylinder" && close(&poser.scenery[0].origin, &[0.0, 0.0, 0.05]), "{:?}", poser.scenery);
+    // On a floating base, it is the base's own shape, and there is no scenery.
+    let floating_model = robot("tree.urdf", &floating([0.0, 0.0, -9.81]));
+    let floating_poser = generator::pose::Poser::new(&floating_model, &floating_model.parameters.iter().map(|(_, v)| *v).collect::<Vec<_>>()).unwrap();
+    let base = &floating_poser.bodies.iter().find(|b| b.name == "base").unwrap().shapes;
+    assert!(floating_poser.scenery.is_empty() && base.len() == 1 && base[0].solid == "cylinder", "{base:?}");
     // URDF is in SI units: angles in radians, a prismatic joint's travel in metres, masses in kg.
     assert_eq!((model.unit("waist"), model.unit("right_wrist"), model.unit("mass_torso")), (Some("rad"), Some("m"), Some("kg")));
     // The shapes reach the page, with the bodies' other data.
@@ -230,6 +240,92 @@ fn visuals_become_shapes_in_their_body_frames() {
         (drawn[0]["solid"].clone(), drawn[0]["sizes"].clone(), drawn[1]["solid"].clone()),
         ("box".into(), serde_json::json!([0.2, 0.3, 0.5]), "sphere".into())
     );
+    // The hand's mesh reaches the page as its scaled vertices and its triangles.
+    let hand = data["bodies"].as_array().unwrap().iter().find(|b| b["name"] == "right_hand").unwrap()["shapes"][0].clone();
+    let points: Vec<f64> = serde_json::from_value(hand["points"].clone()).unwrap();
+    let expected = [-0.02, -0.05, -0.01, 0.02, -0.05, -0.01, 0.02, 0.01, 0.01, -0.02, 0.01, 0.01];
+    assert!(points.len() == 12 && points.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-9), "{points:?}");
+    assert_eq!(hand["triangles"], serde_json::json!([0, 1, 2, 0, 2, 3]));
+    assert_eq!((data["scenery"][0]["solid"].clone(), data["scenery"][0]["sizes"].clone()), ("cylinder".into(), serde_json::json!([0.15, 0.1])));
+}
+
+/// A RON body drawn as an STL mesh: the file found beside the model (or beside the URDF a model
+/// includes, from another folder), scaled and placed; a mesh that is not there, not an STL, or
+/// scaled by zero is refused, located at its field, the path in the message.
+#[test]
+fn a_body_is_drawn_as_an_stl_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("robot/parts")).unwrap();
+    std::fs::copy(fixture("hand.stl"), dir.path().join("robot/parts/hand.stl")).unwrap();
+    let model_with = |shape: &str| {
+        format!(
+            r#"Model(
+        name: "held",
+        parameters: {{ "m": 1.0, "mm": 0.001 }},
+        coordinates: ["x"],
+        frames: [Frame(name: "block", parent: "world", translation: ["x", "0", "0"])],
+        bodies: [Body(name: "block", frame: "block", mass: "m", inertia: PointMass,
+            shape: {shape})],
+        forces: [Potential(name: "spring", expr: "x^2/2")],
+        quasi_velocities: QuasiVelocities(full: ["x'"], reduced: ["x'"]),
+        initial: Initial(q: {{"x": "0.1"}}, qdot: {{"x": "0"}}),
+    )"#
+        )
+    };
+    let load = |name: &str, shape: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, model_with(shape)).unwrap();
+        generator::model::load(&path)
+    };
+    let model = load("held.ron", r#"Mesh(file: "robot/parts/hand.stl", scale: ["mm", "-mm", "mm"], origin: ["0", "0", "0.5"])"#).unwrap();
+    let poser = generator::pose::Poser::new(&model, &[1.0, 0.001]).unwrap();
+    let s = &poser.bodies[0].shapes[0];
+    assert_eq!((s.solid, s.sizes.clone(), s.origin), ("mesh", vec![0.001, -0.001, 0.001], [0.0, 0.0, 0.5]));
+    assert_eq!(s.mesh.as_ref().unwrap().triangles.len(), 2);
+    // Scenery: shapes fixed to the world, a table and the mesh again; a bad size is located.
+    let path = dir.path().join("scenery.ron");
+    let text = model_with(r#"Sphere(radius: "0.1")"#).replace(
+        "        forces:",
+        r#"        scenery: Compound([Box(size: ["1", "1", "0.05"], origin: ["0", "0", "-0.1"]), Mesh(file: "robot/parts/hand.stl", scale: ["mm", "mm", "mm"])]),
+        forces:"#,
+    );
+    std::fs::write(&path, &text).unwrap();
+    let poser = generator::pose::Poser::new(&generator::model::load(&path).unwrap(), &[1.0, 0.001]).unwrap();
+    assert_eq!(poser.scenery.iter().map(|s| s.solid).collect::<Vec<_>>(), ["box", "mesh"]);
+    assert_eq!((poser.scenery[0].sizes.clone(), poser.scenery[0].origin), (vec![1.0, 1.0, 0.05], [0.0, 0.0, -0.1]));
+    std::fs::write(&path, text.replace(r#"size: ["1", "1", "0.05"]"#, r#"size: ["1", "-m", "0.05"]"#)).unwrap();
+    let e = generator::model::load(&path).unwrap_err();
+    assert!(e.place == "scenery[0].size[1]" && e.location.is_some() && e.to_string().contains("not a positive number"), "{e}");
+    // Included from another folder, the robot's mesh is read from the robot's folder.
+    std::fs::copy(fixture("tree.urdf"), dir.path().join("robot/tree.urdf")).unwrap();
+    let urdf = std::fs::read_to_string(dir.path().join("robot/tree.urdf")).unwrap().replace("package://tree_description/hand.stl", "parts/hand.stl");
+    std::fs::write(dir.path().join("robot/tree.urdf"), urdf).unwrap();
+    let path = dir.path().join("with_robot.ron");
+    std::fs::write(
+        &path,
+        r#"Model(name: "with_robot", urdf: Urdf(file: "robot/tree.urdf", base: Fixed), parameters: {}, coordinates: [], frames: [], bodies: [], forces: [])"#,
+    )
+    .unwrap();
+    let model = generator::model::load(&path).unwrap();
+    let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+    let poser = generator::pose::Poser::new(&model, &params).unwrap();
+    let hand = &poser.bodies.iter().find(|b| b.name == "right_hand").unwrap().shapes[0];
+    assert_eq!((hand.solid, hand.mesh.as_ref().map(|m| m.vertices.len())), ("mesh", Some(4)));
+    // Refusals, located at the mesh's field.
+    std::fs::write(dir.path().join("robot/parts/notes.stl"), "these are notes").unwrap();
+    for (shape, field, says) in [
+        (r#"Mesh(file: "robot/parts/gone.stl")"#, "\"robot/parts/gone.stl\"", "cannot be read"),
+        (r#"Mesh(file: "robot/parts/notes.stl")"#, "\"robot/parts/notes.stl\"", "not an STL file"),
+        (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "0", "1"])"#, "\"0\"", "other than zero"),
+        (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "1"])"#, "\"1\"", "three factors"),
+    ] {
+        let e = load("bad.ron", shape).unwrap_err();
+        let text = model_with(shape);
+        let (line, col) = e.location.expect("located");
+        let at: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum::<usize>() + col - 1;
+        assert!(text[at..].starts_with(field), "{shape}: {e} at {line}:{col}");
+        assert!(e.to_string().contains(says) && e.to_string().contains("bad.ron"), "{shape}: {e}");
+    }
 }
 
 /// Every refusal names the file, the line and column of the element at fault, and the fix.

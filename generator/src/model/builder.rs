@@ -163,6 +163,7 @@ impl ModelBuilder {
                 initial: None,
                 simulation: None,
                 events: Vec::new(),
+                scenery: None,
                 units: IndexMap::new(),
                 emit: EmitDef::default(),
             },
@@ -202,6 +203,27 @@ impl ModelBuilder {
     /// A parameter with its value.
     pub fn parameter(mut self, name: impl Into<String>, value: f64) -> ModelBuilder {
         self.def.parameters.insert(name.into(), value);
+        self
+    }
+
+    /// Shapes drawn fixed to the world (`scenery` in RON; the animation only): a second call
+    /// adds to the first.
+    ///
+    /// ```
+    /// use generator::model::{builder::ModelBuilder, ShapeDef};
+    /// let table = ShapeDef::Box { size: vec!["1".into(), "1".into(), "0.05".into()], origin: None, rpy: None };
+    /// let b = ModelBuilder::new("m").scenery(table);
+    /// assert!(b.to_ron().contains("scenery: Box("));
+    /// ```
+    pub fn scenery(mut self, shape: ShapeDef) -> ModelBuilder {
+        self.def.scenery = Some(match self.def.scenery.take() {
+            None => shape,
+            Some(ShapeDef::Compound(mut parts)) => {
+                parts.push(shape);
+                ShapeDef::Compound(parts)
+            }
+            Some(first) => ShapeDef::Compound(vec![first, shape]),
+        });
         self
     }
 

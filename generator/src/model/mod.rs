@@ -11,6 +11,7 @@ pub mod builder;
 mod built_in;
 pub mod error;
 pub mod examples;
+pub mod mesh;
 pub mod schema;
 pub mod shape;
 pub mod spans;
@@ -103,6 +104,8 @@ pub struct Model {
     pub simulation: Option<SimulationDef>,
     /// The events a run watches, in file order.
     pub events: Vec<Event>,
+    /// The shapes drawn fixed to the world ([`schema::ModelFile::scenery`]).
+    pub scenery: Vec<shape::Shape>,
     /// The raw definition.
     pub def: ModelFile,
 }
@@ -191,6 +194,7 @@ impl Transfer for Model {
         self.quasi_full.visit(v);
         self.quasi_reduced.visit(v);
         self.events.visit(v);
+        self.scenery.visit(v);
     }
 }
 
@@ -1029,6 +1033,10 @@ impl<'a> Builder<'a> {
             return Err(self.err(ErrorKind::BadValue, place, "", format!("{e}"), "the reference run is sampled every dt_out from t_start to t_end"));
         }
         let events = self.events(&def.events, &def.coordinates)?;
+        let mut scenery = Vec::new();
+        if let Some(shape) = &def.scenery {
+            self.shapes(shape, "scenery", &self.param_env(&parameters), &mut scenery)?;
+        }
         Ok(Model {
             file: self.file.to_string(),
             source: self.source.to_string(),
@@ -1051,6 +1059,7 @@ impl<'a> Builder<'a> {
             initial,
             simulation: def.simulation.clone(),
             events,
+            scenery,
             def,
         })
     }
@@ -1382,9 +1391,60 @@ impl<'a> Builder<'a> {
                 (Solid::Capsule { radius: size(radius, "radius")?, length: size(length, "length")? }, placed(origin, rpy)?)
             }
             ShapeDef::Sphere { radius, origin } => (Solid::Sphere { radius: size(radius, "radius")? }, placed(origin, &None)?),
+            ShapeDef::Mesh { file, scale, origin, rpy } => {
+                let scale = match scale {
+                    None => [Expr::int(1), Expr::int(1), Expr::int(1)],
+                    Some(v) if v.len() == 3 => {
+                        // A factor may be negative: a mirrored part (URDF's `scale="1 -1 1"`).
+                        let factor = |k: usize| -> Result<Expr, ModelError> {
+                            let at = format!("{place}.scale[{k}]");
+                            let e = self.expr(&v[k], &at, Scope::Parameters)?;
+                            let value = e.eval(env).unwrap_or(f64::NAN);
+                            if !(value != 0.0 && value.is_finite()) {
+                                return Err(self.err(
+                                    ErrorKind::BadValue,
+                                    &at,
+                                    &format!("\"{}\"", v[k]),
+                                    format!("the mesh's scale[{k}] is {} = {value}, which is not a number other than zero", v[k]),
+                                    "give each factor of a mesh's scale a value other than zero",
+                                ));
+                            }
+                            Ok(e)
+                        };
+                        [factor(0)?, factor(1)?, factor(2)?]
+                    }
+                    Some(v) => {
+                        return Err(self.err(
+                            ErrorKind::Dimension,
+                            &format!("{place}.scale"),
+                            &v.first().map(|s| format!("\"{s}\"")).unwrap_or_default(),
+                            format!("a mesh's scale has three factors; {} were given", v.len()),
+                            "write scale: [\"x\", \"y\", \"z\"]",
+                        ));
+                    }
+                };
+                (Solid::Mesh { mesh: self.mesh(file, &format!("{place}.file"))?, scale }, placed(origin, rpy)?)
+            }
         };
         out.push(shape::Shape { solid, origin, rpy });
         Ok(())
+    }
+
+    /// The mesh of the STL file `file` (at `place`), relative to the model file's folder,
+    /// simplified for drawing.
+    fn mesh(&self, file: &str, place: &str) -> Result<std::sync::Arc<mesh::TriangleMesh>, ModelError> {
+        const MAX_MESH_BYTES: u64 = 64 << 20;
+        let path = std::path::Path::new(self.file).parent().unwrap_or(std::path::Path::new("")).join(file);
+        let refuse = |why: String, help: &str| self.err(ErrorKind::Io, place, &format!("\"{file}\""), format!("the mesh `{}` {why}", path.display()), help);
+        let bytes = files::read_bounded(&path, MAX_MESH_BYTES).map_err(|e| match e {
+            files::FileError::TooLarge { limit, .. } => {
+                refuse(format!("holds more than {limit} bytes"), "give a smaller mesh: it is drawn with at most 400 triangles")
+            }
+            e => refuse(format!("cannot be read: {}", e.source_message()), "give the path of an STL file, relative to the model file's folder"),
+        })?;
+        let mesh = mesh::TriangleMesh::from_stl(&bytes)
+            .map_err(|why| refuse(format!("cannot be drawn: {why}"), "give an STL file (binary or text) with at least one triangle"))?;
+        Ok(std::sync::Arc::new(mesh.simplified(mesh::MAX_DRAWN_TRIANGLES)))
     }
 
     fn inertia(&self, def: &InertiaDef, place: &str, env: &Env) -> Result<Option<Matrix>, ModelError> {

@@ -85,6 +85,10 @@ pub struct ModelFile {
     /// happens there.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<EventDef>,
+    /// What is drawn fixed to the world (a table, a pedestal, a fixed-base robot's base link's
+    /// visuals): shapes placed in the world's frame, drawn by the animation only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenery: Option<ShapeDef>,
     /// The unit of a coordinate or a parameter, for plots and tables: `{"x": "m", "theta":
     /// "rad", "M": "kg"}` (text shown as given; the equations do not read it).
     #[serde(default, skip_serializing_if = "IndexMap::is_empty", deserialize_with = "unique_keys")]
@@ -303,8 +307,40 @@ pub enum ShapeDef {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         rpy: Option<Vec<String>>,
     },
+    /// A triangle mesh read from an STL file (binary or text), `file` relative to the model
+    /// file's folder (or absolute), its vertices multiplied by `scale` (default 1, 1, 1: a mesh
+    /// drawn in millimetres takes `["0.001", "0.001", "0.001"]`). Drawn simplified to at most
+    /// 400 triangles.
+    Mesh {
+        file: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        scale: Option<Vec<String>>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        origin: Option<Vec<String>>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rpy: Option<Vec<String>>,
+    },
     /// Several solids (a URDF link's visuals, and those of the links merged into it).
     Compound(Vec<ShapeDef>),
+}
+
+impl ShapeDef {
+    /// The same shapes with each mesh's relative `file` put under `dir` (a model included from
+    /// another folder).
+    ///
+    /// ```
+    /// use generator::model::ShapeDef;
+    /// let mut s = ShapeDef::Mesh { file: "hand.stl".into(), scale: None, origin: None, rpy: None };
+    /// s.rebase_meshes(std::path::Path::new("robots/arm"));
+    /// assert!(matches!(&s, ShapeDef::Mesh { file, .. } if file == "robots/arm/hand.stl"));
+    /// ```
+    pub fn rebase_meshes(&mut self, dir: &std::path::Path) {
+        match self {
+            ShapeDef::Compound(parts) => parts.iter_mut().for_each(|p| p.rebase_meshes(dir)),
+            ShapeDef::Mesh { file, .. } if std::path::Path::new(file.as_str()).is_relative() => *file = dir.join(file.as_str()).to_string_lossy().into_owned(),
+            _ => {}
+        }
+    }
 }
 
 /// Inertia about the centre of mass, in the body frame.

@@ -34,10 +34,15 @@ pub enum Solid {
         radius: Expr,
         length: Expr,
     },
+    /// A triangle mesh (from an STL file), its vertices multiplied by `scale` along x, y, z.
+    Mesh {
+        mesh: std::sync::Arc<super::mesh::TriangleMesh>,
+        scale: [Expr; 3],
+    },
 }
 
 impl Solid {
-    /// The solid's name and its sizes, in the order the page reads them.
+    /// The solid's name and its sizes, in the order the page reads them (a mesh's: its scale).
     ///
     /// ```
     /// # use generator::model::shape::Solid;
@@ -51,6 +56,7 @@ impl Solid {
             Solid::Cylinder { radius, length } => ("cylinder", vec![*radius, *length]),
             Solid::Sphere { radius } => ("sphere", vec![*radius]),
             Solid::Capsule { radius, length } => ("capsule", vec![*radius, *length]),
+            Solid::Mesh { scale, .. } => ("mesh", scale.to_vec()),
         }
     }
 }
@@ -64,6 +70,7 @@ impl Transfer for Shape {
                 length.visit(v);
             }
             Solid::Sphere { radius } => radius.visit(v),
+            Solid::Mesh { scale, .. } => scale.visit(v),
         }
         self.origin.visit(v);
         self.rpy.visit(v);

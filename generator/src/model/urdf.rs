@@ -280,10 +280,10 @@ impl<'a> Reader<'a> {
     }
 
     /// A `<visual>` of link `link`, whose frame is at `at` in its model frame, as a shape in that
-    /// frame: a box, cylinder or sphere as given; a mesh as the box that bounds it, where its
-    /// file is an STL found beside the URDF (`package://NAME/...` is looked for in the folders
-    /// above it); `None` for a mesh not found or of another format, and for geometry of another
-    /// kind.
+    /// frame: a box, cylinder or sphere as given; a mesh where its file is an STL found beside
+    /// the URDF (`package://NAME/...` is looked for in the folders above it), named relative to
+    /// the URDF's folder; `None` for a mesh not found or of another format, and for geometry of
+    /// another kind.
     fn visual(&self, visual: roxmltree::Node, link: &str, at: &Pose, folder: &std::path::Path) -> Result<Option<ShapeDef>, ModelError> {
         let place = format!("link `{link}`.visual");
         let Some(geometry) = child(visual, "geometry") else { return Ok(None) };
@@ -324,19 +324,19 @@ impl<'a> Reader<'a> {
             "sphere" => ShapeDef::Sphere { radius: num(positive("radius")?), origin: placed(&pose).0 },
             "mesh" => {
                 let scale = self.numbers(g, "scale", [1.0; 3], &place)?;
-                let Some((lo, hi)) = g.attribute("filename").and_then(|name| mesh_file(name, folder)).and_then(|bytes| stl_bounds(&bytes)) else {
-                    return Ok(None);
-                };
-                let size: [f64; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) * scale[i]).abs());
-                let largest = size.iter().fold(0.0f64, |m, x| m.max(*x));
-                if !(largest > 0.0 && largest.is_finite()) {
-                    return Ok(None);
+                if scale.iter().any(|x| !(*x != 0.0 && x.is_finite())) {
+                    return Err(self.err(
+                        ErrorKind::BadValue,
+                        g,
+                        &place,
+                        format!("link `{link}`'s visual mesh has scale {} {} {}", scale[0], scale[1], scale[2]),
+                        "give the mesh three scale factors other than zero",
+                    ));
                 }
-                // A flat mesh (a plate) keeps a thousandth of its largest side as its thickness.
-                let size = size.map(|x| x.max(1e-3 * largest));
-                let centre: [f64; 3] = std::array::from_fn(|i| 0.5 * (hi[i] + lo[i]) * scale[i]);
-                let (origin, rpy) = placed(&pose.then(&Pose { r: IDENTITY, p: centre }));
-                ShapeDef::Box { size: size.iter().map(|x| num(*x)).collect(), origin, rpy }
+                // Drawn only where the file is an STL that is found and reads as one.
+                let Some(file) = g.attribute("filename").and_then(|name| mesh_file(name, folder)) else { return Ok(None) };
+                let (origin, rpy) = placed(&pose);
+                ShapeDef::Mesh { file, scale: Some(scale.iter().map(|x| num(*x)).collect()), origin, rpy }
             }
             _ => return Ok(None),
         };
@@ -907,6 +907,8 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
         initial: Some(InitialDef { q: q0, qdot: qdot0 }),
         simulation: Some(SimulationDef { t_start: 0.0, t_end: 1.0, dt_out: 0.01, paper: false }),
         events,
+        // On a fixed base, the visuals of the links fixed to the world.
+        scenery: looks.remove("world").map(|mut v| if v.len() == 1 { v.remove(0) } else { ShapeDef::Compound(v) }),
         units,
         emit: EmitDef::default(),
     })
@@ -923,7 +925,13 @@ pub fn include(file: &str, def: ModelFile) -> Result<ModelFile, ModelError> {
     let path = dir.join(&urdf.file);
     let (robot_file, xml) = super::read_source(&path)?;
     let options = UrdfOptions { base: urdf.base, gravity: urdf.gravity.unwrap_or_else(default_gravity), limits: urdf.limits };
-    let robot = model_file(&robot_file, &xml, &options)?;
+    let mut robot = model_file(&robot_file, &xml, &options)?;
+    // The robot's meshes are named relative to its folder; the merged model reads them relative
+    // to this file's.
+    let urdf_dir = std::path::Path::new(&urdf.file).parent().unwrap_or(std::path::Path::new(""));
+    for shape in robot.bodies.iter_mut().filter_map(|b| b.shape.as_mut()).chain(robot.scenery.as_mut()) {
+        shape.rebase_meshes(urdf_dir);
+    }
     let mut out = robot.clone();
     out.name = def.name.clone();
     out.description = if def.description.is_empty() { robot.description.clone() } else { def.description.clone() };
@@ -936,6 +944,10 @@ pub fn include(file: &str, def: ModelFile) -> Result<ModelFile, ModelError> {
     out.constraints.extend(def.constraints.iter().cloned());
     out.forces.extend(def.forces.iter().cloned());
     out.units.extend(def.units.clone());
+    out.scenery = match (robot.scenery.clone(), def.scenery.clone()) {
+        (Some(a), Some(b)) => Some(ShapeDef::Compound(vec![a, b])),
+        (a, b) => a.or(b),
+    };
     out.events.extend(def.events.iter().cloned());
     out.quasi_velocities = if def.quasi_velocities.is_empty() {
         let own: Vec<String> = def.coordinates.iter().map(|c| format!("{c}'")).collect();
@@ -976,57 +988,26 @@ fn rpy_of(r: &M3) -> [f64; 3] {
     [r[2][1].atan2(r[2][2]), pitch, r[1][0].atan2(r[0][0])]
 }
 
-/// The bytes of a mesh's STL file named `name` in a URDF in `folder` (`file://` absolute,
-/// `package://NAME/PATH` looked for as `NAME/PATH` and as `PATH` in `folder` and the folders
-/// above it, or relative to `folder`); `None` where it is not an STL or is not found.
-fn mesh_file(name: &str, folder: &std::path::Path) -> Option<Vec<u8>> {
+/// The path, relative to `folder` where it was found there or above (so that the model reads
+/// the same on any machine), of a mesh's STL file named `name` in a URDF in `folder`:
+/// `file://` absolute, `package://NAME/PATH` looked for as `NAME/PATH` and as `PATH` in `folder`
+/// and the folders above it, or relative to `folder`; `None` where it is not an STL file that
+/// is found and reads as a mesh.
+fn mesh_file(name: &str, folder: &std::path::Path) -> Option<String> {
     const MAX_MESH_BYTES: u64 = 64 << 20;
     if !name.to_ascii_lowercase().ends_with(".stl") {
         return None;
     }
-    let candidates: Vec<std::path::PathBuf> = if let Some(path) = name.strip_prefix("file://") {
-        vec![path.into()]
+    let candidates: Vec<(std::path::PathBuf, String)> = if let Some(path) = name.strip_prefix("file://") {
+        vec![(path.into(), path.to_string())]
     } else if let Some(rest) = name.strip_prefix("package://") {
         let inside = rest.split_once('/').map_or("", |(_, path)| path);
-        folder.ancestors().flat_map(|dir| [dir.join(rest), dir.join(inside)]).collect()
+        folder.ancestors().enumerate().flat_map(|(up, dir)| [rest, inside].map(|p| (dir.join(p), format!("{}{p}", "../".repeat(up))))).collect()
     } else {
-        vec![folder.join(name)]
+        vec![(folder.join(name), name.to_string())]
     };
-    candidates.into_iter().filter(|p| p.is_file()).find_map(|p| files::read_bounded(&p, MAX_MESH_BYTES).ok())
-}
-
-/// The box that bounds an STL mesh's vertices, binary or text: its lowest and highest corners.
-/// Written by hand: only the bounds are needed, a few lines of either format.
-fn stl_bounds(bytes: &[u8]) -> Option<([f64; 3], [f64; 3])> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    let mut take = |v: [f64; 3]| {
-        for i in 0..3 {
-            lo[i] = lo[i].min(v[i]);
-            hi[i] = hi[i].max(v[i]);
-        }
-    };
-    let count = bytes.get(80..84).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize);
-    if count.is_some_and(|n| bytes.len() == 84 + 50 * n) {
-        for triangle in bytes[84..].chunks_exact(50) {
-            for k in 0..3 {
-                let at = 12 + 12 * k;
-                let f =
-                    |i: usize| f32::from_le_bytes([triangle[at + 4 * i], triangle[at + 4 * i + 1], triangle[at + 4 * i + 2], triangle[at + 4 * i + 3]]) as f64;
-                take([f(0), f(1), f(2)]);
-            }
-        }
-    } else {
-        let text = std::str::from_utf8(bytes).ok()?;
-        for line in text.lines() {
-            let mut words = line.split_whitespace();
-            if words.next() == Some("vertex") {
-                let v: Vec<f64> = words.filter_map(|w| w.parse().ok()).collect();
-                if v.len() == 3 {
-                    take([v[0], v[1], v[2]]);
-                }
-            }
-        }
-    }
-    (lo.iter().chain(&hi).all(|x| x.is_finite())).then_some((lo, hi))
+    candidates.into_iter().filter(|(p, _)| p.is_file()).find_map(|(path, relative)| {
+        let bytes = files::read_bounded(&path, MAX_MESH_BYTES).ok()?;
+        super::mesh::TriangleMesh::from_stl(&bytes).ok().map(|_| relative)
+    })
 }
