@@ -65,6 +65,38 @@ pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
     (half, std::array::from_fn(|k| v[(k / 3, k % 3)]))
 }
 
+/// The most mesh triangles a page draws, all meshes together: the page fills every face it
+/// keeps at every frame on a 2-D canvas (about 10 microseconds a face in software), so a robot
+/// of 30 meshed links shares them (docs/benchmarks/page.json has the frame time).
+const MAX_PAGE_MESH_TRIANGLES: usize = 2400;
+
+/// The meshes of `poser` (its bodies' and its scenery's) simplified further where they hold
+/// more than `total` triangles together: each mesh keeps a share in proportion to its scaled
+/// bounding box's surface (a large part more than a small one), 12 at least.
+fn share_mesh_triangles(poser: &mut generator::pose::Poser, total: usize) {
+    let shapes = || poser.bodies.iter().flat_map(|b| b.shapes.iter()).chain(poser.scenery.iter());
+    let count: usize = shapes().filter_map(|s| s.mesh.as_ref()).map(|m| m.triangles.len()).sum();
+    if count <= total {
+        return;
+    }
+    let surface = |s: &generator::pose::ShapeValues| {
+        let (lo, hi) = s.mesh.as_ref().map_or(([0.0; 3], [0.0; 3]), |m| m.bounds());
+        let d: [f64; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) * s.sizes[i]).abs());
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    };
+    let all: f64 = shapes().filter(|s| s.mesh.is_some()).map(surface).sum();
+    let shapes = poser.bodies.iter_mut().flat_map(|b| b.shapes.iter_mut()).chain(poser.scenery.iter_mut());
+    for s in shapes {
+        let share = if all > 0.0 { surface(s) / all } else { 0.0 };
+        let keep = ((total as f64 * share) as usize).max(12);
+        if let Some(mesh) = &s.mesh
+            && mesh.triangles.len() > keep
+        {
+            s.mesh = Some(std::sync::Arc::new(mesh.simplified(keep)));
+        }
+    }
+}
+
 /// A mesh shape's vertices in its own axes, scaled, flat (x, y, z, x, ...); none for a solid.
 fn mesh_points(s: &generator::pose::ShapeValues) -> Vec<f64> {
     s.mesh.iter().flat_map(|m| m.vertices.iter()).flat_map(|v| (0..3).map(move |i| v[i] * s.sizes[i])).collect()
@@ -114,7 +146,8 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
 /// assert!(html.contains(r#""overlays":[{"centers":null,"formulation":"lagrange""#));
 /// ```
 pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> Result<String, AnimateError> {
-    let poser = Poser::new(model, params)?;
+    let mut poser = Poser::new(model, params)?;
+    share_mesh_triangles(&mut poser, MAX_PAGE_MESH_TRIANGLES);
     let Some((motion, others)) = motions.split_first() else { return Err(AnimateError::Empty) };
     let (poses, centers) = sampled(model, &poser, motion)?;
     let overlays = others
@@ -324,6 +357,50 @@ mod tests {
         let q = vec![0.0; model.coordinates.len()];
         let html = page(&model, &params, &Motion { formulation: "kane", times: &[0.0], q: &q }).unwrap();
         assert!(html.contains(r#""shapes":[]"#) && !html.contains(r#""solid""#));
+    }
+
+    /// Meshes that hold more triangles together than a page draws share them in proportion to
+    /// their sizes: a sphere twice as wide keeps more; every mesh keeps some; the total holds.
+    #[test]
+    fn meshes_share_the_pages_triangles_by_size() {
+        let dir = tempfile::tempdir().unwrap();
+        let (bands, sides) = (40, 80);
+        let at = |j: usize, k: usize| {
+            let (a, b) = (std::f64::consts::PI * j as f64 / bands as f64, std::f64::consts::TAU * k as f64 / sides as f64);
+            format!("vertex {} {} {}\n", a.sin() * b.cos(), a.sin() * b.sin(), a.cos())
+        };
+        let mut stl = String::from("solid s\n");
+        for j in 0..bands {
+            for k in 0..sides {
+                for t in [[(j, k), (j + 1, k), (j + 1, k + 1)], [(j, k), (j + 1, k + 1), (j, k + 1)]] {
+                    stl += "facet normal 0 0 0\nouter loop\n";
+                    for (a, b) in t {
+                        stl += &at(a, b);
+                    }
+                    stl += "endloop\nendfacet\n";
+                }
+            }
+        }
+        std::fs::write(dir.path().join("sphere.stl"), stl + "endsolid s\n").unwrap();
+        // Eight small spheres and one twice as wide: 9 x 400 triangles, more than the page's 2,400.
+        let bodies: Vec<String> = (0..9)
+            .map(|k| {
+                let r = if k == 8 { "0.2" } else { "0.1" };
+                format!(r#"Body(name: "b{k}", frame: "disk", mass: "1", com: ["{k}", "0", "0"], inertia: PointMass, shape: Mesh(file: "sphere.stl", scale: ["{r}", "{r}", "{r}"], origin: ["{k}", "0", "0"]))"#)
+            })
+            .collect();
+        let ron = format!(
+            r#"Model(name: "spheres", parameters: {{}}, coordinates: ["th"], frames: [Frame(name: "disk", parent: "world", rotation: [Z("th")])],
+            bodies: [{}], quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]), initial: Initial(q: {{"th": "0"}}, qdot: {{"th": "1"}}))"#,
+            bodies.join(", ")
+        );
+        std::fs::write(dir.path().join("spheres.ron"), ron).unwrap();
+        let model = generator::model::load(dir.path().join("spheres.ron")).unwrap();
+        let html = page(&model, &[], &Motion { formulation: "kane", times: &[0.0], q: &[0.0] }).unwrap();
+        let data: serde_json::Value = serde_json::from_str(html.split(r#"id="data">"#).nth(1).unwrap().split("</script>").next().unwrap()).unwrap();
+        let kept: Vec<usize> = (0..9).map(|k| data["bodies"][k]["shapes"][0]["triangles"].as_array().unwrap().len() / 3).collect();
+        assert!(kept.iter().sum::<usize>() <= MAX_PAGE_MESH_TRIANGLES, "{kept:?}");
+        assert!(kept[..8].iter().all(|n| *n >= 12 && *n == kept[0]) && kept[8] > 2 * kept[0], "{kept:?}");
     }
 
     /// The wrong shape, no samples or a NaN is refused, naming why.

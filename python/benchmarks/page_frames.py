@@ -3,9 +3,11 @@ quotes it).
 
     python python/benchmarks/page_frames.py        # with the wheel and Debian's chromium
 
-Two models of 40 bodies, each simulated for 2 s and written as a page: a carousel of 40
-capsules (40 shaped bodies, 84 faces each: the page's heaviest solid) on one turning frame,
-and the pendulum on a cart with 39 links (40 bodies drawn as inertia cubes, linked by rods).
+Three models of 40 bodies, each simulated for 2 s and written as a page: a carousel of 40
+capsules (40 shaped bodies, 84 faces each: the page's heaviest built-in solid) on one turning
+frame; the same carousel with each body an STL mesh of a sphere of 14,400 triangles (the page
+shares 2,400 mesh triangles among all its meshes, drawn from both sides); and the pendulum on a
+cart with 39 links (40 bodies drawn as inertia cubes, linked by rods).
 Each page is opened in headless Chromium at 1280 x 720 with `&measure=300`: the page draws 300
 frames one after another through the run, each made to reach the canvas's pixels (a one-pixel
 read waits for the drawing), and keeps their times; three such rounds, pages alternated, the
@@ -33,8 +35,23 @@ FRAMES = 300
 ROUNDS = 3
 
 
-def carousel(bodies=40):
-    """A RON model: `bodies` capsules around a frame turning about the vertical."""
+def sphere_stl(path, bands=60, sides=120):
+    """A text STL of a unit sphere of 2 * bands * sides triangles (14,400 by default)."""
+    def at(j, k):
+        a, b = math.pi * j / bands, 2 * math.pi * k / sides
+        return (math.sin(a) * math.cos(b), math.sin(a) * math.sin(b), math.cos(a))
+
+    facets = []
+    for j in range(bands):
+        for k in range(sides):
+            for tri in [(at(j, k), at(j + 1, k), at(j + 1, k + 1)), (at(j, k), at(j + 1, k + 1), at(j, k + 1))]:
+                facets.append("facet normal 0 0 0\nouter loop\n" + "".join("vertex %.6f %.6f %.6f\n" % v for v in tri) + "endloop\nendfacet\n")
+    path.write_text("solid sphere\n" + "".join(facets) + "endsolid sphere\n")
+
+
+def carousel(bodies=40, mesh=None):
+    """A RON model: `bodies` capsules (or, given `mesh`, that STL file scaled to a 0.08 radius)
+    around a frame turning about the vertical."""
     rows = []
     for k in range(bodies):
         ring, slot = divmod(k, 10)
@@ -44,7 +61,11 @@ def carousel(bodies=40):
         rows.append(
             f'Body(name: "b{k}", frame: "disk", mass: "1", com: ["{x:.6f}", "{y:.6f}", "0"], '
             f'inertia: Diagonal(["0.01", "0.01", "0.01"]), '
-            f'shape: Capsule(radius: "0.06", length: "0.2", origin: ["{x:.6f}", "{y:.6f}", "0"])),'
+            + (
+                f'shape: Mesh(file: "{mesh}", scale: ["0.08", "0.08", "0.08"], origin: ["{x:.6f}", "{y:.6f}", "0"])),'
+                if mesh
+                else f'shape: Capsule(radius: "0.06", length: "0.2", origin: ["{x:.6f}", "{y:.6f}", "0"])),'
+            )
         )
     return (
         'Model(name: "carousel", parameters: {"g": 9.81}, coordinates: ["theta"],\n'
@@ -85,8 +106,11 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         (folder / "carousel.ron").write_text(carousel())
+        sphere_stl(folder / "sphere.stl")
+        (folder / "meshes.ron").write_text(carousel(mesh="sphere.stl"))
         cases = {
             "carousel_40_capsules": multibody.load(str(folder / "carousel.ron")),
+            "carousel_40_meshes": multibody.load(str(folder / "meshes.ron")),
             "pendulum_on_cart_39": multibody.pendulum_on_cart(39),
         }
         pages = {}

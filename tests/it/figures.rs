@@ -85,6 +85,7 @@ fn the_page_figures_are_the_benchmark_file() {
         format!("{:.1} ms a frame ({:.0} frames per second)", r["median_frame_ms"].as_f64().unwrap(), r["frames_per_second"].as_f64().unwrap())
     };
     assert_quoted(&docs, &format!("40 capsules {}", said("carousel_40_capsules")), "docs/benchmarks/page.json");
+    assert_quoted(&docs, &format!("40 STL meshes {}", said("carousel_40_meshes")), "docs/benchmarks/page.json");
     assert_quoted(&docs, &format!("40 inertia cubes {}", said("pendulum_on_cart_39")), "docs/benchmarks/page.json");
     let met = file["results"]["carousel_40_capsules"]["frames_per_second"].as_f64().unwrap() >= 60.0;
     assert_quoted(&docs, &format!("60 frames per second for 40 bodies: {}", if met { "met" } else { "missed" }), "docs/benchmarks/page.json");

@@ -5,6 +5,44 @@
 /// fills every face at every frame, and 40 bodies of this many stay near 60 frames a second.
 pub const MAX_DRAWN_TRIANGLES: usize = 400;
 
+/// The most bytes a mesh file may hold (64 MiB: a scanned part of a million triangles).
+pub const MAX_MESH_BYTES: u64 = 64 << 20;
+
+/// Why a mesh file could not be drawn.
+#[derive(Debug)]
+pub enum MeshError {
+    /// It could not be read, or holds more than [`MAX_MESH_BYTES`].
+    Read(files::FileError),
+    /// It is not an STL mesh ([`TriangleMesh::from_stl`]'s reason).
+    Format(String),
+}
+
+/// The mesh of the STL file at `path`, simplified for drawing ([`MAX_DRAWN_TRIANGLES`]).
+/// A file is read once per process while its size and modification time stay the same: a URDF
+/// is checked, then built, and `watch` rebuilds a model on every save, and a robot's meshes can
+/// be tens of megabytes.
+pub fn drawn_mesh(path: &std::path::Path) -> Result<std::sync::Arc<TriangleMesh>, MeshError> {
+    type Stamp = (u64, Option<std::time::SystemTime>);
+    static READ: std::sync::Mutex<Vec<(std::path::PathBuf, Stamp, std::sync::Arc<TriangleMesh>)>> = std::sync::Mutex::new(Vec::new());
+    // Keyed by the canonical path: a URDF names a file through `..` one way, the model another.
+    let path = &std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let stamp: Option<Stamp> = std::fs::metadata(path).ok().map(|m| (m.len(), m.modified().ok()));
+    // A poisoned lock only means another thread panicked while holding it; the list stays valid.
+    let mut read = READ.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, _, mesh)) = read.iter().find(|(p, s, _)| p == path && stamp.as_ref() == Some(s)) {
+        return Ok(mesh.clone());
+    }
+    drop(read);
+    let bytes = files::read_bounded(path, MAX_MESH_BYTES).map_err(MeshError::Read)?;
+    let mesh = std::sync::Arc::new(TriangleMesh::from_stl(&bytes).map_err(MeshError::Format)?.simplified(MAX_DRAWN_TRIANGLES));
+    if let Some(stamp) = stamp {
+        read = READ.lock().unwrap_or_else(|e| e.into_inner());
+        read.retain(|(p, _, _)| p != path);
+        read.push((path.to_path_buf(), stamp, mesh.clone()));
+    }
+    Ok(mesh)
+}
+
 /// A triangle mesh in its file's own units and axes: vertices, and triangles as indices into
 /// them, counter-clockwise seen from outside (STL's rule; the page lights both sides, so a file
 /// that breaks the rule still draws).
@@ -94,14 +132,17 @@ impl TriangleMesh {
         }
         let (lo, hi) = self.bounds();
         let largest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0f64, f64::max);
+        // A surface's triangles go about as the square of the cells across it: each try aims
+        // a little under the bound from the last count, and steps down by at least one cell.
         let mut cells = 96usize;
         loop {
             let mesh = self.clustered(Some((lo, largest / cells as f64)));
-            if mesh.triangles.len() <= max || cells <= 1 {
+            let count = mesh.triangles.len();
+            if count <= max || cells <= 1 {
                 return mesh;
             }
-            // Steps of an eighth: the result lands near the bound, not far below it.
-            cells -= (cells / 8).max(1);
+            let aim = (cells as f64 * (0.95 * max as f64 / count as f64).sqrt()) as usize;
+            cells = aim.clamp(1, cells - 1);
         }
     }
 

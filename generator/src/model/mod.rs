@@ -1433,18 +1433,17 @@ impl<'a> Builder<'a> {
     /// The mesh of the STL file `file` (at `place`), relative to the model file's folder,
     /// simplified for drawing.
     fn mesh(&self, file: &str, place: &str) -> Result<std::sync::Arc<mesh::TriangleMesh>, ModelError> {
-        const MAX_MESH_BYTES: u64 = 64 << 20;
         let path = std::path::Path::new(self.file).parent().unwrap_or(std::path::Path::new("")).join(file);
         let refuse = |why: String, help: &str| self.err(ErrorKind::Io, place, &format!("\"{file}\""), format!("the mesh `{}` {why}", path.display()), help);
-        let bytes = files::read_bounded(&path, MAX_MESH_BYTES).map_err(|e| match e {
-            files::FileError::TooLarge { limit, .. } => {
+        mesh::drawn_mesh(&path).map_err(|e| match e {
+            mesh::MeshError::Read(files::FileError::TooLarge { limit, .. }) => {
                 refuse(format!("holds more than {limit} bytes"), "give a smaller mesh: it is drawn with at most 400 triangles")
             }
-            e => refuse(format!("cannot be read: {}", e.source_message()), "give the path of an STL file, relative to the model file's folder"),
-        })?;
-        let mesh = mesh::TriangleMesh::from_stl(&bytes)
-            .map_err(|why| refuse(format!("cannot be drawn: {why}"), "give an STL file (binary or text) with at least one triangle"))?;
-        Ok(std::sync::Arc::new(mesh.simplified(mesh::MAX_DRAWN_TRIANGLES)))
+            mesh::MeshError::Read(e) => {
+                refuse(format!("cannot be read: {}", e.source_message()), "give the path of an STL file, relative to the model file's folder")
+            }
+            mesh::MeshError::Format(why) => refuse(format!("cannot be drawn: {why}"), "give an STL file (binary or text) with at least one triangle"),
+        })
     }
 
     fn inertia(&self, def: &InertiaDef, place: &str, env: &Env) -> Result<Option<Matrix>, ModelError> {

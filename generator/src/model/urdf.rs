@@ -994,7 +994,6 @@ fn rpy_of(r: &M3) -> [f64; 3] {
 /// and the folders above it, or relative to `folder`; `None` where it is not an STL file that
 /// is found and reads as a mesh.
 fn mesh_file(name: &str, folder: &std::path::Path) -> Option<String> {
-    const MAX_MESH_BYTES: u64 = 64 << 20;
     if !name.to_ascii_lowercase().ends_with(".stl") {
         return None;
     }
@@ -1006,8 +1005,5 @@ fn mesh_file(name: &str, folder: &std::path::Path) -> Option<String> {
     } else {
         vec![(folder.join(name), name.to_string())]
     };
-    candidates.into_iter().filter(|(p, _)| p.is_file()).find_map(|(path, relative)| {
-        let bytes = files::read_bounded(&path, MAX_MESH_BYTES).ok()?;
-        super::mesh::TriangleMesh::from_stl(&bytes).ok().map(|_| relative)
-    })
+    candidates.into_iter().filter(|(p, _)| p.is_file()).find_map(|(path, relative)| super::mesh::drawn_mesh(&path).ok().map(|_| relative))
 }
