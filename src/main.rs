@@ -143,6 +143,7 @@ fn main() -> ExitCode {
 pub fn describe(e: &CliError, color: bool) -> String {
     match e {
         CliError::Model(e) | CliError::Load(load::LoadError::Model(e)) => e.render(color),
+        CliError::Animate(animate::AnimateError::Mesh(e)) => e.render(color),
         e => format!("error: {e}"),
     }
 }

@@ -94,6 +94,10 @@ pub fn run(args: &SimulateArgs) -> Result<Option<runtime::integrate::RunError>, 
     for path in [base.with_extension("csv"), base.with_extension("json")].iter().chain(&args.animate) {
         files::check_output(path)?;
     }
+    // A page that cannot be drawn (a mesh file missing) is refused before the run, not after.
+    if let Some(e) = args.animate.as_ref().and(source.undrawable()) {
+        return Err(animate::AnimateError::Mesh(Box::new(e.clone())).into());
+    }
     let times = reference.times().map_err(CliError::Grid)?;
     let span = reference.t_end - reference.t_start;
     let bar = crate::report::progress_bar(1000);

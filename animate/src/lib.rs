@@ -41,6 +41,9 @@ pub enum AnimateError {
     NotFinite { t: f64 },
     #[error(transparent)]
     File(#[from] files::FileError),
+    /// A mesh the model draws could not be read ([`Model::undrawable`]).
+    #[error("{0}")]
+    Mesh(Box<generator::model::ModelError>),
 }
 
 /// A body's box: half-extents along its principal axes (columns of `axes`, row-major, in its
@@ -146,6 +149,9 @@ pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String
 /// assert!(html.contains(r#""overlays":[{"centers":null,"formulation":"lagrange""#));
 /// ```
 pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> Result<String, AnimateError> {
+    if let Some(e) = model.undrawable() {
+        return Err(AnimateError::Mesh(Box::new(e.clone())));
+    }
     let mut poser = Poser::new(model, params)?;
     share_mesh_triangles(&mut poser, MAX_PAGE_MESH_TRIANGLES);
     let Some((motion, others)) = motions.split_first() else { return Err(AnimateError::Empty) };

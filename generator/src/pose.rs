@@ -67,7 +67,7 @@ fn shape_values(shape: &crate::model::shape::Shape, env: &Env) -> Result<ShapeVa
         solid,
         sizes: Expr::eval_all(&sizes, env)?,
         mesh: match &shape.solid {
-            crate::model::shape::Solid::Mesh { mesh, .. } => Some(mesh.clone()),
+            crate::model::shape::Solid::Mesh { mesh, .. } => mesh.as_ref().ok().cloned(),
             _ => None,
         },
         origin: [origin[0], origin[1], origin[2]],

@@ -559,6 +559,7 @@ impl Model {
                 runs.iter().zip(&data).map(|((_, _, formulation), (times, q))| animate::Motion { formulation, times, q }).collect();
             animate::write_overlaid(&path, &model, &params, &motions).map_err(|e| match e {
                 animate::AnimateError::File(e) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+                animate::AnimateError::Mesh(e) => model_error(*e),
                 other => PyValueError::new_err(other.to_string()),
             })
         })

@@ -250,8 +250,9 @@ fn visuals_become_shapes_in_their_body_frames() {
 }
 
 /// A RON body drawn as an STL mesh: the file found beside the model (or beside the URDF a model
-/// includes, from another folder), scaled and placed; a mesh that is not there, not an STL, or
-/// scaled by zero is refused, located at its field, the path in the message.
+/// includes, from another folder), scaled and placed; a mesh that is not there or not an STL is
+/// refused when drawn, one scaled by zero when read, located at its field, the path in the
+/// message.
 #[test]
 fn a_body_is_drawn_as_an_stl_mesh() {
     let dir = tempfile::tempdir().unwrap();
@@ -311,21 +312,46 @@ fn a_body_is_drawn_as_an_stl_mesh() {
     let poser = generator::pose::Poser::new(&model, &params).unwrap();
     let hand = &poser.bodies.iter().find(|b| b.name == "right_hand").unwrap().shapes[0];
     assert_eq!((hand.solid, hand.mesh.as_ref().map(|m| m.vertices.len())), ("mesh", Some(4)));
-    // Refusals, located at the mesh's field.
+    // Refusals, located at the mesh's field. A file that is missing or not STL leaves the model
+    // to derive and run (a worker elsewhere has no mesh files) but refuses to draw it; a scale
+    // of zero or of two factors is refused on reading.
     std::fs::write(dir.path().join("robot/parts/notes.stl"), "these are notes").unwrap();
-    for (shape, field, says) in [
-        (r#"Mesh(file: "robot/parts/gone.stl")"#, "\"robot/parts/gone.stl\"", "cannot be read"),
-        (r#"Mesh(file: "robot/parts/notes.stl")"#, "\"robot/parts/notes.stl\"", "not an STL file"),
-        (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "0", "1"])"#, "\"0\"", "other than zero"),
-        (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "1"])"#, "\"1\"", "three factors"),
+    for (shape, field, says, drawn) in [
+        (r#"Mesh(file: "robot/parts/gone.stl")"#, "\"robot/parts/gone.stl\"", "cannot be read", true),
+        (r#"Mesh(file: "robot/parts/notes.stl")"#, "\"robot/parts/notes.stl\"", "not an STL file", true),
+        (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "0", "1"])"#, "\"0\"", "other than zero", false),
+        (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "1"])"#, "\"1\"", "three factors", false),
     ] {
-        let e = load("bad.ron", shape).unwrap_err();
+        let e = match load("bad.ron", shape) {
+            Ok(model) if drawn => {
+                let motion = animate::Motion { formulation: "kane", times: &[0.0], q: &[0.0] };
+                match animate::page(&model, &[1.0, 0.001], &motion) {
+                    Err(animate::AnimateError::Mesh(e)) => *e,
+                    other => panic!("{shape}: drawn as {:?}", other.map(|_| "a page")),
+                }
+            }
+            Ok(_) => panic!("{shape}: read"),
+            Err(e) => {
+                assert!(!drawn, "{shape}: {e}");
+                e
+            }
+        };
         let text = model_with(shape);
         let (line, col) = e.location.expect("located");
         let at: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum::<usize>() + col - 1;
         assert!(text[at..].starts_with(field), "{shape}: {e} at {line}:{col}");
         assert!(e.to_string().contains(says) && e.to_string().contains("bad.ron"), "{shape}: {e}");
     }
+    // The tool refuses such a page before the run: exit 1, the place shown, nothing written; the
+    // same model runs without a page.
+    load("bad.ron", r#"Mesh(file: "robot/parts/gone.stl")"#).unwrap();
+    let args = ["simulate", "bad.ron", "--t-end", "0.1", "--dt-out", "0.05"];
+    let out = multibody(dir.path(), &[&args[..], &["--animate", "bad.html"]].concat());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(1) && said.contains("bad.ron:7:31") && said.contains("cannot be read"), "{said}");
+    assert!(!dir.path().join("bad.html").exists() && !dir.path().join("held_kane.csv").exists() && !dir.path().join("held_reduced_volterra.csv").exists());
+    ok(&multibody(dir.path(), &args));
+    assert!(dir.path().join("held_reduced_volterra.csv").exists());
 }
 
 /// Every refusal names the file, the line and column of the element at fault, and the fix.

@@ -199,6 +199,20 @@ impl Transfer for Model {
 }
 
 impl Model {
+    /// Why the model cannot be drawn, if it cannot: the first mesh (of its bodies, then of its
+    /// scenery) whose file could not be read as STL, as a located error.
+    ///
+    /// ```
+    /// let model = generator::model::from_source("m.ron", &std::fs::read_to_string("../models/cart_pendulum.ron").unwrap()).unwrap();
+    /// assert!(model.undrawable().is_none());
+    /// ```
+    pub fn undrawable(&self) -> Option<&ModelError> {
+        self.bodies.iter().flat_map(|b| b.shapes.iter()).chain(&self.scenery).find_map(|s| match &s.solid {
+            shape::Solid::Mesh { mesh: Err(e), .. } => Some(&**e),
+            _ => None,
+        })
+    }
+
     /// The frames turned by ZYX Euler angles whose three angles are coordinates: each frame's
     /// name and the index of its pitch, singular where `cos(pitch)` vanishes (gimbal lock).
     ///
@@ -1423,7 +1437,7 @@ impl<'a> Builder<'a> {
                         ));
                     }
                 };
-                (Solid::Mesh { mesh: self.mesh(file, &format!("{place}.file"))?, scale }, placed(origin, rpy)?)
+                (Solid::Mesh { mesh: self.mesh(file, &format!("{place}.file")).map_err(Box::new), scale }, placed(origin, rpy)?)
             }
         };
         out.push(shape::Shape { solid, origin, rpy });

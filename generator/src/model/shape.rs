@@ -34,9 +34,11 @@ pub enum Solid {
         radius: Expr,
         length: Expr,
     },
-    /// A triangle mesh (from an STL file), its vertices multiplied by `scale` along x, y, z.
+    /// A triangle mesh (from an STL file), its vertices multiplied by `scale` along x, y, z; or
+    /// why its file could not be drawn (a model whose picture is missing still derives and runs:
+    /// a Dask worker has no mesh files; drawing it is refused with this located error).
     Mesh {
-        mesh: std::sync::Arc<super::mesh::TriangleMesh>,
+        mesh: Result<std::sync::Arc<super::mesh::TriangleMesh>, Box<super::ModelError>>,
         scale: [Expr; 3],
     },
 }
