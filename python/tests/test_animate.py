@@ -368,3 +368,11 @@ def test_a_mesh_is_drawn_from_every_side(tmp_path):
     m.animate(run, path)
     state = page_state(tmp_path, path.as_uri() + "#t=0.5&size=800x520")
     assert state["shaped"] == 1 and state["polygons"] == 4 and state["shadows"] > 0, state
+    # Its file gone, the model still loads and runs (a worker elsewhere has no mesh files), and
+    # drawing it is refused, located at the mesh's file.
+    (tmp_path / "gone.ron").write_text((tmp_path / "tetra.ron").read_text().replace("tetra.stl", "gone.stl"))
+    gone = multibody.load(str(tmp_path / "gone.ron"))
+    run = gone.simulate("kane", t_end=0.2, dt_out=0.05, frame=False)
+    with pytest.raises(multibody.ModelError, match=r"gone\.ron:6:.*cannot be read"):
+        gone.animate(run, tmp_path / "gone.html")
+    assert not (tmp_path / "gone.html").exists()
