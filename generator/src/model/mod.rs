@@ -1448,7 +1448,9 @@ impl<'a> Builder<'a> {
     /// simplified for drawing.
     fn mesh(&self, file: &str, place: &str) -> Result<std::sync::Arc<mesh::TriangleMesh>, ModelError> {
         let path = std::path::Path::new(self.file).parent().unwrap_or(std::path::Path::new("")).join(file);
-        let refuse = |why: String, help: &str| self.err(ErrorKind::Io, place, &format!("\"{file}\""), format!("the mesh `{}` {why}", path.display()), help);
+        let refuse = |why: String, help: &str| {
+            self.err(ErrorKind::Io, place, &format!("\"{file}\""), format!("the mesh `{}` {why}", files::printable_path(&path)), help)
+        };
         mesh::drawn_mesh(&path).map_err(|e| match e {
             mesh::MeshError::Read(files::FileError::TooLarge { limit, .. }) => {
                 refuse(format!("holds more than {limit} bytes"), "give a smaller mesh: it is drawn with at most 400 triangles")
