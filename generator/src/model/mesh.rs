@@ -1,8 +1,9 @@
 //! A solid given as a triangle mesh: read from an STL file (binary or text, by the `stl_io`
 //! crate) and simplified to at most a few hundred triangles for drawing, deterministically.
 
-/// The most triangles a drawn mesh keeps ([`TriangleMesh::simplified`]): the page sorts and
-/// fills every face at every frame, and 40 bodies of this many stay near 60 frames a second.
+/// The most triangles a mesh keeps when read ([`TriangleMesh::simplified`]): the page sorts and
+/// fills every face at every frame (and shares a total among a model's meshes, the animation's
+/// own bound), so a finer mesh would only cost memory and reading time.
 pub const MAX_DRAWN_TRIANGLES: usize = 400;
 
 /// The most bytes a mesh file may hold (64 MiB: a scanned part of a million triangles).
