@@ -160,3 +160,50 @@ fn watch_needs_a_model_file() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("`watch` follows a model file, and `cart_pendulum` is none"), "{err}");
 }
+
+/// A model drawn with an STL mesh: saving the mesh (the model untouched) runs again, and the
+/// page shows the new mesh (the tool reads a mesh once while its file stays the same).
+#[test]
+fn watch_follows_the_mesh_a_model_draws() {
+    let dir = tempfile::tempdir().unwrap();
+    let tetra = |size: f64| {
+        let corners = [[0.0, 0.0, 0.0], [size, 0.0, 0.0], [0.0, size, 0.0], [0.0, 0.0, size]];
+        let mut stl = String::from("solid t\n");
+        for f in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+            stl += "facet normal 0 0 0\nouter loop\n";
+            for k in f {
+                let [x, y, z] = corners[k];
+                stl += &format!("vertex {x} {y} {z}\n");
+            }
+            stl += "endloop\nendfacet\n";
+        }
+        stl + "endsolid t\n"
+    };
+    std::fs::write(dir.path().join("part.stl"), tetra(0.25)).unwrap();
+    std::fs::write(
+        dir.path().join("swing.ron"),
+        r#"Model(name: "swing", parameters: { "g": 9.81 }, coordinates: ["th"],
+    frames: [Frame(name: "arm", parent: "world", rotation: [Z("th")]), Frame(name: "tip", parent: "arm", translation: ["1", "0", "0"])],
+    bodies: [Body(name: "tip", frame: "tip", mass: "1", inertia: PointMass, shape: Mesh(file: "part.stl"))],
+    forces: [Gravity(vector: ["0", "-g", "0"])],
+    quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]),
+    initial: Initial(q: {"th": "-0.5"}, qdot: {"th": "0"}))"#,
+    )
+    .unwrap();
+    let (_watching, port, token) = watch(dir.path(), &["swing.ron", "--t-end", "0.2", "--dt-out", "0.05"]);
+    let token = token.as_str();
+    // The largest coordinate of the mesh the served page draws.
+    let reach = || -> f64 {
+        let (status, page) = get(port, &format!("/?token={token}"));
+        assert_eq!(status, 200);
+        let data: serde_json::Value = serde_json::from_str(page.split(r#"id="data">"#).nth(1).unwrap().split("</script>").next().unwrap()).unwrap();
+        data["bodies"][0]["shapes"][0]["points"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).fold(0.0, f64::max)
+    };
+    let news = wait_for(port, token, |n| n["run"] == 1);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(reach(), 0.25);
+    std::fs::write(dir.path().join("part.stl"), tetra(0.5)).unwrap();
+    let news = wait_for(port, token, |n| n["run"] == 2);
+    assert!(news["error"].is_null(), "{news}");
+    assert_eq!(reach(), 0.5);
+}
