@@ -100,9 +100,9 @@ fn share_mesh_triangles(poser: &mut generator::pose::Poser, total: usize) {
     }
 }
 
-/// A mesh shape's vertices in its own axes, scaled, flat (x, y, z, x, ...); none for a solid.
-fn mesh_points(s: &generator::pose::ShapeValues) -> Vec<f64> {
-    s.mesh.iter().flat_map(|m| m.vertices.iter()).flat_map(|v| (0..3).map(move |i| v[i] * s.sizes[i])).collect()
+/// A mesh shape's vertices in its own axes, scaled; none for a solid.
+fn scaled_vertices(s: &generator::pose::ShapeValues) -> impl Iterator<Item = [f64; 3]> + '_ {
+    s.mesh.iter().flat_map(|m| m.vertices.iter()).map(|v| std::array::from_fn(|i| v[i] * s.sizes[i]))
 }
 
 /// A shape as the page reads it: its solid, sizes and placement; a mesh's scaled vertices and
@@ -110,7 +110,7 @@ fn mesh_points(s: &generator::pose::ShapeValues) -> Vec<f64> {
 fn shape_json(s: &generator::pose::ShapeValues) -> serde_json::Value {
     let mut json = serde_json::json!({ "solid": s.solid, "sizes": s.sizes, "o": s.origin, "r": s.rotation });
     if let Some(m) = &s.mesh {
-        json["points"] = mesh_points(s).into();
+        json["points"] = scaled_vertices(s).flatten().collect::<Vec<f64>>().into();
         json["triangles"] = m.triangles.iter().flatten().copied().collect::<Vec<u32>>().into();
     }
     json
@@ -122,7 +122,7 @@ fn shape_reach(s: &generator::pose::ShapeValues, center: &[f64; 3]) -> f64 {
     let bound = match s.solid {
         "box" => 0.5 * s.sizes.iter().map(|x| x * x).sum::<f64>().sqrt(),
         "sphere" => s.sizes[0],
-        "mesh" => mesh_points(s).chunks(3).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
+        "mesh" => scaled_vertices(s).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
         // A cylinder's or capsule's radius, then its length along its axis.
         _ => s.sizes[0] * if s.solid == "capsule" { 1.0 } else { std::f64::consts::SQRT_2 } + 0.5 * s.sizes[1],
     };

@@ -1358,20 +1358,36 @@ impl<'a> Builder<'a> {
     /// The solids of `def` (at `place`), sizes positive, each one pushed onto `out`.
     fn shapes(&self, def: &ShapeDef, place: &str, env: &Env, out: &mut Vec<shape::Shape>) -> Result<(), ModelError> {
         use shape::Solid;
-        let size = |src: &String, at: &str| -> Result<Expr, ModelError> {
+        // An expression in the parameters at `{place}.{at}` whose value `fits`, else refused.
+        let checked = |src: &String, at: &str, fits: fn(f64) -> bool, wanted: &str, help: &str| -> Result<Expr, ModelError> {
             let e = self.expr(src, &format!("{place}.{at}"), Scope::Parameters)?;
             let value = e.eval(env).unwrap_or(f64::NAN);
-            if !(value > 0.0 && value.is_finite()) {
+            if !fits(value) {
                 return Err(self.err(
                     ErrorKind::BadValue,
                     &format!("{place}.{at}"),
                     &format!("\"{src}\""),
-                    format!("the shape's {at} is {src} = {value}, which is not a positive number"),
-                    "give every size of a shape a positive value",
+                    format!("the shape's {at} is {src} = {value}, which is not {wanted}"),
+                    help,
                 ));
             }
             Ok(e)
         };
+        let size = |src: &String, at: &str| checked(src, at, |v| v > 0.0 && v.is_finite(), "a positive number", "give every size of a shape a positive value");
+        // Three values of `field` (a box's sides, a mesh's scale), each read by `each`.
+        let three =
+            |values: &Vec<String>, field: &str, count: &str, each: &dyn Fn(&String, &str) -> Result<Expr, ModelError>| -> Result<[Expr; 3], ModelError> {
+                if values.len() != 3 {
+                    return Err(self.err(
+                        ErrorKind::Dimension,
+                        &format!("{place}.{field}"),
+                        &values.first().map(|s| format!("\"{s}\"")).unwrap_or_default(),
+                        format!("{count}; {} were given", values.len()),
+                        &format!("write {field}: [\"x\", \"y\", \"z\"]"),
+                    ));
+                }
+                Ok([each(&values[0], &format!("{field}[0]"))?, each(&values[1], &format!("{field}[1]"))?, each(&values[2], &format!("{field}[2]"))?])
+            };
         let zero = || vec!["0".to_string(), "0".to_string(), "0".to_string()];
         let placed = |origin: &Option<Vec<String>>, rpy: &Option<Vec<String>>| -> Result<([Expr; 3], [Expr; 3]), ModelError> {
             let o = self.vec3(origin.as_ref().unwrap_or(&zero()), &format!("{place}.origin"), Scope::Parameters)?;
@@ -1385,19 +1401,7 @@ impl<'a> Builder<'a> {
                 }
                 return Ok(());
             }
-            ShapeDef::Box { size: sides, origin, rpy } => {
-                if sides.len() != 3 {
-                    return Err(self.err(
-                        ErrorKind::Dimension,
-                        &format!("{place}.size"),
-                        &sides.first().map(|s| format!("\"{s}\"")).unwrap_or_default(),
-                        format!("a box has three sides; {} were given", sides.len()),
-                        "write size: [\"x\", \"y\", \"z\"]",
-                    ));
-                }
-                let s = [size(&sides[0], "size[0]")?, size(&sides[1], "size[1]")?, size(&sides[2], "size[2]")?];
-                (Solid::Box { size: s }, placed(origin, rpy)?)
-            }
+            ShapeDef::Box { size: sides, origin, rpy } => (Solid::Box { size: three(sides, "size", "a box has three sides", &size)? }, placed(origin, rpy)?),
             ShapeDef::Cylinder { radius, length, origin, rpy } => {
                 (Solid::Cylinder { radius: size(radius, "radius")?, length: size(length, "length")? }, placed(origin, rpy)?)
             }
@@ -1406,36 +1410,13 @@ impl<'a> Builder<'a> {
             }
             ShapeDef::Sphere { radius, origin } => (Solid::Sphere { radius: size(radius, "radius")? }, placed(origin, &None)?),
             ShapeDef::Mesh { file, scale, origin, rpy } => {
+                // A factor may be negative: a mirrored part (URDF's `scale="1 -1 1"`).
+                let factor = |src: &String, at: &str| {
+                    checked(src, at, |v| v != 0.0 && v.is_finite(), "a number other than zero", "give each factor of a mesh's scale a value other than zero")
+                };
                 let scale = match scale {
                     None => [Expr::int(1), Expr::int(1), Expr::int(1)],
-                    Some(v) if v.len() == 3 => {
-                        // A factor may be negative: a mirrored part (URDF's `scale="1 -1 1"`).
-                        let factor = |k: usize| -> Result<Expr, ModelError> {
-                            let at = format!("{place}.scale[{k}]");
-                            let e = self.expr(&v[k], &at, Scope::Parameters)?;
-                            let value = e.eval(env).unwrap_or(f64::NAN);
-                            if !(value != 0.0 && value.is_finite()) {
-                                return Err(self.err(
-                                    ErrorKind::BadValue,
-                                    &at,
-                                    &format!("\"{}\"", v[k]),
-                                    format!("the mesh's scale[{k}] is {} = {value}, which is not a number other than zero", v[k]),
-                                    "give each factor of a mesh's scale a value other than zero",
-                                ));
-                            }
-                            Ok(e)
-                        };
-                        [factor(0)?, factor(1)?, factor(2)?]
-                    }
-                    Some(v) => {
-                        return Err(self.err(
-                            ErrorKind::Dimension,
-                            &format!("{place}.scale"),
-                            &v.first().map(|s| format!("\"{s}\"")).unwrap_or_default(),
-                            format!("a mesh's scale has three factors; {} were given", v.len()),
-                            "write scale: [\"x\", \"y\", \"z\"]",
-                        ));
-                    }
+                    Some(v) => three(v, "scale", "a mesh's scale has three factors", &factor)?,
                 };
                 (Solid::Mesh { mesh: self.mesh(file, &format!("{place}.file")).map_err(Box::new), scale }, placed(origin, rpy)?)
             }
