@@ -88,7 +88,9 @@ fn share_mesh_triangles(poser: &mut generator::pose::Poser, total: usize) {
         d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
     };
     let all: f64 = shapes().filter(|s| s.mesh.is_some()).map(surface).sum();
-    let shapes = poser.bodies.iter_mut().flat_map(|b| b.shapes.iter_mut()).chain(poser.scenery.iter_mut());
+    // Solids beside the meshes keep their shapes (a cylinder's sizes are two, not a mesh's
+    // three scale factors).
+    let shapes = poser.bodies.iter_mut().flat_map(|b| b.shapes.iter_mut()).chain(poser.scenery.iter_mut()).filter(|s| s.mesh.is_some());
     for s in shapes {
         let share = if all > 0.0 { surface(s) / all } else { 0.0 };
         let keep = ((total as f64 * share) as usize).max(12);
@@ -388,13 +390,19 @@ mod tests {
             }
         }
         std::fs::write(dir.path().join("sphere.stl"), stl + "endsolid s\n").unwrap();
-        // Eight small spheres and one twice as wide: 9 x 400 triangles, more than the page's 2,400.
-        let bodies: Vec<String> = (0..9)
+        // Eight small spheres and one twice as wide: 9 x 400 triangles, more than the page's
+        // 2,400; beside them a body drawn as a cylinder and one as a sphere, whose sizes are
+        // not a mesh's scale.
+        let mut bodies: Vec<String> = (0..9)
             .map(|k| {
                 let r = if k == 8 { "0.2" } else { "0.1" };
                 format!(r#"Body(name: "b{k}", frame: "disk", mass: "1", com: ["{k}", "0", "0"], inertia: PointMass, shape: Mesh(file: "sphere.stl", scale: ["{r}", "{r}", "{r}"], origin: ["{k}", "0", "0"]))"#)
             })
             .collect();
+        bodies.push(
+            r#"Body(name: "rod", frame: "disk", mass: "1", com: ["0", "1", "0"], inertia: PointMass, shape: Cylinder(radius: "0.05", length: "1"))"#.into(),
+        );
+        bodies.push(r#"Body(name: "ball", frame: "disk", mass: "1", com: ["0", "2", "0"], inertia: PointMass, shape: Sphere(radius: "0.1"))"#.into());
         let ron = format!(
             r#"Model(name: "spheres", parameters: {{}}, coordinates: ["th"], frames: [Frame(name: "disk", parent: "world", rotation: [Z("th")])],
             bodies: [{}], quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]), initial: Initial(q: {{"th": "0"}}, qdot: {{"th": "1"}}))"#,
@@ -407,6 +415,8 @@ mod tests {
         let kept: Vec<usize> = (0..9).map(|k| data["bodies"][k]["shapes"][0]["triangles"].as_array().unwrap().len() / 3).collect();
         assert!(kept.iter().sum::<usize>() <= MAX_PAGE_MESH_TRIANGLES, "{kept:?}");
         assert!(kept[..8].iter().all(|n| *n >= 12 && *n == kept[0]) && kept[8] > 2 * kept[0], "{kept:?}");
+        assert_eq!(data["bodies"][9]["shapes"][0]["sizes"], serde_json::json!([0.05, 1.0]));
+        assert_eq!(data["bodies"][10]["shapes"][0]["sizes"], serde_json::json!([0.1]));
     }
 
     /// The wrong shape, no samples or a NaN is refused, naming why.

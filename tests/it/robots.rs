@@ -191,8 +191,9 @@ fn the_builder_includes_a_urdf_and_adds_to_it() {
 /// Each link's visuals become its body's drawn shapes, placed in the body's frame: the torso's
 /// box; the head's sphere, merged with the torso, where the fixed neck puts it; the upper arm's
 /// cylinder turned a quarter about x; the hand's STL mesh (millimetres scaled to metres); the
-/// forearm's mesh, whose file is not there, not drawn (its inertia box is, on the page); the
-/// base's cylinder, on a fixed base, as scenery.
+/// right upper arm's COLLADA mesh (in millimetres by its `<unit>`, placed by its node); the
+/// forearm's COLLADA mesh, whose file is not there, not drawn, and its OBJ mesh beside it, drawn;
+/// the base's cylinder, on a fixed base, as scenery.
 #[test]
 fn visuals_become_shapes_in_their_body_frames() {
     let model = robot("tree.urdf", &UrdfOptions::default());
@@ -220,7 +221,22 @@ fn visuals_become_shapes_in_their_body_frames() {
     let mesh = hand[0].mesh.as_ref().unwrap();
     assert_eq!(mesh.vertices, [[-20.0, -50.0, -10.0], [20.0, -50.0, -10.0], [20.0, 10.0, 10.0], [-20.0, 10.0, 10.0]]);
     assert_eq!(mesh.triangles, [[0, 1, 2], [0, 2, 3]]);
-    assert!(body("left_lower").is_empty());
+    // COLLADA: the triangle in millimetres, moved 150 of them along -y by its node, in metres;
+    // its Y_UP not applied.
+    let upper = body("right_upper");
+    assert!(upper.len() == 1 && upper[0].solid == "mesh" && close(&upper[0].sizes, &[1.0; 3]), "{upper:?}");
+    let mesh = upper[0].mesh.as_ref().unwrap();
+    let expected = [[-0.02, -0.15, 0.0], [0.02, -0.15, 0.0], [0.0, -0.15, 0.04]];
+    assert!(mesh.vertices.len() == 3 && mesh.vertices.iter().zip(expected).all(|(v, e)| close(v, &e)), "{:?}", mesh.vertices);
+    // OBJ: the pyramid's quad base and four sides, six triangles; the missing COLLADA file
+    // beside it is not drawn.
+    let lower = body("left_lower");
+    assert!(lower.len() == 1 && lower[0].solid == "mesh", "{lower:?}");
+    let mesh = lower[0].mesh.as_ref().unwrap();
+    assert_eq!((mesh.vertices.len(), mesh.triangles.len()), (5, 6));
+    // Mesh files are read in single precision (`mesh-loader`'s f32): 0.02 is 0.0199999996.
+    let single = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-7);
+    assert!(single(&mesh.bounds().1, &[0.02, 0.25, 0.02]) && single(&mesh.bounds().0, &[-0.02, 0.0, -0.02]), "{:?}", mesh.bounds());
     // On a fixed base, the base link's cylinder is scenery, fixed to the world where it is.
     assert!(poser.scenery.len() == 1 && poser.scenery[0].solid == "cylinder" && close(&poser.scenery[0].origin, &[0.0, 0.0, 0.05]), "{:?}", poser.scenery);
     // On a floating base, it is the base's own shape, and there is no scenery.
@@ -254,7 +270,7 @@ fn visuals_become_shapes_in_their_body_frames() {
 /// refused when drawn, one scaled by zero when read, located at its field, the path in the
 /// message.
 #[test]
-fn a_body_is_drawn_as_an_stl_mesh() {
+fn a_body_is_drawn_as_a_mesh_file() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir_all(dir.path().join("robot/parts")).unwrap();
     std::fs::copy(fixture("hand.stl"), dir.path().join("robot/parts/hand.stl")).unwrap();
@@ -312,13 +328,18 @@ fn a_body_is_drawn_as_an_stl_mesh() {
     let poser = generator::pose::Poser::new(&model, &params).unwrap();
     let hand = &poser.bodies.iter().find(|b| b.name == "right_hand").unwrap().shapes[0];
     assert_eq!((hand.solid, hand.mesh.as_ref().map(|m| m.vertices.len())), ("mesh", Some(4)));
-    // Refusals, located at the mesh's field. A file that is missing or not STL leaves the model
+    // Refusals, located at the mesh's field. A file that is missing, not a mesh of its format or
+    // of a format not read leaves the model
     // to derive and run (a worker elsewhere has no mesh files) but refuses to draw it; a scale
     // of zero or of two factors is refused on reading.
     std::fs::write(dir.path().join("robot/parts/notes.stl"), "these are notes").unwrap();
+    std::fs::write(dir.path().join("robot/parts/notes.dae"), "these are notes").unwrap();
+    std::fs::write(dir.path().join("robot/parts/hand.glb"), "glTF").unwrap();
     for (shape, field, says, drawn) in [
         (r#"Mesh(file: "robot/parts/gone.stl")"#, "\"robot/parts/gone.stl\"", "cannot be read", true),
         (r#"Mesh(file: "robot/parts/notes.stl")"#, "\"robot/parts/notes.stl\"", "not an STL file", true),
+        (r#"Mesh(file: "robot/parts/notes.dae")"#, "\"robot/parts/notes.dae\"", "not a COLLADA file", true),
+        (r#"Mesh(file: "robot/parts/hand.glb")"#, "\"robot/parts/hand.glb\"", "`.stl`, `.dae` or `.obj`", true),
         (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "0", "1"])"#, "\"0\"", "other than zero", false),
         (r#"Mesh(file: "robot/parts/hand.stl", scale: ["1", "1"])"#, "\"1\"", "three factors", false),
     ] {

@@ -200,7 +200,7 @@ impl Transfer for Model {
 
 impl Model {
     /// Why the model cannot be drawn, if it cannot: the first mesh (of its bodies, then of its
-    /// scenery) whose file could not be read as STL, as a located error.
+    /// scenery) whose file could not be read as a mesh, as a located error.
     ///
     /// ```
     /// let model = generator::model::from_source("m.ron", &std::fs::read_to_string("../models/cart_pendulum.ron").unwrap()).unwrap();
@@ -1425,7 +1425,7 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    /// The mesh of the STL file `file` (at `place`), relative to the model file's folder,
+    /// The mesh of the file `file` (at `place`; STL, COLLADA or OBJ), relative to the model file's folder,
     /// simplified for drawing.
     fn mesh(&self, file: &str, place: &str) -> Result<std::sync::Arc<mesh::TriangleMesh>, ModelError> {
         let path = std::path::Path::new(self.file).parent().unwrap_or(std::path::Path::new("")).join(file);
@@ -1437,9 +1437,11 @@ impl<'a> Builder<'a> {
                 refuse(format!("holds more than {limit} bytes"), "give a smaller mesh: it is drawn with at most 400 triangles")
             }
             mesh::MeshError::Read(e) => {
-                refuse(format!("cannot be read: {}", e.source_message()), "give the path of an STL file, relative to the model file's folder")
+                refuse(format!("cannot be read: {}", e.source_message()), "give the path of a mesh file, relative to the model file's folder")
             }
-            mesh::MeshError::Format(why) => refuse(format!("cannot be drawn: {why}"), "give an STL file (binary or text) with at least one triangle"),
+            mesh::MeshError::Format(why) => {
+                refuse(format!("cannot be drawn: {why}"), &format!("give a mesh file ({}) with at least one triangle", mesh::MESH_EXTENSIONS))
+            }
         })
     }
 

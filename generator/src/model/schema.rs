@@ -307,7 +307,8 @@ pub enum ShapeDef {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         rpy: Option<Vec<String>>,
     },
-    /// A triangle mesh read from an STL file (binary or text), `file` relative to the model
+    /// A triangle mesh read from a file, STL (binary or text), COLLADA (`.dae`) or Wavefront
+    /// OBJ by its extension, `file` relative to the model
     /// file's folder (or absolute), its vertices multiplied by `scale` (default 1, 1, 1: a mesh
     /// drawn in millimetres takes `["0.001", "0.001", "0.001"]`). Drawn simplified to at most
     /// 400 triangles.

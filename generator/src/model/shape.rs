@@ -34,7 +34,7 @@ pub enum Solid {
         radius: Expr,
         length: Expr,
     },
-    /// A triangle mesh (from an STL file), its vertices multiplied by `scale` along x, y, z; or
+    /// A triangle mesh (from a mesh file), its vertices multiplied by `scale` along x, y, z; or
     /// why its file could not be drawn (a model whose picture is missing still derives and runs:
     /// a Dask worker has no mesh files; drawing it is refused with this located error).
     Mesh {

@@ -15,8 +15,8 @@
 //!   (no coordinate of its own); `floating` and `planar` joints, closed loops and several roots
 //!   are refused, located;
 //! - links' `inertial` (mass, the centre of mass `origin` with its own rotation, the inertia
-//!   tensor); `visual` boxes, cylinders and spheres become the body's drawn shape (a mesh: the box
-//!   that bounds its STL file, where found), `collision` is not read;
+//!   tensor); `visual` boxes, cylinders, spheres and meshes (STL, COLLADA or OBJ files, where
+//!   found) become the body's drawn shapes, `collision` is not read;
 //! - `limit` (lower, upper) becomes events on request ([`LimitAction`]); `dynamics` `damping`
 //!   a generalized force `-damping q'` (its friction is not modelled, and said so);
 //! - the parameters are each moving body's mass (`mass_<link>`) and each damped joint's
@@ -280,7 +280,8 @@ impl<'a> Reader<'a> {
     }
 
     /// A `<visual>` of link `link`, whose frame is at `at` in its model frame, as a shape in that
-    /// frame: a box, cylinder or sphere as given; a mesh where its file is an STL found beside
+    /// frame: a box, cylinder or sphere as given; a mesh where its file (STL, COLLADA or OBJ,
+    /// [`super::mesh::MeshFormat`]) is found beside
     /// the URDF (`package://NAME/...` is looked for in the folders above it), named relative to
     /// the URDF's folder; `None` for a mesh not found or of another format, and for geometry of
     /// another kind.
@@ -333,7 +334,7 @@ impl<'a> Reader<'a> {
                         "give the mesh three scale factors other than zero",
                     ));
                 }
-                // Drawn only where the file is an STL that is found and reads as one.
+                // Drawn only where the file is found and reads as a mesh of its format.
                 let Some(file) = g.attribute("filename").and_then(|name| mesh_file(name, folder)) else { return Ok(None) };
                 let (origin, rpy) = placed(&pose);
                 ShapeDef::Mesh { file, scale: Some(scale.iter().map(|x| num(*x)).collect()), origin, rpy }
@@ -989,14 +990,12 @@ fn rpy_of(r: &M3) -> [f64; 3] {
 }
 
 /// The path, relative to `folder` where it was found there or above (so that the model reads
-/// the same on any machine), of a mesh's STL file named `name` in a URDF in `folder`:
+/// the same on any machine), of a mesh file named `name` in a URDF in `folder`:
 /// `file://` absolute, `package://NAME/PATH` looked for as `NAME/PATH` and as `PATH` in `folder`
-/// and the folders above it, or relative to `folder`; `None` where it is not an STL file that
-/// is found and reads as a mesh.
+/// and the folders above it, or relative to `folder`; `None` where it is not a file of a mesh
+/// format read ([`super::mesh::MeshFormat`]) that is found and reads as a mesh.
 fn mesh_file(name: &str, folder: &std::path::Path) -> Option<String> {
-    if !name.to_ascii_lowercase().ends_with(".stl") {
-        return None;
-    }
+    super::mesh::MeshFormat::of(std::path::Path::new(name))?;
     let candidates: Vec<(std::path::PathBuf, String)> = if let Some(path) = name.strip_prefix("file://") {
         vec![(path.into(), path.to_string())]
     } else if let Some(rest) = name.strip_prefix("package://") {
