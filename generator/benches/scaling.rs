@@ -366,12 +366,7 @@ fn main() {
     if args.first().map(String::as_str) == Some("--at-scale-one") {
         let (kind, n) = (&args[1], args[2].parse().expect("--at-scale-one KIND N"));
         let model = scaled_model(kind, n);
-        let mut o = Options::from_model(&model);
-        if let Ok(f) = std::env::var("PROBE_FORMS") {
-            o.formulations.retain(|x| format!("{x:?}").to_lowercase().contains(&f));
-            eprintln!("{:?}", o.formulations);
-        }
-        let out = generate(&model, &o);
+        let out = generate(&model, &Options::from_model(&model));
         let (cpu_s, peak_mb) = (cpu_seconds(), peak_mb());
         let error = out.err().map(|e| e.to_string().lines().next().unwrap_or_default().to_string());
         println!("{}", serde_json::json!({ "cpu_s": cpu_s, "peak_mb": peak_mb, "error": error }));
