@@ -413,6 +413,41 @@ fn refusals_are_located_in_the_xml() {
     assert!(e.to_string().contains("the root link `base` carries no inertia"), "{e}");
 }
 
+/// What exporters write that is not a mistake is read: a joint named as the link it moves (its
+/// coordinate takes the name with `_`), a point mass's inertia written as float noise (iCub's
+/// head: all zero but `ixz = 2.4e-35`); a robot with nothing to move on a fixed base (a drone's
+/// one link) is refused, located at `<robot>`, and runs on a floating base.
+#[test]
+fn what_exporters_write_is_read() {
+    let tree = std::fs::read_to_string(fixture("tree.urdf")).unwrap();
+    let named = tree.replace(r#"<joint name="right_wrist""#, r#"<joint name="right_hand""#);
+    assert_ne!(named, tree);
+    let text = generator::model::to_ron(&model_file("tree.urdf", &named, &UrdfOptions::default()).unwrap());
+    let model = from_source("tree.urdf", &text).unwrap();
+    let names: Vec<String> = model.coordinates.iter().map(|c| c.name()).collect();
+    assert!(names.contains(&"right_hand_".to_string()) && model.frames.iter().any(|f| f.name == "right_hand"), "{names:?}");
+    let noise =
+        tree.replace(r#"ixx="0.0008" iyy="0.0004" izz="0.0008" ixy="0" ixz="0" iyz="0""#, r#"ixx="0" iyy="0" izz="0" ixy="0" ixz="2.40741e-35" iyz="0""#);
+    assert_ne!(noise, tree);
+    model_file("tree.urdf", &noise, &UrdfOptions::default()).unwrap();
+    // A tensor wrong by more than noise is still refused (the ankle's 1e-20 would pass; 1e-6
+    // on a 0.4 kg link is a million times the tolerance).
+    let wrong = tree.replace(r#"ixx="0.0008" iyy="0.0004" izz="0.0008""#, r#"ixx="0.0008" iyy="0.0004" izz="0.001201""#);
+    assert!(model_file("tree.urdf", &wrong, &UrdfOptions::default()).unwrap_err().to_string().contains("no rigid body's"));
+    let dir = tempfile::tempdir().unwrap();
+    let drone = dir.path().join("drone.urdf");
+    std::fs::write(
+        &drone,
+        "<?xml version=\"1.0\"?>\n<robot name=\"drone\">\n  <link name=\"body\"><inertial><mass value=\"1.5\"/>\n    <inertia ixx=\"0.02\" iyy=\"0.02\" izz=\"0.04\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>\n</robot>\n",
+    )
+    .unwrap();
+    let e = generator::model::source_with(&drone, &UrdfOptions::default()).err().expect("refused");
+    let said = e.render(false);
+    assert!(e.location.map(|(line, _)| line) == Some(2) && said.contains("nothing in it moves") && said.contains("--base floating"), "{said}");
+    let flying = generator::model::source_with(&drone, &floating([0.0, 0.0, -9.81])).unwrap().model().unwrap();
+    assert_eq!(flying.m(), 7);
+}
+
 /// A mimic joint follows its master (`q = 2 q_master + 0.1`): no coordinate of its own.
 #[test]
 fn a_mimic_joint_follows_its_master() {

@@ -77,6 +77,21 @@ pub fn source_with(argument: &Path, robot: &super::urdf::UrdfOptions) -> Result<
         let (file, text) = super::read_source(argument)?;
         if argument.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
             let def = super::urdf::model_file(&file, &text, robot)?;
+            if def.coordinates.is_empty() {
+                // Alone, a robot with nothing to move is a mistake (a drone's URDF, one link,
+                // on the default fixed base); included by a RON model, it can be its scenery.
+                let at = text.find("<robot").unwrap_or(0);
+                return Err(ModelError::at(
+                    ErrorKind::QuasiVelocityCount,
+                    &file,
+                    &text,
+                    Some(at..at + "<robot".len().min(text.len() - at)),
+                    "robot",
+                    format!("robot `{}` has no moving joint and a fixed base: nothing in it moves", def.name),
+                    "give it a floating base (`--base floating`; in Python `load(path, base=\"floating\")`), or a revolute, continuous or prismatic joint"
+                        .into(),
+                ));
+            }
             return Ok(Source { file, text: super::to_ron(&def) });
         }
         return Ok(Source { file, text });

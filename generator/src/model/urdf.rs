@@ -372,8 +372,14 @@ impl<'a> Reader<'a> {
 
 /// Why an inertia tensor belongs to no rigid body (not symmetric positive semi-definite, or
 /// its principal moments break the triangle inequality), if it does not.
-fn not_a_body(i: &M3) -> Option<String> {
-    let scale = i.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+///
+/// Within `1e-9` of the larger of the tensor's largest entry and `mass` times a millimetre
+/// squared: CAD exporters write a point mass's tensor as float noise (iCub's head: all zero but
+/// `ixz = 2.4e-35`, a negative principal moment of that size; its ankle: entries of 1e-20
+/// breaking the triangle inequality by 1e-20), a billionth of the inertia of that mass spread over
+/// a millimetre, which no motion can tell apart from a rigid body's.
+fn not_a_body(i: &M3, mass: f64) -> Option<String> {
+    let scale = i.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())).max(mass * 1e-6);
     let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
     let m = nalgebra_free_eigen(i);
     if m[0] < -tol {
@@ -639,7 +645,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
 
     // Each body (the links merged into it) is a rigid body's.
     for (frame, (first, b)) in &bodies {
-        if let Some(why) = not_a_body(&b.inertia) {
+        if let Some(why) = not_a_body(&b.inertia, b.mass) {
             let (link, (node, _)) = links.get_index(*first).expect("a body starts at a link");
             let merged: Vec<&String> = links.keys().filter(|l| frame_of[*l].0 == *frame && links[*l].1.is_some()).collect();
             let at = child(*node, "inertial").and_then(|i| child(i, "inertia")).unwrap_or(*node);
@@ -722,7 +728,9 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
             q0.insert(c.to_string(), v.into());
         }
     }
-    let mut taken: HashSet<String> = coordinates.iter().cloned().collect();
+    // A coordinate takes its joint's name unless a frame (a link's) has it: a joint and the
+    // link it moves often share one (so100's `gripper`).
+    let mut taken: HashSet<String> = coordinates.iter().cloned().chain(frame_of.values().map(|(f, _)| f.clone())).collect();
     let mut forces: Vec<ForceDef> = Vec::new();
     let mut damping: IndexMap<String, String> = IndexMap::new();
     let mut events: Vec<EventDef> = Vec::new();
