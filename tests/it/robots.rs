@@ -414,7 +414,7 @@ fn refusals_are_located_in_the_xml() {
 }
 
 /// What exporters write that is not a mistake is read: a joint named as the link it moves (its
-/// coordinate takes the name with `_`), a point mass's inertia written as float noise (iCub's
+/// coordinate takes the name with `_`), two links whose names read as one identifier, a point mass's inertia written as float noise (iCub's
 /// head: all zero but `ixz = 2.4e-35`); a robot with nothing to move on a fixed base (a drone's
 /// one link) is refused, located at `<robot>`, and runs on a floating base.
 #[test]
@@ -422,10 +422,16 @@ fn what_exporters_write_is_read() {
     let tree = std::fs::read_to_string(fixture("tree.urdf")).unwrap();
     let named = tree.replace(r#"<joint name="right_wrist""#, r#"<joint name="right_hand""#);
     assert_ne!(named, tree);
-    let text = generator::model::to_ron(&model_file("tree.urdf", &named, &UrdfOptions::default()).unwrap());
+    let text = to_ron(&model_file("tree.urdf", &named, &UrdfOptions::default()).unwrap());
     let model = from_source("tree.urdf", &text).unwrap();
     let names: Vec<String> = model.coordinates.iter().map(|c| c.name()).collect();
     assert!(names.contains(&"right_hand_".to_string()) && model.frames.iter().any(|f| f.name == "right_hand"), "{names:?}");
+    // Two links whose names read as one identifier: the second's frame takes `_`.
+    let twins = tree.replace(r#""left_lower""#, r#""left-upper""#);
+    assert_ne!(twins, tree);
+    let model = from_source("tree.urdf", &to_ron(&model_file("tree.urdf", &twins, &UrdfOptions::default()).unwrap())).unwrap();
+    let frames: Vec<&str> = model.frames.iter().map(|f| f.name.as_str()).collect();
+    assert!(frames.contains(&"left_upper") && frames.contains(&"left_upper_"), "{frames:?}");
     let noise =
         tree.replace(r#"ixx="0.0008" iyy="0.0004" izz="0.0008" ixy="0" ixz="0" iyz="0""#, r#"ixx="0" iyy="0" izz="0" ixy="0" ixz="2.40741e-35" iyz="0""#);
     assert_ne!(noise, tree);

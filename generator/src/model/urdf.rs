@@ -589,7 +589,20 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
     // Each link's frame in the model (the nearest ancestor-or-self reached by a moving joint, or
     // the root), and the link's pose in it; joints in breadth-first order from the root.
     let mut frame_of: HashMap<String, (String, Pose)> = HashMap::new();
-    let root_frame = if options.base == Base::Floating { ident(&root) } else { "world".to_string() };
+    // Each link's frame name: its identifier, suffixed by `_` while another link's has it
+    // (`arm-1` and `arm_1` both read `arm_1`).
+    let mut named: HashSet<String> = HashSet::new();
+    let frame_name: HashMap<&str, String> = links
+        .keys()
+        .map(|l| {
+            let mut name = ident(l);
+            while !named.insert(name.clone()) {
+                name.push('_');
+            }
+            (l.as_str(), name)
+        })
+        .collect();
+    let root_frame = if options.base == Base::Floating { frame_name[root.as_str()].clone() } else { "world".to_string() };
     frame_of.insert(root.clone(), (root_frame.clone(), Pose::IDENTITY));
     let mut order: Vec<usize> = Vec::new();
     let mut queue: VecDeque<String> = VecDeque::from([root.clone()]);
@@ -605,7 +618,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
             if j.kind == "fixed" {
                 frame_of.insert(j.child.clone(), (frame, joint_pose));
             } else {
-                frame_of.insert(j.child.clone(), (ident(&j.child), Pose::IDENTITY));
+                frame_of.insert(j.child.clone(), (frame_name[j.child.as_str()].clone(), Pose::IDENTITY));
             }
             order.push(k);
             queue.push_back(j.child.clone());
@@ -816,7 +829,7 @@ pub fn model_file(file: &str, xml: &str, options: &UrdfOptions) -> Result<ModelF
                 _ => RotationDef::Axis(j.axis.iter().map(|x| num(*x)).collect(), q.clone()),
             }),
         }
-        frames.push(FrameDef { name: ident(&j.child), parent: frame, translation: Some(translation), rotation });
+        frames.push(FrameDef { name: frame_name[j.child.as_str()].clone(), parent: frame, translation: Some(translation), rotation });
         // A mimic joint adds no coordinate: its angle is its master's.
         let Some(q) = own else { continue };
         coordinates.push(q.clone());
