@@ -414,7 +414,8 @@ fn refusals_are_located_in_the_xml() {
 }
 
 /// What exporters write that is not a mistake is read: a joint named as the link it moves (its
-/// coordinate takes the name with `_`), two links whose names read as one identifier, a point mass's inertia written as float noise (iCub's
+/// coordinate takes the name with `_`), a quarter turn written to 11 digits, two links whose
+/// names read as one identifier, a point mass's inertia written as float noise (iCub's
 /// head: all zero but `ixz = 2.4e-35`); a robot with nothing to move on a fixed base (a drone's
 /// one link) is refused, located at `<robot>`, and runs on a floating base.
 #[test]
@@ -426,6 +427,19 @@ fn what_exporters_write_is_read() {
     let model = from_source("tree.urdf", &text).unwrap();
     let names: Vec<String> = model.coordinates.iter().map(|c| c.name()).collect();
     assert!(names.contains(&"right_hand_".to_string()) && model.frames.iter().any(|f| f.name == "right_hand"), "{names:?}");
+    // A quarter turn written to 11 digits (anymal's 1.57079632679, whose cosine 4.9e-12 made
+    // every rotation dense and a floating anymal take minutes) is the quarter turn written
+    // exactly; a turn 3.7e-6 away (1.5708) is the angle given.
+    let turned = |rpy: &str| {
+        to_ron(
+            &model_file("tree.urdf", &tree.replace(r#"xyz="0 -0.3 0" rpy="0 0 0.5""#, &format!(r#"xyz="0 -0.3 0" rpy="{rpy}""#)), &UrdfOptions::default())
+                .unwrap(),
+        )
+    };
+    let short = turned("1.57079632679 0 -3.14159265359");
+    assert_eq!(short, turned(&format!("{} 0 {}", std::f64::consts::FRAC_PI_2, -std::f64::consts::PI)));
+    assert_ne!(short, turned("1.5708 0 -3.14159265359"));
+    assert!(!short.contains("e-12") && !short.contains("0.99999"), "{short}");
     // Two links whose names read as one identifier: the second's frame takes `_`.
     let twins = tree.replace(r#""left_lower""#, r#""left-upper""#);
     assert_ne!(twins, tree);

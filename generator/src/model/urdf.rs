@@ -128,8 +128,29 @@ fn add(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
 
 /// URDF's `rpy`: fixed-axis roll about x, pitch about y, yaw about z, `R = Rz Ry Rx`.
 fn rpy(r: f64, p: f64, y: f64) -> M3 {
-    let m = super::shape::rpy_rotation(r, p, y);
-    std::array::from_fn(|i| std::array::from_fn(|j| m[3 * i + j]))
+    let (sr, cr) = quarter_sin_cos(r);
+    let (sp, cp) = quarter_sin_cos(p);
+    let (sy, cy) = quarter_sin_cos(y);
+    [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]]
+}
+
+/// Angles this close to a multiple of a quarter turn are read as it (radians).
+const QUARTER_TURN_SNAP: f64 = 1e-9;
+
+/// `(sin, cos)` of `angle`, exact where it is within [`QUARTER_TURN_SNAP`] of a multiple of a
+/// quarter turn.
+fn quarter_sin_cos(angle: f64) -> (f64, f64) {
+    let quarters = (angle / std::f64::consts::FRAC_PI_2).round();
+    if (angle - quarters * std::f64::consts::FRAC_PI_2).abs() <= QUARTER_TURN_SNAP {
+        match (quarters as i64).rem_euclid(4) {
+            0 => (0.0, 1.0),
+            1 => (1.0, 0.0),
+            2 => (0.0, -1.0),
+            _ => (-1.0, 0.0),
+        }
+    } else {
+        angle.sin_cos()
+    }
 }
 
 /// A pose: the rotation (components of the child's axes in the parent's, columns) and the
