@@ -246,7 +246,7 @@ impl<'a> IntoIterator for &'a States {
 
 /// Why a run stopped early: the time, the last accepted state, and the reason.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("integration stopped at t = {t}: {reason}")]
+#[error("integration stopped after t = {t}, its last accepted step: {reason}")]
 pub struct RunError {
     pub t: f64,
     pub state: Vec<f64>,
@@ -621,6 +621,19 @@ mod tests {
         dy[0] = y[1];
         dy[1] = -y[0];
         Ok(())
+    }
+
+    /// A run refused on its first trial stage says both times: the last step accepted (the
+    /// start) and the stage's own, where the model refused (it read "stopped at t = 0:
+    /// singular at t = 0.006", two times for one stop).
+    #[test]
+    fn a_stop_names_the_last_accepted_step_and_the_refusal_apart() {
+        let mut refuse =
+            |t: f64, _: &[f64], _: &mut [f64]| if t > 0.0 { Err(Failure::Singular { t, condition: "mass matrix M".into(), value: 1.0 }) } else { Ok(()) };
+        let err = integrate(&mut refuse, &[1.0, 0.0], &[0.0, 1.0], &Settings { h_max: 0.1, ..Settings::default() }).unwrap_err();
+        assert_eq!(err.t, 0.0);
+        let said = err.to_string();
+        assert!(said.starts_with("integration stopped after t = 0, its last accepted step: singular configuration at t = 0."), "{said}");
     }
 
     /// Hairer's reference problem for the explicit pairs (Hairer, Norsett & Wanner, "Solving
