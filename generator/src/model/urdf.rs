@@ -134,8 +134,11 @@ fn rpy(r: f64, p: f64, y: f64) -> M3 {
     [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]]
 }
 
-/// Angles this close to a multiple of a quarter turn are read as it (radians).
-const QUARTER_TURN_SNAP: f64 = 1e-9;
+/// Angles this close to a multiple of a quarter turn are read as it (radians): pi/2 written to
+/// 11 digits or more (anymal C's 1.57079632679, 4.9e-12 short). Ten times that changes a robot's
+/// accelerations by about 1e-11 of themselves (ur5 against Pinocchio, which reads the angle as
+/// written), under the 1e-10 `docs/robots/pinocchio_check.py` holds them to.
+const QUARTER_TURN_SNAP: f64 = 1e-11;
 
 /// `(sin, cos)` of `angle`, exact where it is within [`QUARTER_TURN_SNAP`] of a multiple of a
 /// quarter turn.

@@ -1,4 +1,6 @@
-//! Exact rational numbers for coefficients and exponents.
+//! Rational numbers for coefficients and exponents: exact while they fit machine integers, and
+//! integers exact at any size; a non-integer that outgrows them is rounded to a float
+//! ([`Rat::inexact`]).
 //!
 //! A [`Rat`] is kept in machine integers (`i64` numerator and denominator, in lowest terms)
 //! while it fits, and moves to a big-integer rational only on overflow. Multibody models
@@ -36,6 +38,10 @@ pub struct Rat(Repr);
 enum Repr {
     Small(i64, i64),
     Big(Box<BigRational>),
+    /// An inexact number: a non-integer whose exact numerator or denominator outgrew `i64`,
+    /// rounded to the nearest float (see [`Rat::inexact`]); never a value `Small` or `Big` can
+    /// hold, so equal values still have equal representations.
+    Float(f64),
 }
 
 impl PartialEq for Repr {
@@ -43,6 +49,7 @@ impl PartialEq for Repr {
         match (self, other) {
             (Repr::Small(n1, d1), Repr::Small(n2, d2)) => n1 == n2 && d1 == d2,
             (Repr::Big(a), Repr::Big(b)) => a.numer() == b.numer() && a.denom() == b.denom(),
+            (Repr::Float(a), Repr::Float(b)) => a.to_bits() == b.to_bits(),
             _ => false,
         }
     }
@@ -62,6 +69,10 @@ impl std::hash::Hash for Repr {
                 state.write_u8(1);
                 b.numer().hash(state);
                 b.denom().hash(state);
+            }
+            Repr::Float(x) => {
+                state.write_u8(2);
+                x.to_bits().hash(state);
             }
         }
     }
@@ -150,16 +161,67 @@ impl Rat {
         if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
             Rat(Repr::Small(n as i64, d as i64))
         } else {
-            Rat(Repr::Big(Box::new(BigRational::new(BigInt::from(n), BigInt::from(d)))))
+            Rat::from_big(BigRational::new_raw(BigInt::from(n), BigInt::from(d)))
         }
     }
 
-    /// From a big rational, moving back to machine integers when it fits.
+    /// From a big rational, moving back to machine integers when it fits; an integer stays
+    /// exact, any other rational that does not fit becomes the nearest float ([`Rat::inexact`]).
     pub fn from_big(r: BigRational) -> Rat {
         match (r.numer().to_i64(), r.denom().to_i64()) {
             (Some(n), Some(d)) if n != i64::MIN => Rat(Repr::Small(n, d)),
-            _ => Rat(Repr::Big(Box::new(r))),
+            _ if r.is_integer() => Rat(Repr::Big(Box::new(r))),
+            _ => Rat::inexact(r.to_f64().unwrap_or(f64::NAN)),
         }
+    }
+
+    /// The float `x` as a number: exact (`Small`, or `Big` for an integer beyond `i64`) where
+    /// its value fits, else inexact. A rational whose numerator or denominator outgrows `i64`
+    /// is rounded so: a URDF's 15-digit decimals (0.866025403783692, 0.500000000001294) made
+    /// products of hundreds of digits whose gcds took 85 % of a floating anymal C's derivation,
+    /// and every number the emitted code uses is a float anyway. Models written with small
+    /// rationals (`1/2`, `981/100`) never overflow and stay exact.
+    ///
+    /// ```
+    /// use generator::symbolic::number::Rat;
+    /// assert_eq!(Rat::inexact(0.375), Rat::frac(3, 8));
+    /// let tiny = Rat::frac(1, 1 << 40) * Rat::frac(1, 1 << 40);
+    /// assert!(!tiny.is_exact() && tiny.to_f64() == 2f64.powi(-80));
+    /// assert!((&tiny * &Rat::int(1 << 40) * Rat::int(1 << 40)).is_one());
+    /// ```
+    pub fn inexact(x: f64) -> Rat {
+        if x == 0.0 {
+            return Rat::ZERO;
+        }
+        if !x.is_finite() {
+            return Rat(Repr::Float(x));
+        }
+        // x = m 2^e, m odd.
+        let bits = x.to_bits();
+        let exponent = ((bits >> 52) & 0x7ff) as i64;
+        let fraction = bits & ((1u64 << 52) - 1);
+        let (mut m, mut e) = if exponent == 0 { (fraction, -1074) } else { (fraction | (1u64 << 52), exponent - 1075) };
+        let tz = m.trailing_zeros() as i64;
+        m >>= tz;
+        e += tz;
+        let sign = if x < 0.0 { -1i64 } else { 1 };
+        let width = 64 - m.leading_zeros() as i64;
+        if e >= 0 {
+            if width + e <= 62 {
+                return Rat(Repr::Small(sign * ((m as i64) << e), 1));
+            }
+            return Rat(Repr::Big(Box::new(BigRational::from_integer(BigInt::from(sign) * (BigInt::from(m) << e as usize)))));
+        }
+        if -e <= 62 {
+            return Rat(Repr::Small(sign * m as i64, 1i64 << -e));
+        }
+        Rat(Repr::Float(x))
+    }
+
+    /// False for a number held as a float: a value rounded by [`Rat::inexact`] that no machine
+    /// fraction holds (a rounded value that one holds, `m / 2^k`, is held as that fraction).
+    pub fn is_exact(&self) -> bool {
+        !matches!(self.0, Repr::Float(_))
     }
 
     /// As a big rational.
@@ -167,6 +229,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(n, d) => BigRational::new_raw(BigInt::from(*n), BigInt::from(*d)),
             Repr::Big(b) => (**b).clone(),
+            Repr::Float(x) => BigRational::from_float(*x).unwrap_or_default(),
         }
     }
 
@@ -174,7 +237,7 @@ impl Rat {
     pub fn as_i64_pair(&self) -> Option<(i64, i64)> {
         match self.0 {
             Repr::Small(n, d) => Some((n, d)),
-            Repr::Big(_) => None,
+            Repr::Big(_) | Repr::Float(_) => None,
         }
     }
 
@@ -183,6 +246,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(n, _) => BigInt::from(*n),
             Repr::Big(b) => b.numer().clone(),
+            Repr::Float(_) => self.to_big().numer().clone(),
         }
     }
 
@@ -191,6 +255,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(_, d) => BigInt::from(*d),
             Repr::Big(b) => b.denom().clone(),
+            Repr::Float(_) => self.to_big().denom().clone(),
         }
     }
 
@@ -209,6 +274,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(_, d) => *d == 1,
             Repr::Big(b) => b.is_integer(),
+            Repr::Float(_) => false,
         }
     }
 
@@ -230,6 +296,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(n, _) => *n < 0,
             Repr::Big(b) => b.is_negative(),
+            Repr::Float(x) => *x < 0.0,
         }
     }
 
@@ -238,6 +305,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(n, _) => *n > 0,
             Repr::Big(b) => b.is_positive(),
+            Repr::Float(x) => *x > 0.0,
         }
     }
 
@@ -251,6 +319,7 @@ impl Rat {
         match &self.0 {
             Repr::Small(n, d) => Rat::frac(*d, *n),
             Repr::Big(b) => Rat::from_big(b.recip()),
+            Repr::Float(x) => Rat::inexact(1.0 / x),
         }
     }
 
@@ -276,7 +345,7 @@ impl Rat {
 
     /// The exact `q`-th root of a non-negative rational when it is one (`(8/27)^(1/3) = 2/3`).
     pub fn exact_root(&self, q: u32) -> Option<Rat> {
-        if q == 0 || self.is_negative() {
+        if q == 0 || self.is_negative() || !self.is_exact() {
             return None;
         }
         let (n, d) = (self.numer(), self.denom());
@@ -297,6 +366,7 @@ impl Rat {
                 }
             }
             Repr::Big(b) => b.to_f64().unwrap_or(f64::NAN),
+            Repr::Float(x) => *x,
         }
     }
 
@@ -311,6 +381,7 @@ impl Rat {
                 };
                 (fold(b.numer()), fold(b.denom()) ^ 0xB16)
             }
+            Repr::Float(x) => (x.to_bits(), 0xF10A7),
         }
     }
 }
@@ -333,6 +404,7 @@ impl fmt::Display for Rat {
             Repr::Small(n, 1) => write!(f, "{n}"),
             Repr::Small(n, d) => write!(f, "{n}/{d}"),
             Repr::Big(b) => write!(f, "{b}"),
+            Repr::Float(x) => write!(f, "{x:e}"),
         }
     }
 }
@@ -347,6 +419,7 @@ impl Ord for Rat {
     fn cmp(&self, other: &Rat) -> Ordering {
         match (&self.0, &other.0) {
             (Repr::Small(a, b), Repr::Small(c, d)) => ((*a as i128) * (*d as i128)).cmp(&((*c as i128) * (*b as i128))),
+            (Repr::Float(a), Repr::Float(b)) => a.total_cmp(b),
             _ => self.to_big().cmp(&other.to_big()),
         }
     }
@@ -372,6 +445,7 @@ fn add(a: &Rat, b: &Rat) -> Rat {
             }
             Rat::from_i128(*n1 as i128 * *d2 as i128 + *n2 as i128 * *d1 as i128, *d1 as i128 * *d2 as i128)
         }
+        (Repr::Float(_), _) | (_, Repr::Float(_)) => Rat::inexact(a.to_f64() + b.to_f64()),
         _ => Rat::from_big(a.to_big() + b.to_big()),
     }
 }
@@ -397,9 +471,10 @@ fn mul(a: &Rat, b: &Rat) -> Rat {
             if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
                 Rat(Repr::Small(n as i64, d as i64))
             } else {
-                Rat(Repr::Big(Box::new(BigRational::new_raw(BigInt::from(n), BigInt::from(d)))))
+                Rat::from_big(BigRational::new_raw(BigInt::from(n), BigInt::from(d)))
             }
         }
+        (Repr::Float(_), _) | (_, Repr::Float(_)) => Rat::inexact(a.to_f64() * b.to_f64()),
         _ => Rat::from_big(a.to_big() * b.to_big()),
     }
 }
@@ -408,6 +483,7 @@ fn neg(a: &Rat) -> Rat {
     match &a.0 {
         Repr::Small(n, d) => Rat(Repr::Small(-n, *d)),
         Repr::Big(b) => Rat::from_big(-(**b).clone()),
+        Repr::Float(x) => Rat(Repr::Float(-x)),
     }
 }
 
@@ -579,6 +655,36 @@ mod tests {
         assert!(rat_from_decimal(&"9".repeat(50_000)).is_none());
         assert!(rat_from_decimal("1e-400").is_none());
         assert_eq!(rat_from_decimal("0e999999").unwrap(), Rat::zero());
+    }
+
+    /// Products of a URDF's 15-digit decimals outgrow `i64`: they are rounded to the nearest
+    /// float (and stay inexact through sums and products, each within a rounding of the exact
+    /// value), never equal to an exact number, and the same operations give the same bits.
+    #[test]
+    fn rationals_that_outgrow_machine_integers_are_rounded() {
+        let (c, s) = (rat_from_decimal("0.866025403783692").unwrap(), rat_from_decimal("0.500000000001294").unwrap());
+        assert!(c.is_exact() && s.is_exact());
+        let cc = &c * &c;
+        let exact = c.to_big() * c.to_big();
+        assert!(cc.to_big() != exact && cc.to_f64() == exact.to_f64().unwrap(), "{cc}");
+        // Rounded, it is a float's value: a machine fraction over a power of two here, held
+        // as a float where none holds it (2^-80).
+        assert!(cc.as_i64_pair().is_some_and(|(_, d)| d.count_ones() == 1));
+        assert!(!(&cc * &Rat::frac(1, 1 << 40) * Rat::frac(1, 1 << 40)).is_exact());
+        let sum = &cc + &(&s * &s);
+        let exact_sum = exact + s.to_big() * s.to_big();
+        assert!((sum.to_f64() - exact_sum.to_f64().unwrap()).abs() <= 2.0 * f64::EPSILON, "{sum}");
+        assert_ne!(cc, Rat::frac(3, 4));
+        assert_eq!(&c * &c, cc);
+        assert!((&cc - &cc).is_zero());
+        // A float that a machine fraction holds is that fraction again.
+        assert_eq!(&cc * &Rat::zero(), Rat::zero());
+        assert_eq!(Rat::inexact(-0.25), Rat::frac(-1, 4));
+        assert_eq!(Rat::inexact(2f64.powi(70)), Rat::int(1 << 35) * Rat::int(1 << 35));
+        // Small rationals stay exact: a power of a third, and back.
+        let p = Rat::frac(1, 3).pow(30);
+        assert!(p.is_exact() == (p.as_i64_pair().is_some()));
+        assert!(cc < Rat::one() && cc > Rat::frac(1, 2) && -&cc < Rat::zero());
     }
 
     #[test]

@@ -189,12 +189,17 @@ impl Renderer {
         let mut num: Vec<String> = num.into_iter().map(|t| t.2).collect();
         let mut den: Vec<String> = den.into_iter().map(|t| t.2).collect();
         let neg = coefficient.is_negative();
-        let (cn, cd) = (coefficient.numer().abs(), coefficient.denom().clone());
-        if !cn.is_one() {
-            num.insert(0, cn.to_string());
-        }
-        if !cd.is_one() {
-            den.insert(0, cd.to_string());
+        if coefficient.is_exact() {
+            let (cn, cd) = (coefficient.numer().abs(), coefficient.denom().clone());
+            if !cn.is_one() {
+                num.insert(0, cn.to_string());
+            }
+            if !cd.is_one() {
+                den.insert(0, cd.to_string());
+            }
+        } else {
+            // A rounded number ([`Rat::inexact`]) as the float it is.
+            num.insert(0, format!("{:?}", coefficient.to_f64().abs()));
         }
         let sep = if st == Style::Text { "*" } else { " " };
         let numerator = if num.is_empty() { "1".to_string() } else { num.join(sep) };
@@ -248,6 +253,9 @@ impl Renderer {
 }
 
 fn render_rat(r: &Rat, st: Style) -> (String, u8) {
+    if !r.is_exact() {
+        return (format!("{:?}", r.to_f64()), if r.is_negative() { SUM } else { 10 });
+    }
     if r.denom().is_one() {
         let s = r.numer().to_string();
         let p = if r.is_negative() { SUM } else { 10 };
