@@ -207,8 +207,8 @@ impl Rat {
         let sign = if x < 0.0 { -1i64 } else { 1 };
         let width = 64 - m.leading_zeros() as i64;
         if e >= 0 {
-            if width + e <= 62 {
-                return Rat(Repr::Small(sign * ((m as i64) << e), 1));
+            if width + e <= 126 {
+                return Rat::from_i128(sign as i128 * ((m as i128) << e), 1);
             }
             return Rat(Repr::Big(Box::new(BigRational::from_integer(BigInt::from(sign) * (BigInt::from(m) << e as usize)))));
         }
@@ -488,7 +488,13 @@ fn neg(a: &Rat) -> Rat {
 }
 
 fn div(a: &Rat, b: &Rat) -> Rat {
-    mul(a, &b.recip())
+    // One rounding at most: the quotient of the exact values, not a product with a reciprocal
+    // that may have been rounded already.
+    match (&a.0, &b.0) {
+        (Repr::Small(n1, d1), Repr::Small(n2, d2)) if *n2 != 0 => Rat::from_i128(*n1 as i128 * *d2 as i128, *d1 as i128 * *n2 as i128),
+        (Repr::Float(_), _) | (_, Repr::Float(_)) => Rat::inexact(a.to_f64() / b.to_f64()),
+        _ => mul(a, &b.recip()),
+    }
 }
 
 macro_rules! binary_op {
