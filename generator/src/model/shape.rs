@@ -88,8 +88,11 @@ impl Transfer for Shape {
 /// assert!((r[3] - 1.0).abs() < 1e-15 && r[0].abs() < 1e-15);
 /// ```
 pub fn rpy_rotation(roll: f64, pitch: f64, yaw: f64) -> [f64; 9] {
-    let (sr, cr) = roll.sin_cos();
-    let (sp, cp) = pitch.sin_cos();
-    let (sy, cy) = yaw.sin_cos();
+    rpy_rotation_of([roll, pitch, yaw].map(f64::sin_cos))
+}
+
+/// [`rpy_rotation`] from the angles' `(sin, cos)` pairs (a URDF reader gives quarter turns
+/// exactly).
+pub fn rpy_rotation_of([(sr, cr), (sp, cp), (sy, cy)]: [(f64, f64); 3]) -> [f64; 9] {
     [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr, sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr, -sp, cp * sr, cp * cr]
 }

@@ -128,10 +128,8 @@ fn add(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
 
 /// URDF's `rpy`: fixed-axis roll about x, pitch about y, yaw about z, `R = Rz Ry Rx`.
 fn rpy(r: f64, p: f64, y: f64) -> M3 {
-    let (sr, cr) = quarter_sin_cos(r);
-    let (sp, cp) = quarter_sin_cos(p);
-    let (sy, cy) = quarter_sin_cos(y);
-    [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]]
+    let m = super::shape::rpy_rotation_of([r, p, y].map(quarter_sin_cos));
+    std::array::from_fn(|i| std::array::from_fn(|j| m[3 * i + j]))
 }
 
 /// Angles this close to a multiple of a quarter turn are read as it (radians): pi/2 written to
