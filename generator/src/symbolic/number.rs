@@ -404,7 +404,8 @@ impl fmt::Display for Rat {
             Repr::Small(n, 1) => write!(f, "{n}"),
             Repr::Small(n, d) => write!(f, "{n}/{d}"),
             Repr::Big(b) => write!(f, "{b}"),
-            Repr::Float(x) => write!(f, "{x:e}"),
+            // The shortest decimal that reads back to the float.
+            Repr::Float(x) => write!(f, "{x:?}"),
         }
     }
 }

@@ -199,7 +199,7 @@ impl Renderer {
             }
         } else {
             // A rounded number ([`Rat::inexact`]) as the float it is.
-            num.insert(0, format!("{:?}", coefficient.to_f64().abs()));
+            num.insert(0, coefficient.abs().to_string());
         }
         let sep = if st == Style::Text { "*" } else { " " };
         let numerator = if num.is_empty() { "1".to_string() } else { num.join(sep) };
@@ -254,7 +254,7 @@ impl Renderer {
 
 fn render_rat(r: &Rat, st: Style) -> (String, u8) {
     if !r.is_exact() {
-        return (format!("{:?}", r.to_f64()), if r.is_negative() { SUM } else { 10 });
+        return (r.to_string(), if r.is_negative() { SUM } else { 10 });
     }
     if r.denom().is_one() {
         let s = r.numer().to_string();
