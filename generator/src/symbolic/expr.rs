@@ -173,6 +173,17 @@ pub enum Node {
     Apply(Symbol, Expr),
 }
 
+impl Node {
+    /// The `i`-th child (a sum's term, a product's base, a function's argument), if any.
+    fn child(&self, i: usize) -> Option<Expr> {
+        match self {
+            Node::Num(_) | Node::Sym(_) => None,
+            Node::Add { terms: items, .. } | Node::Mul { factors: items, .. } => items.get(i).map(|(e, _)| *e),
+            Node::Fun(_, a) | Node::Apply(_, a) => (i == 0).then_some(*a),
+        }
+    }
+}
+
 struct Pool {
     /// Distinguishes this pool's expressions from another context's.
     id: u32,
@@ -181,7 +192,11 @@ struct Pool {
     masks: Vec<u128>,
     sizes: Vec<u32>,
     depths: Vec<u32>,
-    map: FxHashMap<Rc<Node>, u32>,
+    /// Every node's id, found by the node's structural key (`keys`, computed once per node): a
+    /// lookup hashes a new node by its children's keys, and growing the table rehashes nothing
+    /// (a map keyed by the node itself hashed every node again at each growth, 8 % of the
+    /// 100-link pendulum's derivation, `perf`).
+    map: hashbrown::HashTable<u32>,
     names: Vec<String>,
     name_map: FxHashMap<String, Symbol>,
     diff_memo: FxHashMap<(Expr, Symbol), Expr>,
@@ -200,7 +215,7 @@ impl Pool {
             masks: Vec::new(),
             sizes: Vec::new(),
             depths: Vec::new(),
-            map: FxHashMap::default(),
+            map: hashbrown::HashTable::new(),
             names: Vec::new(),
             name_map: FxHashMap::default(),
             diff_memo: FxHashMap::default(),
@@ -311,7 +326,9 @@ impl Pool {
     }
 
     fn intern(&mut self, node: Node) -> Expr {
-        if let Some(&id) = self.map.get(&node) {
+        let summary = self.summarize(&node);
+        // The key first: it is beside the others, where the node is behind a pointer.
+        if let Some(&id) = self.map.find(summary.0, |&id| self.keys[id as usize] == summary.0 && *self.nodes[id as usize] == node) {
             return Expr { id, cx: self.id };
         }
         if self.nodes.len() >= max_nodes() {
@@ -322,26 +339,26 @@ impl Pool {
             if let Some(id) = self.spent {
                 return Expr { id, cx: self.id };
             }
-            let placeholder = self.symbol(&format!("{INTERNAL}node budget spent"));
-            let id = self.push(Node::Sym(placeholder));
+            let placeholder = Node::Sym(self.symbol(&format!("{INTERNAL}node budget spent")));
+            let summary = self.summarize(&placeholder);
+            let id = self.push(placeholder, summary);
             self.spent = Some(id);
             return Expr { id, cx: self.id };
         }
-        let id = self.push(node);
+        let id = self.push(node, summary);
         Expr { id, cx: self.id }
     }
 
-    /// Stores a new node.
-    fn push(&mut self, node: Node) -> u32 {
-        let (key, mask, size, depth) = self.summarize(&node);
+    /// Stores a new node with its [`Pool::summarize`] summary.
+    fn push(&mut self, node: Node, (key, mask, size, depth): (u64, u128, u32, u32)) -> u32 {
         let id = self.nodes.len() as u32;
-        let rc = Rc::new(node);
-        self.nodes.push(rc.clone());
+        self.nodes.push(Rc::new(node));
         self.keys.push(key);
         self.masks.push(mask);
         self.sizes.push(size);
         self.depths.push(depth);
-        self.map.insert(rc, id);
+        let keys = &self.keys;
+        self.map.insert_unique(key, id, |&other| keys[other as usize]);
         id
     }
 
@@ -942,15 +959,13 @@ pub fn post_order_pruned(outputs: &[Expr], mut known: impl FnMut(Expr) -> bool) 
         if known(root) || !seen.insert(root) {
             continue;
         }
-        // (node, its children, next child index)
-        let mut stack: Vec<(Expr, Vec<Expr>, usize)> = vec![(root, root.children(), 0)];
-        while let Some((node, children, next)) = stack.last_mut() {
-            if *next < children.len() {
-                let c = children[*next];
+        // (node, its node, next child index): the children read in place, not collected.
+        let mut stack: Vec<(Expr, Rc<Node>, usize)> = vec![(root, root.node(), 0)];
+        while let Some((node, held, next)) = stack.last_mut() {
+            if let Some(c) = held.child(*next) {
                 *next += 1;
                 if !known(c) && seen.insert(c) {
-                    let cc = c.children();
-                    stack.push((c, cc, 0));
+                    stack.push((c, c.node(), 0));
                 }
             } else {
                 order.push(*node);
