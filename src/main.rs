@@ -116,7 +116,7 @@ pub enum CliError {
 fn main() -> ExitCode {
     use std::io::IsTerminal;
     let cli = Cli::parse();
-    generator::symbolic::expr::budget_for_command_line(cli.max_nodes);
+    generator::symbolic::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
         Command::Inspect { model, latex, robot } => match load::model_with(&model, &robot.options()) {

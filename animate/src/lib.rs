@@ -36,7 +36,7 @@ pub enum AnimateError {
     #[error("the motion has no samples")]
     Empty,
     #[error("the model's kinematics cannot be evaluated: {0}")]
-    Evaluate(#[from] generator::symbolic::eval::EvalError),
+    Evaluate(#[from] generator::symbolic::EvalError),
     #[error("a coordinate is not finite at t = {t}: nothing to draw there")]
     NotFinite { t: f64 },
     #[error(transparent)]

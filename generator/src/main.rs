@@ -46,7 +46,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    generator::symbolic::expr::budget_for_command_line(cli.max_nodes);
+    generator::symbolic::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Some(Command::Inspect { model, latex }) => command::inspect(&model, latex),
         None => command::generate(cli.generate),

@@ -94,8 +94,8 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     })
 }
 
-/// Stack of the emitting thread: the recursive passes over expressions as deep as
-/// [`crate::symbolic::expr::MAX_DEPTH`] need more than a spawned thread's default.
+/// Stack of the emitting thread: the recursive passes over the derived expressions (deeper than
+/// a model's own, which parsing bounds) need more than a spawned thread's default.
 const EMITTER_STACK: usize = 64 << 20;
 
 /// What the deriving thread hands the emitting one, each packed for its context.

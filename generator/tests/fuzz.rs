@@ -290,7 +290,7 @@ fn mutated_models_give_a_located_error_or_a_module() {
             // A panic inside is caught and reported; keep the default hook quiet meanwhile.
             std::panic::set_hook(Box::new(|_| {}));
             // A budget the nested expressions reach (this test binary runs nothing else).
-            generator::symbolic::expr::set_max_nodes(200_000);
+            generator::symbolic::set_max_nodes(200_000);
             for i in 0..mutants {
                 let (name, src) = &sources[i % sources.len()];
                 let text = mutate(src, &mut rng);

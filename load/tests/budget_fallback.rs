@@ -2,7 +2,7 @@
 //! runtime's differences, with the warning that says so. Alone in its file: the node budget is
 //! the whole process's.
 
-use generator::symbolic::expr::{DEFAULT_MAX_NODES, set_max_nodes};
+use generator::symbolic::{DEFAULT_MAX_NODES, set_max_nodes};
 use load::{Jacobians, Route};
 
 /// Enough for the cart pendulum's four right-hand sides (they evaluate within 2000 nodes), not

@@ -2,9 +2,9 @@
 
 use generator::formulation::{ignorable, mechanics};
 use generator::model::Model;
-use generator::symbolic::parse::{Resolver, lower, parse};
-use generator::symbolic::zero::{SplitMix, zero_test};
 use generator::symbolic::{Expr, Symbol};
+use generator::symbolic::{Resolver, lower, parse};
+use generator::symbolic::{SplitMix, zero_test};
 
 const SCENES: [&str; 3] = ["cart_pendulum", "three_body", "satellite_boom"];
 const OWN: [&str; 3] = ["cartesian_pendulum", "rolling_disk", "spring_cart"];
@@ -98,7 +98,7 @@ fn own_models_exercise_what_the_scenes_do_not() {
 }
 
 /// Random states: coordinates in [-1.2, 1.2] (away from the ZYX singularity), rates in [-2, 2].
-fn random_env(m: &Model, rng: &mut SplitMix) -> generator::symbolic::eval::Env {
+fn random_env(m: &Model, rng: &mut SplitMix) -> generator::symbolic::Env {
     let mut env = m.parameter_env();
     for (q, v) in m.coordinates.iter().zip(&m.velocities) {
         env.set(*q, rng.uniform(-1.2, 1.2));

@@ -6,7 +6,7 @@ use generated::{Failure, Model};
 use generator::formulation::{ignorable, mechanics, volterra};
 use generator::model::Model as ModelDef;
 use generator::symbolic::Expr;
-use generator::symbolic::zero::SplitMix;
+use generator::symbolic::SplitMix;
 
 const MODELS: [&str; 8] =
     ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5", "stiff_pendulum"];

@@ -1,7 +1,7 @@
 //! Every emitted `jacobian` (every committed module, every formulation) against central finite
 //! differences of its own `rhs`, at random states around the model's initial state.
 
-use generator::symbolic::zero::SplitMix;
+use generator::symbolic::SplitMix;
 
 /// `(rhs, jac)` at `state`, through the slice interface.
 fn exact(f: &generated::Formulation, params: &[f64], g: &[f64], state: &[f64]) -> (Vec<f64>, Vec<f64>) {

@@ -14,7 +14,7 @@
 
 use generator::emit::Options;
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
-use generator::symbolic::zero::SplitMix;
+use generator::symbolic::SplitMix;
 use runtime::integrate::Settings;
 use runtime::system::System;
 use seam::Model;

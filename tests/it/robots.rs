@@ -600,7 +600,7 @@ fn a_short_branched_tree_derived_for_kane_alone_runs_the_same() {
     let size = |m: &generator::symbolic::Matrix| (0..6).flat_map(|i| (0..6).map(move |j| (i, j))).map(|(i, j)| m.get(i, j).tree_size() as u64).sum::<u64>();
     assert_ne!(size(&built.mass), size(&settled.mass), "M kept as built on the star");
     let all = load::evaluate(&model, load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap().model;
-    let mut rng = generator::symbolic::zero::SplitMix(7);
+    let mut rng = generator::symbolic::SplitMix(7);
     for kind in [FormulationKind::Kane, FormulationKind::ReducedVolterra] {
         let alone = load::evaluate_only(&model, Some(kind), load::Jacobians::Differenced, load::Route::Jit, &mut |_| {}).unwrap().model;
         assert_eq!(alone.kinds(), [kind]);

@@ -8,8 +8,8 @@ use crate::common;
 use common::{all_accelerations, load};
 use generator::formulation::{Request, derive};
 use generator::model::{Constraint, Model, from_source};
-use generator::symbolic::eval::Env;
-use generator::symbolic::zero::SplitMix;
+use generator::symbolic::Env;
+use generator::symbolic::SplitMix;
 
 fn hand() -> Model {
     from_source("rolling_disk_hand.ron", include_str!("../fixtures/rolling_disk_hand.ron")).unwrap()

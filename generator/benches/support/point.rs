@@ -2,7 +2,7 @@
 //! benchmark's SymPy checks, the Pinocchio benchmark's ABA checks): the same draws on every
 //! machine.
 
-use generator::symbolic::zero::SplitMix;
+use generator::symbolic::SplitMix;
 use seam::{FormulationKind, Model};
 
 /// Numbers in `[-1, 1)` from SplitMix64 with a fixed seed.

@@ -198,7 +198,7 @@ impl Summary {
     }
 
     /// What the user should act on (empty when nothing): a decision the derivation took for
-    /// want of an answer that changes what the model does ([`crate::symbolic::report::Cuts::warnings`]).
+    /// want of an answer that changes what the model does (the report of cuts' warnings).
     pub fn warnings(&self) -> Vec<String> {
         self.cuts.warnings.clone()
     }

@@ -100,7 +100,7 @@ impl Tidy {
     ///
     /// ```
     /// use generator::formulation::mechanics::Tidy;
-    /// use generator::symbolic::{Expr, fourier::FourierLimits};
+    /// use generator::symbolic::{Expr, FourierLimits};
     /// let tidy = Tidy::new(FourierLimits::default());
     /// let (a, b) = (Expr::sym("a"), Expr::sym("b"));
     /// let e = a.sin() * b.cos() + a.cos() * b.sin();
@@ -137,7 +137,7 @@ impl Translation {
     /// The velocity, given in the frame's components and in the world's, with partials by
     /// `rates` and the acceleration along `chain` (`omega` the frame's angular velocity in its
     /// own components); the one with fewer operations
-    /// ([`crate::symbolic::expr::dag_ops`]) wins. A body moved by translation rates (a floating
+    /// (`dag_ops`: the operations with shared nodes counted once) wins. A body moved by translation rates (a floating
     /// base) is cheapest in world components, where their derivatives vanish at once; a link of
     /// a chain in its own, where only its joints' relative angles appear.
     pub fn cheaper(tidy: &Tidy, v_body: &[Expr; 3], v_world: &[Expr; 3], omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain) -> Translation {
@@ -229,7 +229,7 @@ fn has_trig_denominator(e: Expr) -> bool {
 }
 
 /// What the mechanics derives before a formulation is chosen (a [`Mechanics`] without its
-/// simplifier: this part can move to another context, [`crate::symbolic::transfer`]).
+/// simplifier: this part can move to another context, as a `Parcel`).
 #[derive(Clone, Debug)]
 pub struct Quantities {
     /// Coordinates m, constraints r, degrees of freedom p = m - r.
@@ -354,7 +354,7 @@ pub fn derive(model: &Model) -> Mechanics {
     derive_for(model, true)
 }
 
-/// [`derive`], for formulations of which `classical` says whether Lagrange's or Maggi's form
+/// [`derive()`], for formulations of which `classical` says whether Lagrange's or Maggi's form
 /// is among them (they solve with `M` and `N` themselves; Kane's and the reduced forms on a
 /// tree take their rates from the recursions).
 pub fn derive_for(model: &Model, classical: bool) -> Mechanics {

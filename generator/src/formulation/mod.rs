@@ -2,7 +2,7 @@
 //! ignorable-coordinate analysis ([`ignorable`]), the Volterra forms ([`volterra`]) and the
 //! four formulations, each a [`Method`] giving [`Equations`] (private modules: `lagrange`,
 //! `maggi`, `kane`, `reduced`; over a tree of frames, `composite` and `articulated`).
-//! [`derive`] runs them once for `inspect`; emission runs the same stages in the same order,
+//! [`derive()`] runs them once for `inspect`; emission runs the same stages in the same order,
 //! spread over two threads ([`crate::generate`]).
 //!
 //! ```
@@ -109,7 +109,7 @@ impl Derivation {
 }
 
 /// Where [`derive_with`] hands its results as soon as they are ready, and where it has the
-/// ignorable coordinates decided: here by default ([`derive`]); generation hands the mechanics
+/// ignorable coordinates decided: here by default ([`derive()`]); generation hands the mechanics
 /// to a second thread that decides them meanwhile, and emits each formulation as it arrives
 /// ([`crate::generate`]).
 pub trait Stages {

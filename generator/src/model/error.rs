@@ -123,7 +123,7 @@ fn shorten(text: &str, max: usize) -> String {
     text.chars().take(head).chain(std::iter::once('…')).chain(text.chars().skip(chars - tail)).collect()
 }
 
-/// `text` with each word (a run without spaces) over [`MAX_QUOTED_CHARS`] cut to its start
+/// `text` with each word (a run without spaces) over `MAX_QUOTED_CHARS` cut to its start
 /// and end around an ellipsis: a name or expression of thousands of characters is quoted, not
 /// copied, whatever quotes it.
 ///

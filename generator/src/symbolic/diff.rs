@@ -108,14 +108,6 @@ mod tests {
 /// `d/dt e = ∂e/∂t + Σ ∂e/∂x_i · rate_i` for the `(x_i, rate_i)` pairs given. The cost is
 /// linear in the number of distinct nodes, where summing partial derivatives costs one pass
 /// per symbol.
-///
-/// ```
-/// use generator::symbolic::{Expr, Symbol, diff::TimeDerivative};
-/// let (t, q) = (Symbol::new("t"), Symbol::new("q"));
-/// let mut d = TimeDerivative::new(t, &[(q, Expr::sym("q'"))]);
-/// let e = q.expr().sin() * t.expr();
-/// assert_eq!(d.dt(e), q.expr().cos() * Expr::sym("q'") * t.expr() + q.expr().sin());
-/// ```
 #[derive(Clone, Debug)]
 pub struct TimeDerivative {
     t: Symbol,
@@ -191,5 +183,18 @@ impl TimeDerivative {
                 Expr::apply_named(derived, *a) * self.of(*a)
             }
         }
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn time_derivative() {
+        use crate::symbolic::{Expr, Symbol, diff::TimeDerivative};
+        let (t, q) = (Symbol::new("t"), Symbol::new("q"));
+        let mut d = TimeDerivative::new(t, &[(q, Expr::sym("q'"))]);
+        let e = q.expr().sin() * t.expr();
+        assert_eq!(d.dt(e), q.expr().cos() * Expr::sym("q'") * t.expr() + q.expr().sin());
     }
 }

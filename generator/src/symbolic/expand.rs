@@ -1,7 +1,7 @@
 //! Expansion: products of sums multiplied out, positive integer powers of sums expanded.
 //!
 //! ```
-//! use generator::symbolic::{Expr, limits::Limits};
+//! use generator::symbolic::{Expr, Limits};
 //! let (x, y) = (Expr::sym("x"), Expr::sym("y"));
 //! let e = (x + y).powi(2);
 //! assert_eq!(e.expand(Limits::default()).unwrap(), x * x + x * y * 2 + y * y);

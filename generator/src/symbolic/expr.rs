@@ -293,10 +293,6 @@ impl Context {
     }
 }
 
-/// Most nodes a chain of nested operations may have: beyond it, recursive passes would run
-/// out of stack. Model input is checked against it when parsed.
-pub const MAX_DEPTH: u32 = 2_000;
-
 /// A 64-bit mixing step (splitmix64's finalizer): stable across runs and toolchains.
 fn mix(h: u64, v: u64) -> u64 {
     let mut z = h ^ v.wrapping_add(0x9E37_79B9_7F4A_7C15).wrapping_add(h << 6).wrapping_add(h >> 2);
@@ -912,13 +908,6 @@ impl Expr {
 /// True when `sym` occurs in any of `exprs`: one walk over their shared DAG, which skips every
 /// node whose bloom mask rules the symbol out (so a symbol that occurs nowhere costs one mask
 /// test per root, whatever the expressions' size).
-///
-/// ```
-/// use generator::symbolic::{Expr, Symbol, expr::any_contains};
-/// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
-/// assert!(any_contains(&[x.sin(), y * y], Symbol::new("y")));
-/// assert!(!any_contains(&[x.sin() * x], Symbol::new("y")));
-/// ```
 pub fn any_contains(exprs: &[Expr], sym: Symbol) -> bool {
     let mut seen = rustc_hash::FxHashSet::default();
     let mut stack: Vec<Expr> = exprs.iter().copied().filter(|e| e.may_contain(sym)).collect();
@@ -945,13 +934,6 @@ pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
 /// [`post_order`] without the nodes `known` accepts, nor anything below them: for memo tables
 /// that hold a node only once they hold everything it is built from, this lists exactly what
 /// they lack, in the order [`post_order`] would visit it, without walking what they have.
-///
-/// ```
-/// use generator::symbolic::{Expr, expr::post_order_pruned};
-/// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
-/// let s = x.sin();
-/// assert_eq!(post_order_pruned(&[s * y], |e| e == s), vec![y, s * y]);
-/// ```
 pub fn post_order_pruned(outputs: &[Expr], mut known: impl FnMut(Expr) -> bool) -> Vec<Expr> {
     let mut seen = rustc_hash::FxHashSet::default();
     let mut order = Vec::new();
@@ -1117,5 +1099,25 @@ mod tests {
         let k = a.key();
         let b = Expr::sym("key_b_zz") + Expr::sym("key_a_zz");
         assert_eq!(k, b.key());
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn any_contains_finds_a_symbol() {
+        use crate::symbolic::{Expr, Symbol, expr::any_contains};
+        let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+        assert!(any_contains(&[x.sin(), y * y], Symbol::new("y")));
+        assert!(!any_contains(&[x.sin() * x], Symbol::new("y")));
+    }
+
+    #[test]
+    fn post_order_pruned_skips_known_nodes() {
+        use crate::symbolic::{Expr, expr::post_order_pruned};
+        let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+        let s = x.sin();
+        assert_eq!(post_order_pruned(&[s * y], |e| e == s), vec![y, s * y]);
     }
 }

@@ -17,7 +17,7 @@
 //! a whole derivation shares one.
 //!
 //! ```
-//! use generator::symbolic::{Expr, fourier::Simplifier};
+//! use generator::symbolic::{Expr, Simplifier};
 //! let (a, b, l) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("l"));
 //! let mut s = Simplifier::default();
 //! let e = l * a.cos() * b.cos() + l * a.sin() * b.sin();
@@ -164,7 +164,7 @@ impl Default for FourierLimits {
 /// limit was reached.
 ///
 /// ```
-/// use generator::symbolic::fourier::SimplifyReport;
+/// use generator::symbolic::SimplifyReport;
 /// assert_eq!(SimplifyReport::default().summary(), None);
 /// let cut = SimplifyReport { over_term_limit: 2, over_angle_limit: 5, ..SimplifyReport::default() };
 /// assert_eq!(
@@ -531,7 +531,7 @@ impl Simplifier {
     }
 
     /// An estimate of what `e` costs in emitted code, counting shared children each time (a
-    /// tree cost, saturating): one per operation, and [`HARMONIC_COST`] for the sine or cosine of
+    /// tree cost, saturating): one per operation, and `HARMONIC_COST` for the sine or cosine of
     /// a combination of angles (a call, or a chain of angle-sum products), where the sine and
     /// cosine of a single angle are computed once per function and cost one.
     pub fn cost(&mut self, e: Expr) -> u32 {

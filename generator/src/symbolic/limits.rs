@@ -6,7 +6,7 @@
 //! same model gives the same output on any machine, however loaded.
 //!
 //! ```
-//! use generator::symbolic::limits::{Budget, Limits, StopReason};
+//! use generator::symbolic::{Budget, Limits, StopReason};
 //! let budget = Budget::start(Limits { max_terms: 10, max_work: 100 }, "expand");
 //! assert!(budget.check(5).is_ok());
 //! let stop = budget.check(12).unwrap_err();

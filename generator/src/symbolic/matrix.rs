@@ -6,15 +6,6 @@
 //! and divides common monomial factors (`cos(theta)`, `l`, ...) out of rows, so that no
 //! spurious singularity (a pivot that vanishes where the matrix does not) is left behind in the
 //! common cases. Numbers pivot by exact rational division.
-//!
-//! ```
-//! use generator::symbolic::{Expr, matrix::{Matrix, SolveOptions, solve}};
-//! let (a, b) = (Expr::sym("a"), Expr::sym("b"));
-//! let m = Matrix::from_rows(vec![vec![Expr::one(), b], vec![Expr::zero(), a]]);
-//! let rhs = Matrix::from_rows(vec![vec![Expr::int(1)], vec![Expr::int(2)]]);
-//! let s = solve(&m, &rhs, &SolveOptions::default()).unwrap();
-//! assert_eq!(s.x.get(1, 0), Expr::int(2) / a);
-//! ```
 
 use super::expr::{Expr, Node, Symbol};
 use super::limits::{Limits, StopReason};
@@ -225,8 +216,6 @@ pub struct Solution {
     pub pivots: Vec<Expr>,
     /// `det(A)` as far as it could be simplified, when asked for.
     pub determinant: Option<Expr>,
-    /// Normal forms that hit a limit on the way (the solve went on without them).
-    pub stops: Vec<StopReason>,
 }
 
 /// Why [`solve`] failed.
@@ -366,7 +355,7 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
     if !stops.is_empty() {
         super::report::record(|c| c.solver_stops += stops.len());
     }
-    Ok(Solution { x, pivots, determinant, stops })
+    Ok(Solution { x, pivots, determinant })
 }
 
 /// Solves `A X = B` without elimination where the rows of `A` are mutually orthogonal: `A A^T =
@@ -375,15 +364,6 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
 /// angular velocity in unit quaternions, `omega = 2 G(e) e'`, with the unit norm's row `2 e^T`
 /// and plain rates beside them, is such a matrix (`G G^T = |e|^2 I`, `G e = 0`): elimination
 /// would bury `|e|^2` in fractions of high powers. `None` where the rows are not orthogonal.
-///
-/// ```
-/// use generator::symbolic::{Expr, matrix::{Matrix, solve_orthogonal}};
-/// let (c, s) = (Expr::sym("c"), Expr::sym("s"));
-/// let a = Matrix::from_rows(vec![vec![c, s], vec![-s, c]]);
-/// let x = solve_orthogonal(&a, &Matrix::from_rows(vec![vec![Expr::one()], vec![Expr::zero()]])).unwrap().x;
-/// assert_eq!(x.get(0, 0), c / (c * c + s * s));
-/// assert!(solve_orthogonal(&Matrix::from_rows(vec![vec![c, s], vec![s, c]]), &Matrix::zeros(2, 1)).is_none());
-/// ```
 pub fn solve_orthogonal(a: &Matrix, b: &Matrix) -> Option<Solution> {
     let n = a.rows;
     if a.cols != n || b.rows != n {
@@ -414,7 +394,7 @@ pub fn solve_orthogonal(a: &Matrix, b: &Matrix) -> Option<Solution> {
             pivots.push(e);
         }
     }
-    Some(Solution { x, pivots, determinant: None, stops: Vec::new() })
+    Some(Solution { x, pivots, determinant: None })
 }
 
 /// Largest entry (distinct nodes) put in the polynomial normal form: larger ones are kept as
@@ -625,5 +605,35 @@ mod tests {
         env.set(Symbol::new("l"), 1.0);
         assert!(s.pivots.iter().any(|p| p.eval(&env).unwrap().abs() < 1e-12));
         assert!(s.determinant.unwrap().eval(&env).unwrap().abs() < 1e-12);
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::symbolic::{
+            Expr,
+            matrix::{Matrix, SolveOptions, solve},
+        };
+        let (a, b) = (Expr::sym("a"), Expr::sym("b"));
+        let m = Matrix::from_rows(vec![vec![Expr::one(), b], vec![Expr::zero(), a]]);
+        let rhs = Matrix::from_rows(vec![vec![Expr::int(1)], vec![Expr::int(2)]]);
+        let s = solve(&m, &rhs, &SolveOptions::default()).unwrap();
+        assert_eq!(s.x.get(1, 0), Expr::int(2) / a);
+    }
+
+    #[test]
+    fn solve_orthogonal_example() {
+        use crate::symbolic::{
+            Expr,
+            matrix::{Matrix, solve_orthogonal},
+        };
+        let (c, s) = (Expr::sym("c"), Expr::sym("s"));
+        let a = Matrix::from_rows(vec![vec![c, s], vec![-s, c]]);
+        let x = solve_orthogonal(&a, &Matrix::from_rows(vec![vec![Expr::one()], vec![Expr::zero()]])).unwrap().x;
+        assert_eq!(x.get(0, 0), c / (c * c + s * s));
+        assert!(solve_orthogonal(&Matrix::from_rows(vec![vec![c, s], vec![s, c]]), &Matrix::zeros(2, 1)).is_none());
     }
 }

@@ -10,7 +10,7 @@
 //! hybrid, so this one is ours; it is checked against `BigRational` by property tests.
 //!
 //! ```
-//! use generator::symbolic::number::{Rat, rat_from_decimal, rat_to_f64};
+//! use generator::symbolic::{Rat, rat_from_decimal, rat_to_f64};
 //! let g = rat_from_decimal("9.81").unwrap();
 //! assert_eq!(g.to_string(), "981/100");
 //! assert_eq!(rat_to_f64(&g), 9.81);
@@ -183,7 +183,7 @@ impl Rat {
     /// rationals (`1/2`, `981/100`) never overflow and stay exact.
     ///
     /// ```
-    /// use generator::symbolic::number::Rat;
+    /// use generator::symbolic::Rat;
     /// assert_eq!(Rat::inexact(0.375), Rat::frac(3, 8));
     /// let tiny = Rat::frac(1, 1 << 40) * Rat::frac(1, 1 << 40);
     /// assert!(!tiny.is_exact() && tiny.to_f64() == 2f64.powi(-80));
@@ -574,7 +574,7 @@ pub const MAX_DECIMAL_EXPONENT: i64 = 330;
 pub const MAX_DECIMAL_DIGITS: usize = 40;
 
 /// Parses a decimal literal (`12`, `9.81`, `1e-3`, `2.5E+2`) exactly. Literals whose value lies
-/// outside the range of `f64`, or with more than [`MAX_DECIMAL_DIGITS`] digits, are refused.
+/// outside the range of `f64`, or with more than `MAX_DECIMAL_DIGITS` digits, are refused.
 pub fn rat_from_decimal(s: &str) -> Option<Rat> {
     let s = s.trim();
     let (mantissa, exponent) = match s.find(['e', 'E']) {

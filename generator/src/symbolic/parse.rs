@@ -2,16 +2,8 @@
 //! and `q'` for a time derivative. Parsing gives an [`Ast`] with column spans; lowering it to
 //! an [`Expr`] asks a resolver what each name means, so unknown names are reported with the
 //! column where they stand.
-//!
-//! ```
-//! use generator::symbolic::{Expr, parse::{parse, lower_default}};
-//! let ast = parse("l*cos(theta1 - theta2)*theta1' + l*theta2'").unwrap();
-//! let e = lower_default(&ast).unwrap();
-//! assert_eq!(e.to_string(), "l*theta1'*cos(theta1 - theta2) + l*theta2'");
-//! assert_eq!(parse("1 + * 2").unwrap_err().column, 5);
-//! ```
 
-use super::expr::{Expr, Func, Symbol};
+use super::expr::{Expr, Func};
 use super::number::{Rat, rat_from_decimal};
 
 /// A parsed expression with the byte range (0-based, end exclusive) it came from.
@@ -347,15 +339,18 @@ pub fn lower(ast: &Ast, r: &dyn Resolver) -> Result<Expr, LowerError> {
 }
 
 /// A resolver that accepts every name as a symbol (primes kept in the name) and `pi`.
+#[cfg(test)]
 pub struct AnyName;
 
+#[cfg(test)]
 impl Resolver for AnyName {
     fn name(&self, name: &str, primes: usize) -> Result<Expr, String> {
-        Ok(Symbol::new(&format!("{name}{}", "'".repeat(primes))).expr())
+        Ok(super::expr::Symbol::new(&format!("{name}{}", "'".repeat(primes))).expr())
     }
 }
 
-/// Lowers with [`AnyName`]: for tests and quick use.
+/// Lowers with [`AnyName`]: for tests.
+#[cfg(test)]
 pub fn lower_default(ast: &Ast) -> Result<Expr, LowerError> {
     lower(ast, &AnyName)
 }
@@ -390,5 +385,18 @@ mod tests {
         assert_eq!(e.column, 3);
         let e = lower_default(&parse("sin(x, y)").unwrap()).unwrap_err();
         assert_eq!(e.column, 1);
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::symbolic::parse::{lower_default, parse};
+        let ast = parse("l*cos(theta1 - theta2)*theta1' + l*theta2'").unwrap();
+        let e = lower_default(&ast).unwrap();
+        assert_eq!(e.to_string(), "l*theta1'*cos(theta1 - theta2) + l*theta2'");
+        assert_eq!(parse("1 + * 2").unwrap_err().column, 5);
     }
 }

@@ -56,15 +56,6 @@ impl Expr {
 /// Subexpressions larger than `inline` tree nodes that occur more than once get a name
 /// (`#1`, `#2`, ... in text, `x_{1}`, ... in LaTeX), so the output grows with the number of
 /// distinct nodes, not with the tree a DAG stands for.
-///
-/// ```
-/// use generator::symbolic::{Expr, print::render_shared};
-/// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
-/// let shared = (x + y * y).sin();
-/// let (items, defs) = render_shared(&[shared + x, shared * y], false, 4);
-/// assert_eq!(defs, vec![("#1".to_string(), "sin(x + y^2)".to_string())]);
-/// assert_eq!(items, vec!["#1 + x".to_string(), "y*#1".to_string()]);
-/// ```
 pub fn render_shared(items: &[Expr], latex: bool, inline: u32) -> (Vec<String>, Vec<(String, String)>) {
     let st = if latex { Style::Latex } else { Style::Text };
     let order = super::expr::post_order(items);
@@ -333,5 +324,19 @@ mod tests {
         assert_eq!(Expr::sym("theta1'").to_latex(), "\\dot{\\theta}_{1}");
         assert_eq!(Expr::sym("G_x").to_latex(), "G_{x}");
         assert_eq!(Expr::sym("mg").to_latex(), "\\mathrm{mg}");
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn render_shared_example() {
+        use crate::symbolic::{Expr, print::render_shared};
+        let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+        let shared = (x + y * y).sin();
+        let (items, defs) = render_shared(&[shared + x, shared * y], false, 4);
+        assert_eq!(defs, vec![("#1".to_string(), "sin(x + y^2)".to_string())]);
+        assert_eq!(items, vec!["#1 + x".to_string(), "y*#1".to_string()]);
     }
 }

@@ -6,13 +6,6 @@
 //! [`Parcel::unpack`] rebuilds the same nodes, already canonical, in the current context. What
 //! a value holds is said by its [`Transfer`] impl, which visits every expression and symbol in
 //! a fixed order.
-//!
-//! ```
-//! use generator::symbolic::{Context, Expr, transfer::Parcel};
-//! let parcel = Context::new().enter(|| Parcel::pack(&vec![Expr::sym("x").sin() * 2]));
-//! let text = std::thread::spawn(move || Context::new().enter(|| parcel.unpack()[0].to_string())).join().unwrap();
-//! assert_eq!(text, "2*sin(x)");
-//! ```
 
 use super::expr::post_order;
 use super::number::Rat;
@@ -265,5 +258,17 @@ mod tests {
             let text: Vec<String> = terms.iter().map(|(a, b, c, p)| format!("{c}*{}*({})^{p}", names[*a], names[*b])).collect();
             round_trip(|| vec![parse(&text.join(" + "))]);
         }
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::symbolic::{Context, Expr, transfer::Parcel};
+        let parcel = Context::new().enter(|| Parcel::pack(&vec![Expr::sym("x").sin() * 2]));
+        let text = std::thread::spawn(move || Context::new().enter(|| parcel.unpack()[0].to_string())).join().unwrap();
+        assert_eq!(text, "2*sin(x)");
     }
 }

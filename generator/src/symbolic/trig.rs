@@ -11,7 +11,7 @@
 //! test of [`super::zero`].
 //!
 //! ```
-//! use generator::symbolic::{Expr, limits::Limits};
+//! use generator::symbolic::{Expr, Limits};
 //! let (a, b) = (Expr::sym("a"), Expr::sym("b"));
 //! let e = (a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin();
 //! assert!(e.trig_normal(Limits::default()).unwrap().is_zero());

@@ -507,7 +507,7 @@ fn an_expensive_expression_stays_within_the_simplifier_s_work_budget() {
     let model = from_source("models/heavy.ron", &text).unwrap();
     let out = generator::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
     let report = &out.summary.simplifier;
-    let limits = generator::symbolic::fourier::FourierLimits::default();
+    let limits = generator::symbolic::FourierLimits::default();
     assert!(report.work <= limits.max_work + limits.max_terms as u64 * limits.max_terms as u64, "{report:?}");
     assert!(report.over_term_limit > 0 || report.work_limit_reached, "the limits were reached: {report:?}");
     assert!(out.summary.work_counters().contains("kept as built"));

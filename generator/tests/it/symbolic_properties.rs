@@ -1,10 +1,10 @@
 //! Property tests for the symbolic core: derivatives match central finite differences,
 //! expansion, normal form and substitution preserve numeric value.
 
-use generator::symbolic::eval::Env;
-use generator::symbolic::limits::Limits;
-use generator::symbolic::zero::{ZeroVerdict, zero_test};
+use generator::symbolic::Env;
+use generator::symbolic::Limits;
 use generator::symbolic::{Expr, Symbol};
+use generator::symbolic::{ZeroVerdict, zero_test};
 use proptest::prelude::*;
 use std::collections::HashMap;
 
@@ -47,8 +47,8 @@ fn env_at(p: [f64; 3]) -> Env {
 fn magnitude(e: Expr, p: [f64; 3]) -> f64 {
     match &*e.node() {
         generator::symbolic::Node::Add { constant, terms } => {
-            generator::symbolic::number::rat_to_f64(constant).abs()
-                + terms.iter().map(|(t, c)| (generator::symbolic::number::rat_to_f64(c) * t.eval(&env_at(p)).unwrap()).abs()).sum::<f64>()
+            generator::symbolic::rat_to_f64(constant).abs()
+                + terms.iter().map(|(t, c)| (generator::symbolic::rat_to_f64(c) * t.eval(&env_at(p)).unwrap()).abs()).sum::<f64>()
         }
         _ => e.eval(&env_at(p)).unwrap().abs(),
     }
@@ -124,7 +124,7 @@ proptest! {
 
     #[test]
     fn fourier_simplification_preserves_value(e in arb_expr(), p in prop::array::uniform3(-1.5f64..1.5)) {
-        let mut simplifier = generator::symbolic::fourier::Simplifier::default();
+        let mut simplifier = generator::symbolic::Simplifier::default();
         let n = simplifier.simplify(e);
         let (a, b) = (e.eval(&env_at(p)).unwrap(), n.eval(&env_at(p)).unwrap());
         let scale = magnitude(n, p).max(magnitude(e, p));
@@ -143,10 +143,10 @@ proptest! {
         let a = v[0] * k[0] + v[1] * k[1] + v[2] * k[2];
         let b = v[0] * k[3] + v[1] * k[4] + v[2] * k[5] + 1;
         // Up to four angle atoms (three symbols and the constant phase).
-        let limits = generator::symbolic::fourier::FourierLimits { max_angle_atoms: 4, ..Default::default() };
-        let mut simplifier = generator::symbolic::fourier::Simplifier::new(limits);
+        let limits = generator::symbolic::FourierLimits { max_angle_atoms: 4, ..Default::default() };
+        let mut simplifier = generator::symbolic::Simplifier::new(limits);
         let g = e * a.sin() * b.cos() + (a - b).cos().powi(2);
-        let h = e * ((a + b).sin() + (a - b).sin()) / 2 + ((a - b) * 2).cos() / 2 + Expr::num(generator::symbolic::number::Rat::frac(1, 2));
+        let h = e * ((a + b).sin() + (a - b).sin()) / 2 + ((a - b) * 2).cos() / 2 + Expr::num(generator::symbolic::Rat::frac(1, 2));
         prop_assert!(zero_test(g - h).is_zero());
         prop_assert!(simplifier.form_is_zero(g - h), "{:?} e = {} a = {} b = {}", simplifier.report(), e, a, b);
         prop_assert_eq!(simplifier.report().over_term_limit, 0);
@@ -158,7 +158,7 @@ proptest! {
 
     #[test]
     fn zero_test_rejects_perturbed_identities(e in arb_expr(), eps_exp in 3i32..9) {
-        let eps = Expr::num(generator::symbolic::number::rat_from_decimal(&format!("1e-{eps_exp}")).unwrap());
+        let eps = Expr::num(generator::symbolic::rat_from_decimal(&format!("1e-{eps_exp}")).unwrap());
         let a = Expr::sym("pa");
         let id = a.sin().powi(2) + a.cos().powi(2) - 1;
         // e*0-ish identity plus a small constant is never zero.
@@ -172,9 +172,7 @@ fn named_identities() {
     let (a, b) = (Expr::sym("a"), Expr::sym("b"));
     assert!(zero_test(a.sin().powi(2) + a.cos().powi(2) - 1).is_zero());
     assert!(zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin()).is_zero());
-    assert!(
-        !zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin() + Expr::num(generator::symbolic::number::rat_from_decimal("1e-9").unwrap())).is_zero()
-    );
+    assert!(!zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin() + Expr::num(generator::symbolic::rat_from_decimal("1e-9").unwrap())).is_zero());
 }
 
 /// Values near the edge of `i64`, where the machine-integer rationals must move to big ones.
@@ -195,7 +193,7 @@ proptest! {
     /// float operation's result.
     #[test]
     fn small_rationals_agree_with_big_ones(a in arb_rat(), b in arb_rat(), p in -5i32..6) {
-        use generator::symbolic::number::Rat;
+        use generator::symbolic::Rat;
         use num_bigint::BigInt;
         use num_rational::BigRational;
         use num_traits::{ToPrimitive, Zero};
@@ -252,7 +250,7 @@ proptest! {
     /// fractions, else within a few roundings whatever the order.
     #[test]
     fn equal_big_rationals_are_equal_and_hash_alike(a in arb_rat(), b in arb_rat(), c in arb_rat()) {
-        use generator::symbolic::number::Rat;
+        use generator::symbolic::Rat;
         use num_bigint::BigInt;
         use num_rational::BigRational;
         use num_traits::ToPrimitive;

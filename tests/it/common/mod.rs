@@ -5,8 +5,8 @@
 use generator::formulation::Derivation;
 use generator::formulation::volterra::Volterra;
 use generator::model::{self, Model};
-use generator::symbolic::eval::Env;
-use generator::symbolic::zero::SplitMix;
+use generator::symbolic::Env;
+use generator::symbolic::SplitMix;
 use generator::symbolic::{Expr, Symbol};
 
 /// A model of `models/`.
