@@ -36,7 +36,7 @@ mod robots;
 #[path = "../generator/benches/support/timing.rs"]
 mod timing;
 
-use generator::model::urdf::{Base, UrdfOptions, ident};
+use generator::model::{Base, UrdfOptions, urdf_ident as ident};
 use seam::FormulationKind;
 use std::path::{Path, PathBuf};
 use std::process::Command;

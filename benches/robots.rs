@@ -74,7 +74,7 @@ fn usage() -> (f64, f64) {
 
 /// The child: one robot, ready to evaluate, its figures as JSON on stdout.
 fn child(path: &Path, base: &str, rustc: bool, one: bool) {
-    use generator::model::urdf::{Base, UrdfOptions};
+    use generator::model::{Base, UrdfOptions};
     let options = UrdfOptions { base: if base == "floating" { Base::Floating } else { Base::Fixed }, ..UrdfOptions::default() };
     let model = load::model_with(path, &options).unwrap();
     let only = one.then(|| load::default_formulation(&model));

@@ -39,7 +39,7 @@ fn angular_momentum_drift(model: &seam::Model, inv: &runtime::monitor::Invariant
             &model.default_params,
             q,
             qd,
-            &generator::model::urdf::world_rotation(&model.coordinates, q, axis).expect("a floating base"),
+            &generator::model::world_rotation(&model.coordinates, q, axis).expect("a floating base"),
         )
         .expect("the energy")
     };
@@ -118,7 +118,7 @@ fn main() {
             &model.default_params,
             q,
             qd,
-            &generator::model::urdf::world_rotation(&model.coordinates, q, axis).expect("a floating base"),
+            &generator::model::world_rotation(&model.coordinates, q, axis).expect("a floating base"),
         )
         .expect("the energy")
     });

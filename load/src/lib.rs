@@ -34,12 +34,12 @@ pub fn source(argument: impl AsRef<std::ffi::OsStr>) -> Result<Source, LoadError
 }
 
 /// [`source`], a URDF robot read with `robot`'s options ([`generator::model::source_with`]).
-pub fn source_with(argument: impl AsRef<std::ffi::OsStr>, robot: &generator::model::urdf::UrdfOptions) -> Result<Source, LoadError> {
+pub fn source_with(argument: impl AsRef<std::ffi::OsStr>, robot: &generator::model::UrdfOptions) -> Result<Source, LoadError> {
     Ok(generator::model::source_with(Path::new(argument.as_ref()), robot)?)
 }
 
 /// [`model`], a URDF robot read with `robot`'s options.
-pub fn model_with(argument: impl AsRef<std::ffi::OsStr>, robot: &generator::model::urdf::UrdfOptions) -> Result<generator::model::Model, LoadError> {
+pub fn model_with(argument: impl AsRef<std::ffi::OsStr>, robot: &generator::model::UrdfOptions) -> Result<generator::model::Model, LoadError> {
     Ok(source_with(argument, robot)?.model()?)
 }
 

@@ -702,7 +702,7 @@ fn ensemble<'py>(
 #[pyo3(name = "load", signature = (path, base=None, gravity=None, limits=None))]
 fn load_model(path: &Bound<'_, PyAny>, base: Option<&str>, gravity: Option<[f64; 3]>, limits: Option<&str>) -> PyResult<Model> {
     guarded(|| {
-        use generator::model::urdf::{Base, LimitAction, UrdfOptions};
+        use generator::model::{Base, LimitAction, UrdfOptions};
         let argument: std::path::PathBuf = path.extract()?;
         let base = match base {
             None | Some("fixed") => Base::Fixed,

@@ -6,7 +6,7 @@
 //! located in the XML.
 
 use crate::common::{check_formulations_agree, multibody, ok};
-use generator::model::urdf::{Base, LimitAction, UrdfOptions, model_file};
+use generator::model::{Base, LimitAction, UrdfOptions, urdf_model_file as model_file};
 use generator::model::{from_source, to_ron};
 use runtime::integrate::Settings;
 use runtime::system::System;
@@ -551,7 +551,7 @@ fn the_space_manipulator_keeps_its_momentum_under_control() {
             for axis in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
                 let l = |i: usize| {
                     let (q, qd) = (&inv.coordinates[i], &inv.rates[i]);
-                    let xi = generator::model::urdf::world_rotation(&seam.coordinates, q, axis).unwrap();
+                    let xi = generator::model::world_rotation(&seam.coordinates, q, axis).unwrap();
                     runtime::monitor::momentum_along(&seam, 0.0, &seam.default_params, q, qd, &xi).unwrap()
                 };
                 let l0 = l(0);

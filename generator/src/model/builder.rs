@@ -178,7 +178,7 @@ impl ModelBuilder {
     ///
     /// ```no_run
     /// use generator::model::builder::{Body, Frame, ModelBuilder};
-    /// use generator::model::urdf::{Base, UrdfOptions};
+    /// use generator::model::{Base, UrdfOptions};
     /// // A panda with a 0.5 kg payload between its fingers.
     /// let model = ModelBuilder::new("panda_with_payload")
     ///     .urdf("panda.urdf", &UrdfOptions { base: Base::Fixed, ..UrdfOptions::default() })

@@ -59,10 +59,10 @@ pub fn source(argument: &Path) -> Result<Source, ModelError> {
 }
 
 /// [`source`], a URDF file (`.urdf`) read with `robot`'s options (its base, gravity, limits)
-/// into the RON text of its model ([`super::urdf`]); they are not read for a RON model.
+/// into the RON text of its model (see [`UrdfOptions`](super::UrdfOptions)); they are not read for a RON model.
 ///
 /// ```
-/// use generator::model::{source_with, urdf::{Base, UrdfOptions}};
+/// use generator::model::{Base, UrdfOptions, source_with};
 /// let dir = tempfile::tempdir().unwrap();
 /// let path = dir.path().join("one.urdf");
 /// std::fs::write(&path, r#"<robot name="one"><link name="a"><inertial><mass value="1"/>

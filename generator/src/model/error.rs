@@ -126,14 +126,6 @@ fn shorten(text: &str, max: usize) -> String {
 /// `text` with each word (a run without spaces) over `MAX_QUOTED_CHARS` cut to its start
 /// and end around an ellipsis: a name or expression of thousands of characters is quoted, not
 /// copied, whatever quotes it.
-///
-/// ```
-/// # use generator::model::error::shorten_words;
-/// let long = format!("`{}` is not a name", "x".repeat(500));
-/// let short = shorten_words(&long);
-/// assert!(short.len() < 120 && short.ends_with("` is not a name") && short.contains('…'), "{short}");
-/// assert_eq!(shorten_words("`ok` is fine"), "`ok` is fine");
-/// ```
 pub fn shorten_words(text: &str) -> String {
     text.split(' ').map(|word| shorten(word, MAX_QUOTED_CHARS)).collect::<Vec<_>>().join(" ")
 }
@@ -303,13 +295,6 @@ impl miette::Diagnostic for Excerpt<'_> {
 /// The bytes an error at `place` is about: the value at that path in the file (or its deepest
 /// enclosing value), narrowed to the first occurrence of `needle` inside it when there is one;
 /// without a path that resolves, the first occurrence of `needle` in the file.
-///
-/// ```
-/// use generator::model::{error::place_span, spans::Spans};
-/// let src = "Model(bodies: [Body(mass: \"0\"), Body(mass: \"0\")])";
-/// let r = place_span(src, &Spans::new(src), "bodies[1] (b).mass", "\"0\"").unwrap();
-/// assert_eq!(r.start, src.rfind("\"0\"").unwrap());
-/// ```
 pub fn place_span(source: &str, spans: &Spans, place: &str, needle: &str) -> Option<Range<usize>> {
     match spans.find(place) {
         Some(r) => {
@@ -343,17 +328,6 @@ impl fmt::Display for ModelError {
 }
 
 impl std::error::Error for ModelError {}
-
-/// Finds the 1-based line and column of `needle` in `source`, searching after `after` first
-/// (so repeated strings resolve to the right place when a context string is known).
-pub fn locate(source: &str, needle: &str, after: Option<&str>) -> Option<(usize, usize)> {
-    if needle.is_empty() {
-        return None;
-    }
-    let start = after.and_then(|a| source.find(a)).unwrap_or(0);
-    let idx = source[start..].find(needle).map(|i| i + start).or_else(|| source.find(needle))?;
-    Some(line_col(source, idx))
-}
 
 /// 1-based line and column of a byte offset.
 pub fn line_col(source: &str, idx: usize) -> (usize, usize) {
@@ -389,14 +363,6 @@ fn edit_distance(a: &str, b: &str) -> usize {
 
 /// At most 60 characters of an expression around `column` (1-based), with `…` where cut, so
 /// that an error about a 20,000-character input stays one readable line.
-///
-/// ```
-/// use generator::model::error::excerpt;
-/// assert_eq!(excerpt("l*cos(q)", 3), "l*cos(q)");
-/// let long = format!("{}x{}", "sin(".repeat(300), ")".repeat(300));
-/// let cut = excerpt(&long, 804);
-/// assert!(cut.starts_with('…') && cut.ends_with('…') && cut.chars().count() <= 62, "{cut}");
-/// ```
 pub fn excerpt(src: &str, column: usize) -> String {
     const WIDTH: usize = 60;
     let chars: Vec<char> = src.chars().collect();
@@ -421,10 +387,40 @@ mod tests {
     use super::*;
 
     #[test]
-    fn locates_and_suggests() {
+    fn places_and_suggests() {
         let src = "a: \"x\",\nb: \"l/2\",\n";
-        assert_eq!(locate(src, "\"l/2\"", None), Some((2, 4)));
+        assert_eq!(line_col(src, src.find("\"l/2\"").unwrap()), (2, 4));
         assert_eq!(closest("thta1", ["theta1", "theta2", "x"]), Some("theta1"));
         assert_eq!(closest("zzz", ["theta1"]), None);
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn shorten_words_example() {
+        use crate::model::error::shorten_words;
+        let long = format!("`{}` is not a name", "x".repeat(500));
+        let short = shorten_words(&long);
+        assert!(short.len() < 120 && short.ends_with("` is not a name") && short.contains('…'), "{short}");
+        assert_eq!(shorten_words("`ok` is fine"), "`ok` is fine");
+    }
+
+    #[test]
+    fn place_span_example() {
+        use crate::model::{error::place_span, spans::Spans};
+        let src = "Model(bodies: [Body(mass: \"0\"), Body(mass: \"0\")])";
+        let r = place_span(src, &Spans::new(src), "bodies[1] (b).mass", "\"0\"").unwrap();
+        assert_eq!(r.start, src.rfind("\"0\"").unwrap());
+    }
+
+    #[test]
+    fn excerpt_example() {
+        use crate::model::error::excerpt;
+        assert_eq!(excerpt("l*cos(q)", 3), "l*cos(q)");
+        let long = format!("{}x{}", "sin(".repeat(300), ")".repeat(300));
+        let cut = excerpt(&long, 804);
+        assert!(cut.starts_with('…') && cut.ends_with('…') && cut.chars().count() <= 62, "{cut}");
     }
 }

@@ -43,7 +43,7 @@ impl MeshFormat {
     /// The format a file's extension names (any case), if one we read.
     ///
     /// ```
-    /// use generator::model::mesh::MeshFormat;
+    /// use generator::model::MeshFormat;
     /// assert_eq!(MeshFormat::of(std::path::Path::new("link1.DAE")), Some(MeshFormat::Collada));
     /// assert_eq!(MeshFormat::of(std::path::Path::new("hand.glb")), None);
     /// ```
@@ -108,7 +108,7 @@ impl TriangleMesh {
     /// Vertices at the same place are merged (STL repeats each corner in every triangle).
     ///
     /// ```
-    /// use generator::model::mesh::{MeshFormat, TriangleMesh};
+    /// use generator::model::{MeshFormat, TriangleMesh};
     /// let text = b"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
     /// let mesh = TriangleMesh::from_bytes(text, MeshFormat::Stl).unwrap();
     /// assert_eq!((mesh.vertices.len(), mesh.triangles), (3, vec![[0, 1, 2]]));
@@ -171,7 +171,7 @@ impl TriangleMesh {
     /// The lowest and highest corners of the box that bounds the vertices.
     ///
     /// ```
-    /// use generator::model::mesh::TriangleMesh;
+    /// use generator::model::TriangleMesh;
     /// let m = TriangleMesh { vertices: vec![[0.0, -1.0, 2.0], [3.0, 1.0, 0.0]], triangles: vec![] };
     /// assert_eq!(m.bounds(), ([0.0, -1.0, 0.0], [3.0, 1.0, 2.0]));
     /// ```
@@ -197,7 +197,7 @@ impl TriangleMesh {
     /// simplify by edge collapse (`meshopt`) build C++ into every user of the generator.
     ///
     /// ```
-    /// use generator::model::mesh::TriangleMesh;
+    /// use generator::model::TriangleMesh;
     /// // A fan of 1000 thin triangles around the origin.
     /// let n = 1000;
     /// let mut vertices = vec![[0.0, 0.0, 0.0]];

@@ -9,17 +9,20 @@
 
 pub mod builder;
 mod built_in;
-pub mod error;
+pub(crate) mod error;
 pub mod examples;
-pub mod mesh;
-pub mod schema;
-pub mod shape;
-pub mod spans;
-pub mod urdf;
+pub(crate) mod mesh;
+pub(crate) mod schema;
+pub(crate) mod shape;
+pub(crate) mod spans;
+pub(crate) mod urdf;
 
 pub use built_in::{Source, built_in, source, source_with};
 pub use error::{ErrorKind, ModelError};
+pub use mesh::{MeshFormat, TriangleMesh};
 pub use schema::*;
+pub use shape::{Shape, Solid, rpy_rotation};
+pub use urdf::{UrdfOptions, ident as urdf_ident, model_file as urdf_model_file, world_rotation};
 
 use crate::kinematics::{Axis, FrameKinematics, TimeChain, Turn};
 use crate::symbolic::eval::Env;
@@ -308,7 +311,7 @@ impl Model {
     }
 
     /// An error at `place` in the file (a path such as `quasi_velocities.full`), narrowed to
-    /// `needle` inside it (see [`error::place_span`]).
+    /// `needle` inside it (the narrowing of `place_span` in `model/error.rs`).
     pub fn error(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: String) -> ModelError {
         let span = error::place_span(&self.source, &spans::Spans::new(&self.source), place, needle);
         ModelError::at(kind, &self.file, &self.source, span, place, message, help)

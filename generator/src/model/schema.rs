@@ -65,7 +65,7 @@ pub struct ModelFile {
     pub forces: Vec<ForceDef>,
     /// A URDF robot this model starts from (its path relative to this file, and how it is
     /// read): its coordinates, frames, bodies, forces and quasi-velocities come first, and
-    /// this file's items are added to them ([`crate::model::urdf`]).
+    /// this file's items are added to them (as [`urdf_model_file`](crate::model::urdf_model_file) reads it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub urdf: Option<UrdfInclude>,
     /// The choice of quasi-velocities (with `urdf` and none given: the robot's, followed by the

@@ -47,7 +47,7 @@ impl Solid {
     /// The solid's name and its sizes, in the order the page reads them (a mesh's: its scale).
     ///
     /// ```
-    /// # use generator::model::shape::Solid;
+    /// # use generator::model::Solid;
     /// # use generator::symbolic::Expr;
     /// let s = Solid::Cylinder { radius: Expr::int(1), length: Expr::int(2) };
     /// assert_eq!(s.sizes(), ("cylinder", vec![Expr::int(1), Expr::int(2)]));
@@ -83,7 +83,7 @@ impl Transfer for Shape {
 /// `Rz(yaw) Ry(pitch) Rx(roll)`, row-major (columns the turned axes).
 ///
 /// ```
-/// let r = generator::model::shape::rpy_rotation(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+/// let r = generator::model::rpy_rotation(0.0, 0.0, std::f64::consts::FRAC_PI_2);
 /// // Yaw a quarter turn: x goes to y.
 /// assert!((r[3] - 1.0).abs() < 1e-15 && r[0].abs() < 1e-15);
 /// ```

@@ -2,16 +2,6 @@
 //! byte span of every value under its path (`bodies[1].com[0]`, `forces[1].components.theta1`),
 //! so that an error is reported at the value it is about, not at the first occurrence of some
 //! text. Serde does not give spans; the scanner runs only when an error is reported.
-//!
-//! ```
-//! use generator::model::spans::Spans;
-//! let src = "Model(name: \"m\", bodies: [Body(mass: \"0\"), Body(mass: \"0\", com: [\"1\", \"2\"])])";
-//! let spans = Spans::new(src);
-//! let second = spans.find("bodies[1] (b2).mass").unwrap();
-//! assert_eq!(&src[second.clone()], "\"0\"");
-//! assert!(second.start > src.find("Body(mass: \"0\", com").unwrap());
-//! assert_eq!(&src[spans.find("bodies[1].com[1]").unwrap()], "\"2\"");
-//! ```
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -51,12 +41,6 @@ impl Spans {
     }
 
     /// The path of the innermost value that holds byte `at` (ties: the shortest path).
-    ///
-    /// ```
-    /// let src = "Model(bodies: [Body(com: [\"0\", \"-l/2*1e200\"])])";
-    /// let at = src.find("1e200").unwrap();
-    /// assert_eq!(generator::model::spans::Spans::new(src).path_at(at).as_deref(), Some("bodies[0].com[1]"));
-    /// ```
     pub fn path_at(&self, at: usize) -> Option<String> {
         self.by_path.iter().filter(|(p, r)| r.contains(&at) && !p.is_empty()).min_by_key(|(p, r)| (r.len(), p.len(), p.as_str())).map(|(p, _)| p.clone())
     }
@@ -368,5 +352,27 @@ mod tests {
         let spans = Spans::new("Model(name: \"x\", bodies: [Body(mass: ");
         assert!(spans.get("name").is_some());
         assert!(spans.get("bodies[0].mass").is_none());
+    }
+}
+
+/// The examples that were this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::model::spans::Spans;
+        let src = "Model(name: \"m\", bodies: [Body(mass: \"0\"), Body(mass: \"0\", com: [\"1\", \"2\"])])";
+        let spans = Spans::new(src);
+        let second = spans.find("bodies[1] (b2).mass").unwrap();
+        assert_eq!(&src[second.clone()], "\"0\"");
+        assert!(second.start > src.find("Body(mass: \"0\", com").unwrap());
+        assert_eq!(&src[spans.find("bodies[1].com[1]").unwrap()], "\"2\"");
+    }
+
+    #[test]
+    fn path_at_example() {
+        let src = "Model(bodies: [Body(com: [\"0\", \"-l/2*1e200\"])])";
+        let at = src.find("1e200").unwrap();
+        assert_eq!(crate::model::spans::Spans::new(src).path_at(at).as_deref(), Some("bodies[0].com[1]"));
     }
 }

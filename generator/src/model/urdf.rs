@@ -24,7 +24,7 @@
 //!   replaced by `_`.
 //!
 //! ```
-//! use generator::model::urdf::{UrdfOptions, model_file};
+//! use generator::model::{UrdfOptions, urdf_model_file as model_file};
 //! let xml = r#"<robot name="arm">
 //!   <link name="base"/>
 //!   <link name="upper"><inertial><mass value="2"/><origin xyz="0 0 0.5"/>
@@ -57,7 +57,7 @@ pub const BASE_ATTITUDE: [&str; 4] = ["base_qw", "base_qx", "base_qy", "base_qz"
 /// when the coordinates have no floating base.
 ///
 /// ```
-/// use generator::model::urdf::world_rotation;
+/// use generator::model::world_rotation;
 /// let names: Vec<String> = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz", "elbow"].map(String::from).into();
 /// let q = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.3];
 /// let xi = world_rotation(&names, &q, [0.0, 0.0, 1.0]).unwrap();
@@ -191,9 +191,9 @@ fn num(x: f64) -> String {
 /// `_` again while the name is taken).
 ///
 /// ```
-/// assert_eq!(generator::model::urdf::ident("arm/elbow-1"), "arm_elbow_1");
-/// assert_eq!(generator::model::urdf::ident("2nd"), "j_2nd");
-/// assert_eq!(generator::model::urdf::ident("world"), "world_");
+/// assert_eq!(generator::model::urdf_ident("arm/elbow-1"), "arm_elbow_1");
+/// assert_eq!(generator::model::urdf_ident("2nd"), "j_2nd");
+/// assert_eq!(generator::model::urdf_ident("world"), "world_");
 /// ```
 pub fn ident(name: &str) -> String {
     let mut out: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
