@@ -187,17 +187,30 @@ impl RunArgs {
         for (name, v) in &self.values.qdot {
             qd0[index_of(&model.coordinates, name, "coordinate")?] = *v;
         }
-        let (t_start, t_end, dt_out) = match (model.run, self.t_end, self.dt_out) {
-            (Some((a, b, c)), t_end, dt_out) => (a, t_end.unwrap_or(b), dt_out.unwrap_or(c)),
-            (None, Some(b), Some(c)) => (0.0, b, c),
-            (None, _, _) => return Err(CliError::NoRun { model: model.module.clone() }),
-        };
+        let (t_start, t_end, dt_out) = self.span(&model.module, model.run)?;
         let reference = Reference { q0, qd0, params, t_start, t_end, dt_out };
-        reference.check().map_err(CliError::Grid)?;
         if let Err(e) = runtime::system::System::start(model, model.default_kind(), reference.params.clone(), &reference.q0, &reference.qd0) {
             return Err(self.values.locate(e, source));
         }
         Ok(reference)
+    }
+
+    /// The run's `(t_start, t_end, dt_out)`: the model's `simulation` (`run`) with `--t-end` and
+    /// `--dt-out` over it, refused when there is none or it makes no output times. The
+    /// commands that run check it on the model as loaded, before anything is derived.
+    pub fn span(&self, model: &str, run: Option<(f64, f64, f64)>) -> Result<(f64, f64, f64), CliError> {
+        let span = match (run, self.t_end, self.dt_out) {
+            (Some((a, b, c)), t_end, dt_out) => (a, t_end.unwrap_or(b), dt_out.unwrap_or(c)),
+            (None, Some(b), Some(c)) => (0.0, b, c),
+            (None, _, _) => return Err(CliError::NoRun { model: model.to_string() }),
+        };
+        seam::output_steps(span.0, span.1, span.2).map_err(CliError::Grid)?;
+        Ok(span)
+    }
+
+    /// [`RunArgs::span`] of a model as loaded, before it is derived.
+    pub fn check_span(&self, source: &generator::model::Model) -> Result<(), CliError> {
+        self.span(&source.name, source.simulation.as_ref().map(|s| (s.t_start, s.t_end, s.dt_out))).map(|_| ())
     }
 
     /// The Jacobians a run with these settings wants: exact ones for the stiff method.

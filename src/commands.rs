@@ -108,7 +108,7 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     let route = load::Route::of(args.run.values.compiled);
-    let (model, source) = crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), route, &|_| None)?;
+    let (model, source) = crate::evaluated(&args.model, &args.run.values, &Default::default(), Some(&args.run), args.run.jacobians(), route, &|_| None)?;
     let reference = args.run.reference(&model, &source)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -175,7 +175,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
     let jacobians = if stiff { load::Jacobians::Exact { only: None, by_parameters: false } } else { load::Jacobians::Differenced };
     let (model, source) =
-        crate::evaluated(&args.model, &args.run.values, &Default::default(), jacobians, load::Route::of(args.run.values.compiled), &|_| None)?;
+        crate::evaluated(&args.model, &args.run.values, &Default::default(), Some(&args.run), jacobians, load::Route::of(args.run.values.compiled), &|_| None)?;
     let reference = args.run.reference(&model, &source)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -281,6 +281,7 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
         &args.model,
         &args.values,
         &names,
+        None,
         load::Jacobians::Exact { only: Some(args.formulation.0), by_parameters: !args.input.is_empty() },
         load::Route::of(args.values.compiled),
         // Only the formulation linearized is derived, where the model emits it.

@@ -155,19 +155,24 @@ impl From<load::LoadError> for CliError {
 }
 
 /// The model MODEL names with `--param` applied, its names on the command line checked
-/// (`--q`, `--qdot`, and the `more` a command takes) before anything is derived, then
+/// (`--q`, `--qdot`, and the `more` a command takes) and the span of the `run` a command makes
+/// (none for `linearize`) before anything is derived, then
 /// evaluated by [`load::evaluate`] on `route`; its warnings and the compiled route's one-time
 /// build are told on stderr.
 pub fn evaluated(
     argument: &std::path::Path,
     values: &args::ValueArgs,
     more: &args::Names,
+    run: Option<&args::RunArgs>,
     exact: load::Jacobians,
     route: load::Route,
     only: &dyn Fn(&generator::model::Model) -> Option<seam::FormulationKind>,
 ) -> Result<(seam::Model, generator::model::Model), CliError> {
     let model = load::model_with(argument, &values.robot.options())?.with_parameters(&values.param)?;
     args::check_names(&model, values, more)?;
+    if let Some(run) = run {
+        run.check_span(&model)?;
+    }
     let loaded = load::evaluate_only(&model, only(&model), exact, route, &mut |path| {
         eprintln!("compiling the model with rustc into {} (once per model and version)...", files::printable_path(path));
     })?;

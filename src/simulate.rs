@@ -76,8 +76,15 @@ pub fn run(args: &SimulateArgs) -> Result<Option<runtime::integrate::RunError>, 
         None => Some(load::default_formulation(m)),
         Some(kind) => generator::emit::Options::from_model(m).formulations.iter().any(|f| f.kind() == kind).then_some(kind),
     };
-    let (model, source) =
-        crate::evaluated(&args.model, &args.run.values, &Default::default(), args.run.jacobians(), load::Route::of(args.run.values.compiled), &only)?;
+    let (model, source) = crate::evaluated(
+        &args.model,
+        &args.run.values,
+        &Default::default(),
+        Some(&args.run),
+        args.run.jacobians(),
+        load::Route::of(args.run.values.compiled),
+        &only,
+    )?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => model.default_kind(),

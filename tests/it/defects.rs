@@ -124,6 +124,32 @@ fn names_are_checked_before_the_derivation() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("budget"), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
+/// The run a command makes is checked before anything is derived: a model whose file gives no
+/// run, or settings that make no output times, are refused at once, not after a derivation
+/// (which the node budget stops here, to show which came first).
+#[test]
+fn the_run_is_checked_before_the_derivation() {
+    let dir = tempfile::tempdir().unwrap();
+    let bicycle = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/models/bicycle.ron")).unwrap();
+    let line = "    simulation: Simulation(t_end: 5.0, dt_out: 0.01),\n";
+    assert!(bicycle.contains(line), "the bicycle's run");
+    let no_run = dir.path().join("no_run.ron");
+    std::fs::write(&no_run, bicycle.replace(line, "")).unwrap();
+    let no_run = no_run.to_str().unwrap();
+    for command in ["simulate", "compare", "sweep"] {
+        let out = multibody(dir.path(), &[command, no_run, "--max-nodes", "20000"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("has no `simulation` section: give the run with --t-end and --dt-out"), "{command}: {err}");
+        assert!(!err.contains("budget"), "{command}: {err}");
+        let out = multibody(dir.path(), &[command, "bicycle", "--max-nodes", "20000", "--dt-out", "10"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("run settings:") && !err.contains("budget"), "{command}: {err}");
+    }
+    // Given a run, the same model reaches the budget.
+    let out = multibody(dir.path(), &["simulate", no_run, "--max-nodes", "20000", "--t-end", "1", "--dt-out", "0.1"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("budget"), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
 /// Every command takes a built-in model by name, `generate` too (it refused, pointing into a
 /// checkout the user does not have); an unknown name lists the built-in ones.
 #[test]

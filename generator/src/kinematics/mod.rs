@@ -17,7 +17,7 @@
 //! assert_eq!(r.get(0, 1), -Expr::sym("a").sin());
 //! ```
 
-pub mod rolling;
+pub(crate) mod rolling;
 
 use crate::symbolic::diff::TimeDerivative;
 use crate::symbolic::{Expr, Matrix, Symbol};
