@@ -9,20 +9,6 @@
 //! `|n| v_c,x - R (omega x n)_x = 0` and the same for `y`, linear in the rates with
 //! coefficients free of them. The height constraint `h = 0` is holonomic; its derivative is
 //! the vertical component of `v_p`.
-//!
-//! ```
-//! use generator::kinematics::{FrameKinematics, TimeChain, rolling::contact, Axis};
-//! use generator::symbolic::{Expr, Symbol};
-//! // An upright disk of radius 1 on a heading frame at (x, y, 1), spinning about its y axis.
-//! let (t, x, y, psi, phi) = (Symbol::new("t"), Symbol::new("x"), Symbol::new("y"), Symbol::new("psi"), Symbol::new("phi"));
-//! let rates: Vec<_> = [x, y, psi, phi].iter().map(|s| (*s, Symbol::new(&format!("{}'", s.name())).expr())).collect();
-//! let chain = TimeChain::new(t, rates);
-//! let heading = FrameKinematics::world().child(0, "h", &[x.expr(), y.expr(), Expr::one()], &[(Axis::Z, psi.expr())], &chain);
-//! let disk = heading.child(1, "d", &[Expr::zero(), Expr::zero(), Expr::zero()], &[(Axis::Y, phi.expr())], &chain);
-//! let z = Expr::zero();
-//! let c = contact(&disk, &[z, z, z], &[z, Expr::one(), z], Expr::one(), &chain);
-//! assert!(c.height.is_zero());
-//! ```
 
 use super::{FrameKinematics, TimeChain, cross};
 use crate::symbolic::eval::Env;
@@ -70,4 +56,23 @@ pub fn on_the_ground(height: Expr, coordinates: &[Symbol], params: &Env) -> bool
         }
         height.eval(&env).is_ok_and(|h| h.abs() < 1e-12)
     })
+}
+
+/// The example that was this module's documentation when it was public.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn module_example() {
+        use crate::kinematics::{Axis, FrameKinematics, TimeChain, rolling::contact};
+        use crate::symbolic::{Expr, Symbol};
+        // An upright disk of radius 1 on a heading frame at (x, y, 1), spinning about its y axis.
+        let (t, x, y, psi, phi) = (Symbol::new("t"), Symbol::new("x"), Symbol::new("y"), Symbol::new("psi"), Symbol::new("phi"));
+        let rates: Vec<_> = [x, y, psi, phi].iter().map(|s| (*s, Symbol::new(&format!("{}'", s.name())).expr())).collect();
+        let chain = TimeChain::new(t, rates);
+        let heading = FrameKinematics::world().child(0, "h", &[x.expr(), y.expr(), Expr::one()], &[(Axis::Z, psi.expr())], &chain);
+        let disk = heading.child(1, "d", &[Expr::zero(), Expr::zero(), Expr::zero()], &[(Axis::Y, phi.expr())], &chain);
+        let z = Expr::zero();
+        let c = contact(&disk, &[z, z, z], &[z, Expr::one(), z], Expr::one(), &chain);
+        assert!(c.height.is_zero());
+    }
 }
