@@ -626,6 +626,14 @@ pub mod lagrange {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 13;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "constraint matrix [M a^T; a 0]";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 8,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 0] = [];
     ///Everything the right-hand side evaluates before its solve.
@@ -1475,31 +1483,14 @@ pub mod lagrange {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        ::seam::check::finite(t, dstate)
+        let (mut matrix, mut force) = (a.matrix, a.force);
+        ::seam::solve::solve_dense_array(&mut matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -2044,6 +2035,14 @@ pub mod kane {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 3;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 3,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 4] = [
         "pivot factor 1 of the velocity transformation vanishes",
@@ -10655,26 +10654,14 @@ pub mod kane {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(

@@ -626,6 +626,14 @@ pub mod lagrange {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 13;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "constraint matrix [M a^T; a 0]";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 8,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 0] = [];
     ///Everything the right-hand side evaluates before its solve.
@@ -1475,31 +1483,14 @@ pub mod lagrange {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        ::seam::check::finite(t, dstate)
+        let (mut matrix, mut force) = (a.matrix, a.force);
+        ::seam::solve::solve_dense_array(&mut matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -6082,43 +6073,30 @@ pub mod lagrange {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "constraint matrix [M a^T; a 0]".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..8 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..8 {
-            dstate[8 + j] = x[j];
-        }
-        for k in 0..16 {
-            for j in 0..8 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 13];
-            for i in 0..13 {
-                let mut s = d_force[k][i];
-                for j in 0..13 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..8 {
-                jac[8 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (16, derivative),
+            &mut [0.0; 13],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

@@ -174,6 +174,14 @@ pub mod lagrange {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 3;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "constraint matrix [M a^T; a 0]";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 2,
+        post: None,
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 0] = [];
     ///Everything the right-hand side evaluates before its solve.
@@ -218,21 +226,15 @@ pub mod lagrange {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]".into(),
-                value: column as f64,
-            });
-        }
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = force[0];
-        dstate[3] = force[1];
-        dstate[4] = power;
-        ::seam::check::finite(t, dstate)
+        let (mut matrix, mut force) = (a.matrix, a.force);
+        ::seam::solve::solve_dense_array(&mut matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -408,47 +410,32 @@ pub mod lagrange {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "constraint matrix [M a^T; a 0]".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..2 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..2 {
-            dstate[2 + j] = x[j];
-        }
-        dstate[4] = power;
-        for k in 0..4 {
-            jac[4][k] = d_power[k];
-        }
-        for k in 0..4 {
-            for j in 0..2 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 3];
-            for i in 0..3 {
-                let mut s = d_force[k][i];
-                for j in 0..3 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..2 {
-                jac[2 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (4, derivative),
+            &mut [0.0; 3],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -566,6 +553,14 @@ pub mod maggi {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "Maggi matrix W^T M W";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 2,
+        post: Some((2, 1)),
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 2] = ["x^2 + y^2 = 0", "4*x^2 + 4*y^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -635,22 +630,17 @@ pub mod maggi {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "Maggi matrix W^T M W".into(),
-                value: column as f64,
-            });
-        }
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = w[0][0] * force[0] + c[0];
-        dstate[3] = w[1][0] * force[0] + c[1];
-        dstate[4] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            w: a.w.as_flattened(),
+            c: &a.c,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -893,55 +883,36 @@ pub mod maggi {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "Maggi matrix W^T M W".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..2 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..2 {
-            let mut s = c[j];
-            for i in 0..1 {
-                s += w[j][i] * x[i];
-            }
-            dstate[2 + j] = s;
-        }
-        dstate[4] = power;
-        for k in 0..4 {
-            jac[4][k] = d_power[k];
-        }
-        for k in 0..4 {
-            for j in 0..2 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 1];
-            for i in 0..1 {
-                let mut s = d_force[k][i];
-                for j in 0..1 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..2 {
-                let mut s = d_c[k][j];
-                for i in 0..1 {
-                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
-                }
-                jac[2 + j][k] = s;
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            w: w.as_flattened(),
+            c: &c,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            w: d_w[k].as_flattened(),
+            c: &d_c[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (4, derivative),
+            &mut [0.0; 1],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1048,6 +1019,14 @@ pub mod kane {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 1,
+        post: None,
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 2] = ["x^2 + y^2 = 0", "4*x^2 + 4*y^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -1108,20 +1087,15 @@ pub mod kane {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = force[0];
-        dstate[3] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1310,47 +1284,32 @@ pub mod kane {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..2 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..1 {
-            dstate[2 + j] = x[j];
-        }
-        dstate[3] = power;
-        for k in 0..3 {
-            jac[3][k] = d_power[k];
-        }
-        for k in 0..3 {
-            for j in 0..2 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 1];
-            for i in 0..1 {
-                let mut s = d_force[k][i];
-                for j in 0..1 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..1 {
-                jac[2 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (3, derivative),
+            &mut [0.0; 1],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1457,6 +1416,14 @@ pub mod reduced_volterra {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 1,
+        post: None,
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 2] = ["x^2 + y^2 = 0", "4*x^2 + 4*y^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -1517,20 +1484,15 @@ pub mod reduced_volterra {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = force[0];
-        dstate[3] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1719,47 +1681,32 @@ pub mod reduced_volterra {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..2 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..1 {
-            dstate[2 + j] = x[j];
-        }
-        dstate[3] = power;
-        for k in 0..3 {
-            jac[3][k] = d_power[k];
-        }
-        for k in 0..3 {
-            for j in 0..2 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 1];
-            for i in 0..1 {
-                let mut s = d_force[k][i];
-                for j in 0..1 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..1 {
-                jac[2 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (3, derivative),
+            &mut [0.0; 1],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

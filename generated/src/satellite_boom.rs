@@ -299,6 +299,14 @@ pub mod lagrange {
     pub const DEPENDS_ON_TIME: bool = true;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 7;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 7,
+        post: None,
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 0] = [];
     ///Everything the right-hand side evaluates before its solve.
@@ -563,31 +571,15 @@ pub mod lagrange {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M".into(),
-                value: column as f64,
-            });
-        }
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = force[0];
-        dstate[8] = force[1];
-        dstate[9] = force[2];
-        dstate[10] = force[3];
-        dstate[11] = force[4];
-        dstate[12] = force[5];
-        dstate[13] = force[6];
-        dstate[14] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1277,47 +1269,32 @@ pub mod lagrange {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..7 {
-            dstate[7 + j] = x[j];
-        }
-        dstate[14] = power;
-        for k in 0..14 {
-            jac[14][k] = d_power[k];
-        }
-        for k in 0..14 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 7];
-            for i in 0..7 {
-                let mut s = d_force[k][i];
-                for j in 0..7 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..7 {
-                jac[7 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (14, derivative),
+            &mut [0.0; 7],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -1726,47 +1703,32 @@ pub mod lagrange {
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; 9]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..7 {
-            dstate[7 + j] = x[j];
-        }
-        dstate[14] = power;
-        for k in 0..9 {
-            jac[14][k] = d_power[k];
-        }
-        for k in 0..9 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 7];
-            for i in 0..7 {
-                let mut s = d_force[k][i];
-                for j in 0..7 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..7 {
-                jac[7 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (9, derivative),
+            &mut [0.0; 7],
+            dstate,
+            (jac.as_flattened_mut(), 9),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -1912,6 +1874,14 @@ pub mod maggi {
     pub const DEPENDS_ON_TIME: bool = true;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 7;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "Maggi matrix W^T M W";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 7,
+        post: Some((7, 7)),
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -2202,46 +2172,17 @@ pub mod maggi {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "Maggi matrix W^T M W".into(),
-                value: column as f64,
-            });
-        }
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = w[0][0] * force[0] + w[0][1] * force[1] + w[0][2] * force[2]
-            + w[0][3] * force[3] + w[0][4] * force[4] + w[0][5] * force[5]
-            + w[0][6] * force[6] + c[0];
-        dstate[8] = w[1][0] * force[0] + w[1][1] * force[1] + w[1][2] * force[2]
-            + w[1][3] * force[3] + w[1][4] * force[4] + w[1][5] * force[5]
-            + w[1][6] * force[6] + c[1];
-        dstate[9] = w[2][0] * force[0] + w[2][1] * force[1] + w[2][2] * force[2]
-            + w[2][3] * force[3] + w[2][4] * force[4] + w[2][5] * force[5]
-            + w[2][6] * force[6] + c[2];
-        dstate[10] = w[3][0] * force[0] + w[3][1] * force[1] + w[3][2] * force[2]
-            + w[3][3] * force[3] + w[3][4] * force[4] + w[3][5] * force[5]
-            + w[3][6] * force[6] + c[3];
-        dstate[11] = w[4][0] * force[0] + w[4][1] * force[1] + w[4][2] * force[2]
-            + w[4][3] * force[3] + w[4][4] * force[4] + w[4][5] * force[5]
-            + w[4][6] * force[6] + c[4];
-        dstate[12] = w[5][0] * force[0] + w[5][1] * force[1] + w[5][2] * force[2]
-            + w[5][3] * force[3] + w[5][4] * force[4] + w[5][5] * force[5]
-            + w[5][6] * force[6] + c[5];
-        dstate[13] = w[6][0] * force[0] + w[6][1] * force[1] + w[6][2] * force[2]
-            + w[6][3] * force[3] + w[6][4] * force[4] + w[6][5] * force[5]
-            + w[6][6] * force[6] + c[6];
-        dstate[14] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            w: a.w.as_flattened(),
+            c: &a.c,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -3252,55 +3193,36 @@ pub mod maggi {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "Maggi matrix W^T M W".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..7 {
-            let mut s = c[j];
-            for i in 0..7 {
-                s += w[j][i] * x[i];
-            }
-            dstate[7 + j] = s;
-        }
-        dstate[14] = power;
-        for k in 0..14 {
-            jac[14][k] = d_power[k];
-        }
-        for k in 0..14 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 7];
-            for i in 0..7 {
-                let mut s = d_force[k][i];
-                for j in 0..7 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..7 {
-                let mut s = d_c[k][j];
-                for i in 0..7 {
-                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
-                }
-                jac[7 + j][k] = s;
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            w: w.as_flattened(),
+            c: &c,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            w: d_w[k].as_flattened(),
+            c: &d_c[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (14, derivative),
+            &mut [0.0; 7],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -3895,55 +3817,36 @@ pub mod maggi {
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "Maggi matrix W^T M W".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; 9]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..7 {
-            let mut s = c[j];
-            for i in 0..7 {
-                s += w[j][i] * x[i];
-            }
-            dstate[7 + j] = s;
-        }
-        dstate[14] = power;
-        for k in 0..9 {
-            jac[14][k] = d_power[k];
-        }
-        for k in 0..9 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 7];
-            for i in 0..7 {
-                let mut s = d_force[k][i];
-                for j in 0..7 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..7 {
-                let mut s = d_c[k][j];
-                for i in 0..7 {
-                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
-                }
-                jac[7 + j][k] = s;
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            w: w.as_flattened(),
+            c: &c,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            w: d_w[k].as_flattened(),
+            c: &d_c[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (9, derivative),
+            &mut [0.0; 7],
+            dstate,
+            (jac.as_flattened_mut(), 9),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -4078,6 +3981,14 @@ pub mod kane {
     pub const DEPENDS_ON_TIME: bool = true;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 7;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 7,
+        post: None,
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -4285,31 +4196,15 @@ pub mod kane {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = force[0];
-        dstate[8] = force[1];
-        dstate[9] = force[2];
-        dstate[10] = force[3];
-        dstate[11] = force[4];
-        dstate[12] = force[5];
-        dstate[13] = force[6];
-        dstate[14] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -4866,47 +4761,32 @@ pub mod kane {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..7 {
-            dstate[7 + j] = x[j];
-        }
-        dstate[14] = power;
-        for k in 0..14 {
-            jac[14][k] = d_power[k];
-        }
-        for k in 0..14 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 7];
-            for i in 0..7 {
-                let mut s = d_force[k][i];
-                for j in 0..7 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..7 {
-                jac[7 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (14, derivative),
+            &mut [0.0; 7],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -5185,47 +5065,32 @@ pub mod kane {
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; 9]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..7 {
-            dstate[7 + j] = x[j];
-        }
-        dstate[14] = power;
-        for k in 0..9 {
-            jac[14][k] = d_power[k];
-        }
-        for k in 0..9 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 7];
-            for i in 0..7 {
-                let mut s = d_force[k][i];
-                for j in 0..7 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..7 {
-                jac[7 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (9, derivative),
+            &mut [0.0; 7],
+            dstate,
+            (jac.as_flattened_mut(), 9),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -5357,6 +5222,14 @@ pub mod reduced_volterra {
     pub const DEPENDS_ON_TIME: bool = true;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 4;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 4,
+        post: None,
+        work: true,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -5507,28 +5380,15 @@ pub mod reduced_volterra {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        let power = a.power;
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = force[0];
-        dstate[8] = force[1];
-        dstate[9] = force[2];
-        dstate[10] = force[3];
-        dstate[11] = power;
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            power: a.power,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -5984,47 +5844,32 @@ pub mod reduced_volterra {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..4 {
-            dstate[7 + j] = x[j];
-        }
-        dstate[11] = power;
-        for k in 0..11 {
-            jac[11][k] = d_power[k];
-        }
-        for k in 0..11 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 4];
-            for i in 0..4 {
-                let mut s = d_force[k][i];
-                for j in 0..4 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..4 {
-                jac[7 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (11, derivative),
+            &mut [0.0; 4],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
     struct ParameterDerivatives {
@@ -6272,47 +6117,32 @@ pub mod reduced_volterra {
         } = assemble_parameter_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; 9]; STATES];
-        for j in 0..7 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..4 {
-            dstate[7 + j] = x[j];
-        }
-        dstate[11] = power;
-        for k in 0..9 {
-            jac[11][k] = d_power[k];
-        }
-        for k in 0..9 {
-            for j in 0..7 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 4];
-            for i in 0..4 {
-                let mut s = d_force[k][i];
-                for j in 0..4 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..4 {
-                jac[7 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            power,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            power: d_power[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (9, derivative),
+            &mut [0.0; 4],
+            dstate,
+            (jac.as_flattened_mut(), 9),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

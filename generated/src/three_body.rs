@@ -413,6 +413,14 @@ pub mod lagrange {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 8,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 0] = [];
     ///Everything the right-hand side evaluates before its solve.
@@ -893,31 +901,14 @@ pub mod lagrange {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -2587,43 +2578,30 @@ pub mod lagrange {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..8 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..8 {
-            dstate[8 + j] = x[j];
-        }
-        for k in 0..16 {
-            for j in 0..8 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 8];
-            for i in 0..8 {
-                let mut s = d_force[k][i];
-                for j in 0..8 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..8 {
-                jac[8 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (16, derivative),
+            &mut [0.0; 8],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -2758,6 +2736,14 @@ pub mod maggi {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "Maggi matrix W^T M W";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 8,
+        post: Some((8, 8)),
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -3278,48 +3264,16 @@ pub mod maggi {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "Maggi matrix W^T M W".into(),
-                value: column as f64,
-            });
-        }
-        let (w, c) = (a.w, a.c);
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = w[0][0] * force[0] + w[0][1] * force[1] + w[0][2] * force[2]
-            + w[0][3] * force[3] + w[0][4] * force[4] + w[0][5] * force[5]
-            + w[0][6] * force[6] + w[0][7] * force[7] + c[0];
-        dstate[9] = w[1][0] * force[0] + w[1][1] * force[1] + w[1][2] * force[2]
-            + w[1][3] * force[3] + w[1][4] * force[4] + w[1][5] * force[5]
-            + w[1][6] * force[6] + w[1][7] * force[7] + c[1];
-        dstate[10] = w[2][0] * force[0] + w[2][1] * force[1] + w[2][2] * force[2]
-            + w[2][3] * force[3] + w[2][4] * force[4] + w[2][5] * force[5]
-            + w[2][6] * force[6] + w[2][7] * force[7] + c[2];
-        dstate[11] = w[3][0] * force[0] + w[3][1] * force[1] + w[3][2] * force[2]
-            + w[3][3] * force[3] + w[3][4] * force[4] + w[3][5] * force[5]
-            + w[3][6] * force[6] + w[3][7] * force[7] + c[3];
-        dstate[12] = w[4][0] * force[0] + w[4][1] * force[1] + w[4][2] * force[2]
-            + w[4][3] * force[3] + w[4][4] * force[4] + w[4][5] * force[5]
-            + w[4][6] * force[6] + w[4][7] * force[7] + c[4];
-        dstate[13] = w[5][0] * force[0] + w[5][1] * force[1] + w[5][2] * force[2]
-            + w[5][3] * force[3] + w[5][4] * force[4] + w[5][5] * force[5]
-            + w[5][6] * force[6] + w[5][7] * force[7] + c[5];
-        dstate[14] = w[6][0] * force[0] + w[6][1] * force[1] + w[6][2] * force[2]
-            + w[6][3] * force[3] + w[6][4] * force[4] + w[6][5] * force[5]
-            + w[6][6] * force[6] + w[6][7] * force[7] + c[6];
-        dstate[15] = w[7][0] * force[0] + w[7][1] * force[1] + w[7][2] * force[2]
-            + w[7][3] * force[3] + w[7][4] * force[4] + w[7][5] * force[5]
-            + w[7][6] * force[6] + w[7][7] * force[7] + c[7];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            w: a.w.as_flattened(),
+            c: &a.c,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -5464,51 +5418,34 @@ pub mod maggi {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "Maggi matrix W^T M W".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..8 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..8 {
-            let mut s = c[j];
-            for i in 0..8 {
-                s += w[j][i] * x[i];
-            }
-            dstate[8 + j] = s;
-        }
-        for k in 0..16 {
-            for j in 0..8 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 8];
-            for i in 0..8 {
-                let mut s = d_force[k][i];
-                for j in 0..8 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..8 {
-                let mut s = d_c[k][j];
-                for i in 0..8 {
-                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
-                }
-                jac[8 + j][k] = s;
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            w: w.as_flattened(),
+            c: &c,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            w: d_w[k].as_flattened(),
+            c: &d_c[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (16, derivative),
+            &mut [0.0; 8],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -5632,6 +5569,14 @@ pub mod kane {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 8,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -6008,31 +5953,14 @@ pub mod kane {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -7007,43 +6935,30 @@ pub mod kane {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..8 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..8 {
-            dstate[8 + j] = x[j];
-        }
-        for k in 0..16 {
-            for j in 0..8 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 8];
-            for i in 0..8 {
-                let mut s = d_force[k][i];
-                for j in 0..8 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..8 {
-                jac[8 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (16, derivative),
+            &mut [0.0; 8],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -7164,6 +7079,14 @@ pub mod reduced_volterra {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 5,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -7514,28 +7437,14 @@ pub mod reduced_volterra {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = qdot[5];
-        dstate[6] = qdot[6];
-        dstate[7] = qdot[7];
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -8588,43 +8497,30 @@ pub mod reduced_volterra {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..8 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..5 {
-            dstate[8 + j] = x[j];
-        }
-        for k in 0..13 {
-            for j in 0..8 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 5];
-            for i in 0..5 {
-                let mut s = d_force[k][i];
-                for j in 0..5 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..5 {
-                jac[8 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (13, derivative),
+            &mut [0.0; 5],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

@@ -407,6 +407,14 @@ pub mod reduced_volterra {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 5,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -687,25 +695,14 @@ pub mod reduced_volterra {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = qdot[4];
-        dstate[5] = force[0];
-        dstate[6] = force[1];
-        dstate[7] = force[2];
-        dstate[8] = force[3];
-        dstate[9] = force[4];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1517,43 +1514,30 @@ pub mod reduced_volterra {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..5 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..5 {
-            dstate[5 + j] = x[j];
-        }
-        for k in 0..10 {
-            for j in 0..5 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 5];
-            for i in 0..5 {
-                let mut s = d_force[k][i];
-                for j in 0..5 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..5 {
-                jac[5 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (10, derivative),
+            &mut [0.0; 5],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

@@ -243,6 +243,14 @@ pub mod lagrange {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "constraint matrix [M a^T; a 0]";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 4,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 0] = [];
     ///Everything the right-hand side evaluates before its solve.
@@ -352,23 +360,14 @@ pub mod lagrange {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = ::seam::solve::solve_dense_array(&mut matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = force[0];
-        dstate[5] = force[1];
-        dstate[6] = force[2];
-        dstate[7] = force[3];
-        ::seam::check::finite(t, dstate)
+        let (mut matrix, mut force) = (a.matrix, a.force);
+        ::seam::solve::solve_dense_array(&mut matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -810,43 +809,30 @@ pub mod lagrange {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "constraint matrix [M a^T; a 0]".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..4 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..4 {
-            dstate[4 + j] = x[j];
-        }
-        for k in 0..8 {
-            for j in 0..4 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 5];
-            for i in 0..5 {
-                let mut s = d_force[k][i];
-                for j in 0..5 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..4 {
-                jac[4 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (8, derivative),
+            &mut [0.0; 5],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -973,6 +959,14 @@ pub mod maggi {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 3;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "Maggi matrix W^T M W";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 4,
+        post: Some((4, 3)),
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["4*e0^2 + 4*e1^2 + 4*e2^2 + 4*e3^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -1131,24 +1125,16 @@ pub mod maggi {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "Maggi matrix W^T M W".into(),
-                value: column as f64,
-            });
-        }
-        let (w, c) = (a.w, a.c);
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = w[0][0] * force[0] + w[0][1] * force[1] + w[0][2] * force[2] + c[0];
-        dstate[5] = w[1][0] * force[0] + w[1][1] * force[1] + w[1][2] * force[2] + c[1];
-        dstate[6] = w[2][0] * force[0] + w[2][1] * force[1] + w[2][2] * force[2] + c[2];
-        dstate[7] = w[3][0] * force[0] + w[3][1] * force[1] + w[3][2] * force[2] + c[3];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            w: a.w.as_flattened(),
+            c: &a.c,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -1965,51 +1951,34 @@ pub mod maggi {
         } = assemble_derivatives(t, state, params, g_i);
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "Maggi matrix W^T M W".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..4 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..4 {
-            let mut s = c[j];
-            for i in 0..3 {
-                s += w[j][i] * x[i];
-            }
-            dstate[4 + j] = s;
-        }
-        for k in 0..8 {
-            for j in 0..4 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 3];
-            for i in 0..3 {
-                let mut s = d_force[k][i];
-                for j in 0..3 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..4 {
-                let mut s = d_c[k][j];
-                for i in 0..3 {
-                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
-                }
-                jac[4 + j][k] = s;
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            w: w.as_flattened(),
+            c: &c,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            w: d_w[k].as_flattened(),
+            c: &d_c[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (8, derivative),
+            &mut [0.0; 3],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -2116,6 +2085,14 @@ pub mod kane {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 3;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 3,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["4*e0^2 + 4*e1^2 + 4*e2^2 + 4*e3^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -2199,22 +2176,14 @@ pub mod kane {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = force[0];
-        dstate[5] = force[1];
-        dstate[6] = force[2];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -2512,43 +2481,30 @@ pub mod kane {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..4 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..3 {
-            dstate[4 + j] = x[j];
-        }
-        for k in 0..7 {
-            for j in 0..4 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 3];
-            for i in 0..3 {
-                let mut s = d_force[k][i];
-                for j in 0..3 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..3 {
-                jac[4 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (7, derivative),
+            &mut [0.0; 3],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
@@ -2655,6 +2611,14 @@ pub mod reduced_volterra {
     pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 3;
+    ///The matrix `rhs` solves, as its singular failures name it.
+    const MATRIX_NAME: &str = "mass matrix M_NI";
+    ///How the solution becomes the state's rates.
+    const LAYOUT: ::seam::rates::Layout = ::seam::rates::Layout {
+        speeds: 3,
+        post: None,
+        work: false,
+    };
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
     const CONDITIONS: [&str; 1] = ["4*e0^2 + 4*e1^2 + 4*e2^2 + 4*e3^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
@@ -2738,22 +2702,14 @@ pub mod reduced_volterra {
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         ::seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
-        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_ldl(&matrix, &mut force) {
-            return Err(Failure::Singular {
-                t,
-                condition: "mass matrix M_NI".into(),
-                value: column as f64,
-            });
-        }
-        dstate[0] = qdot[0];
-        dstate[1] = qdot[1];
-        dstate[2] = qdot[2];
-        dstate[3] = qdot[3];
-        dstate[4] = force[0];
-        dstate[5] = force[1];
-        dstate[6] = force[2];
-        ::seam::check::finite(t, dstate)
+        let (matrix, mut force) = (a.matrix, a.force);
+        solve_ldl(&matrix, &mut force)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
+        let block = ::seam::rates::Block {
+            qdot: &a.qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write(t, LAYOUT, &block, &force, dstate)
     }
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
@@ -3051,43 +3007,30 @@ pub mod reduced_volterra {
         );
         let mut x = force;
         ::seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-        let pivots = match ::seam::solve::lu_factor_array(&mut matrix) {
-            Ok(p) => p,
-            Err(column) => {
-                return Err(Failure::Singular {
-                    t,
-                    condition: "mass matrix M_NI".into(),
-                    value: column as f64,
-                });
-            }
-        };
+        let pivots = ::seam::solve::lu_factor_array(&mut matrix)
+            .map_err(|column| ::seam::solve::singular(t, MATRIX_NAME, column))?;
         ::seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-        *jac = [[0.0; STATES]; STATES];
-        for j in 0..4 {
-            dstate[j] = qdot[j];
-        }
-        for j in 0..3 {
-            dstate[4 + j] = x[j];
-        }
-        for k in 0..7 {
-            for j in 0..4 {
-                jac[j][k] = d_qdot[k][j];
-            }
-            let mut dx = [0.0f64; 3];
-            for i in 0..3 {
-                let mut s = d_force[k][i];
-                for j in 0..3 {
-                    s -= d_matrix[k][i][j] * x[j];
-                }
-                dx[i] = s;
-            }
-            ::seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-            for j in 0..3 {
-                jac[4 + j][k] = dx[j];
-            }
-        }
-        ::seam::check::finite(t, dstate)?;
-        ::seam::check::finite_after(t, STATES, jac.as_flattened())
+        let block = ::seam::rates::Block {
+            qdot: &qdot,
+            ..::seam::rates::Block::EMPTY
+        };
+        let derivative = |k: usize| ::seam::rates::Block {
+            qdot: &d_qdot[k],
+            matrix: d_matrix[k].as_flattened(),
+            force: &d_force[k],
+            ..::seam::rates::Block::EMPTY
+        };
+        ::seam::rates::write_jacobian(
+            t,
+            LAYOUT,
+            &block,
+            &x,
+            (&matrix, &pivots),
+            (7, derivative),
+            &mut [0.0; 3],
+            dstate,
+            (jac.as_flattened_mut(), STATES),
+        )
     }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {

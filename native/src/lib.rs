@@ -53,7 +53,7 @@ pub enum Error {
 }
 
 /// The `seam` crate's sources, built into every library (`lib.rs` first).
-pub const SEAM_SOURCES: [(&str, &str); 9] = [
+pub const SEAM_SOURCES: [(&str, &str); 10] = [
     ("lib.rs", include_str!("../../runtime/seam/src/lib.rs")),
     ("check.rs", include_str!("../../runtime/seam/src/check.rs")),
     ("compiled.rs", include_str!("../../runtime/seam/src/compiled.rs")),
@@ -62,6 +62,7 @@ pub const SEAM_SOURCES: [(&str, &str); 9] = [
     ("grid.rs", include_str!("../../runtime/seam/src/grid.rs")),
     ("kind.rs", include_str!("../../runtime/seam/src/kind.rs")),
     ("model.rs", include_str!("../../runtime/seam/src/model.rs")),
+    ("rates.rs", include_str!("../../runtime/seam/src/rates.rs")),
     ("solve.rs", include_str!("../../runtime/seam/src/solve.rs")),
 ];
 

@@ -357,7 +357,6 @@ impl Emitter<'_> {
         let model = self.scope.model;
         let name = f.name();
         let work = self.scope.work;
-        let n_states = f.states(work);
         let nq = f.kept.len();
         let n_speeds = f.speeds.len();
         let n = f.mass.rows;
@@ -397,59 +396,33 @@ impl Emitter<'_> {
             fields.insert(1, quote!(matrix: [[f64; #n_l]; #n_l]));
             values.insert(1, quote!(matrix: [#(#rows),*]));
         }
-        // The speeds' rates from the solution x (in `force` after the solve).
-        let speed_values: Vec<TokenStream> = match &f.post {
-            None => (0..n_speeds)
-                .map(|k| {
-                    let l = usize_lit(k);
-                    quote!(force[#l])
-                })
-                .collect(),
-            Some((w, _)) => {
-                let (rw, cw) = (w.rows, w.cols);
-                let w_out = take(rw * cw);
-                let c_out = take(rw);
-                let (rw_l, cw_l) = (usize_lit(rw), usize_lit(cw));
-                let w_rows = super::syntax::matrix_rows(w_out, rw, cw);
-                fields.push(quote!(w: [[f64; #cw_l]; #rw_l]));
-                fields.push(quote!(c: [f64; #rw_l]));
-                values.push(quote!(w: [#(#w_rows),*]));
-                values.push(quote!(c: [#(#c_out),*]));
-                (0..rw)
-                    .map(|j| {
-                        let jl = usize_lit(j);
-                        let terms: Vec<TokenStream> = (0..cw)
-                            .map(|k| {
-                                let kl = usize_lit(k);
-                                quote!(w[#jl][#kl] * force[#kl])
-                            })
-                            .collect();
-                        quote!(#(#terms +)* c[#jl])
-                    })
-                    .collect()
-            }
-        };
-        let power_stmt = if work {
+        // The parts `seam::rates::write` reads besides the kept rates and the solution.
+        let mut parts = Vec::new();
+        if let Some((w, _)) = &f.post {
+            let (rw, cw) = (w.rows, w.cols);
+            let w_out = take(rw * cw);
+            let c_out = take(rw);
+            let (rw_l, cw_l) = (usize_lit(rw), usize_lit(cw));
+            let w_rows = super::syntax::matrix_rows(w_out, rw, cw);
+            fields.push(quote!(w: [[f64; #cw_l]; #rw_l]));
+            fields.push(quote!(c: [f64; #rw_l]));
+            values.push(quote!(w: [#(#w_rows),*]));
+            values.push(quote!(c: [#(#c_out),*]));
+            parts.push(quote!(w: a.w.as_flattened(), c: &a.c,));
+        }
+        if work {
             let p = &take(1)[0];
             fields.push(quote!(power: f64));
             values.push(quote!(power: #p));
-            let l = usize_lit(n_states - 1);
+            parts.push(quote!(power: a.power,));
             if f.constraint_power.is_some() {
                 // The moving constraints' power: its weights on the solution x (in `force`).
                 let weights = take(n);
                 fields.push(quote!(power_weights: [f64; #n_l]));
                 values.push(quote!(power_weights: [#(#weights),*]));
-                let terms = (0..n).map(|k| {
-                    let kl = usize_lit(k);
-                    quote!(power_weights[#kl] * force[#kl])
-                });
-                quote!(dstate[#l] = power #(+ #terms)*;)
-            } else {
-                quote!(dstate[#l] = power;)
+                parts.push(quote!(power_weights: &a.power_weights,));
             }
-        } else {
-            TokenStream::new()
-        };
+        }
         let check_out = take(conditions.len());
         fields.push(quote!(checks: [f64; #nc_l]));
         values.push(quote!(checks: [#(#check_out),*]));
@@ -484,14 +457,6 @@ impl Emitter<'_> {
         let helpers = &b.helpers;
         let fn_args = arg_list(&args, &b.used_args);
         let matrix_name = f.matrix_name;
-        let qd_idx: Vec<Literal> = (0..nq).map(usize_lit).collect();
-        let s_idx: Vec<Literal> = (0..n_speeds).map(|k| usize_lit(nq + k)).collect();
-        let unpack_post = if f.post.is_some() { quote!(let (w, c) = (a.w, a.c);) } else { TokenStream::new() };
-        let unpack_power = match (work, f.constraint_power.is_some()) {
-            (true, true) => quote!(let (power, power_weights) = (a.power, a.power_weights);),
-            (true, false) => quote!(let power = a.power;),
-            _ => TokenStream::new(),
-        };
         let rhs_doc = doc(&format!(
             "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.",
             f.label,
@@ -504,22 +469,31 @@ impl Emitter<'_> {
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
+        let seam = self.scope.seam.clone();
         let solve_with = |call: TokenStream, matrix_mut: TokenStream| {
             quote! {
-                let (qdot, #matrix_mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-                if let Err(column) = #call {
-                    return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 });
-                }
+                let (#matrix_mut matrix, mut force) = (a.matrix, a.force);
+                #call.map_err(|column| #seam::solve::singular(t, MATRIX_NAME, column))?;
             }
         };
-        let seam = self.scope.seam.clone();
         let (solve_stmts, solve_item) = match (plan.sparse(), &plan) {
             (Some(sparse), _) => {
                 (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.workshop.splices, self.scope.options.fma))
             }
             (None, Solve::Ldl(_)) => (solve_with(quote!(#seam::solve::solve_spd_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
             (None, Solve::Lu(_)) => (solve_with(quote!(#seam::solve::solve_dense_array(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
-            (None, Solve::Articulated { .. }) => (quote!(let (qdot, force) = (a.qdot, a.force);), TokenStream::new()),
+            (None, Solve::Articulated { .. }) => (quote!(let force = a.force;), TokenStream::new()),
+        };
+        let layout = {
+            let speeds = usize_lit(n_speeds);
+            let post = match &f.post {
+                Some((w, _)) => {
+                    let (rw, cw) = (usize_lit(w.rows), usize_lit(w.cols));
+                    quote!(Some((#rw, #cw)))
+                }
+                None => quote!(None),
+            };
+            quote!(#seam::rates::Layout { speeds: #speeds, post: #post, work: #work })
         };
         let matrix_fn = if plan.reads_matrix() {
             quote! {
@@ -546,6 +520,10 @@ impl Emitter<'_> {
         let items = quote! {
             #[doc = "Size of the matrix `rhs` solves numerically."]
             pub const MATRIX_SIZE: usize = #n_l;
+            #[doc = "The matrix `rhs` solves, as its singular failures name it."]
+            const MATRIX_NAME: &str = #matrix_name;
+            #[doc = "How the solution becomes the state's rates."]
+            const LAYOUT: #seam::rates::Layout = #layout;
             #[doc = "What each checked singular factor's vanishing means, in the order of `Assembly::checks`."]
             const CONDITIONS: [&str; #nc_l] = [#(#conditions),*];
             #[doc = "Everything the right-hand side evaluates before its solve."]
@@ -565,13 +543,8 @@ impl Emitter<'_> {
             fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
                 #seam::check::nonsingular(t, &CONDITIONS, &a.checks, SINGULAR_TOLERANCE)?;
                 #solve_stmts
-                #unpack_post
-                #unpack_power
-                #(dstate[#qd_idx] = qdot[#qd_idx];)*
-                #(dstate[#s_idx] = #speed_values;)*
-                #power_stmt
-                #seam::check::finite(t, dstate)
-
+                let block = #seam::rates::Block { qdot: &a.qdot, #(#parts)* ..#seam::rates::Block::EMPTY };
+                #seam::rates::write(t, LAYOUT, &block, &force, dstate)
             }
             #rhs_doc
             pub fn rhs(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES]) -> Result<(), Failure> {

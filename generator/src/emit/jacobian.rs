@@ -46,9 +46,7 @@ impl Emitter<'_> {
         let seam = self.scope.seam.clone();
         let name = f.name();
         let work = self.scope.work;
-        let n_states = f.states(work);
         let nq = f.kept.len();
-        let n_speeds = f.speeds.len();
         let n = f.mass.rows;
         let (rw, cw) = f.post.as_ref().map(|(w, _)| (w.rows, w.cols)).unwrap_or((0, 0));
         let rates = self.rate_outputs(f, shared);
@@ -101,77 +99,24 @@ impl Emitter<'_> {
             d_pw.push(pw);
         }
         let (n_l, nq_l, nv_l, rw_l, cw_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(nv), usize_lit(rw), usize_lit(cw), usize_lit(checks.len()));
-        let ns_l = usize_lit(n_speeds);
-        let last = usize_lit(n_states.saturating_sub(1));
         let stmts = &b.stmts;
         let helpers = &b.helpers;
         let fn_args = super::function::arg_list(&args, &b.used_args);
-        let matrix_name = f.matrix_name;
-        // Rates and their columns: speeds are `x` itself, or Maggi's `W x + c`.
-        let speeds = if f.post.is_some() {
-            quote! {
-                for j in 0..#rw_l {
-                    let mut s = c[j];
-                    for i in 0..#cw_l {
-                        s += w[j][i] * x[i];
-                    }
-                    dstate[#nq_l + j] = s;
-                }
-            }
-        } else {
-            quote! {
-                for j in 0..#ns_l {
-                    dstate[#nq_l + j] = x[j];
-                }
-            }
-        };
-        let speed_columns = if f.post.is_some() {
-            quote! {
-                for j in 0..#rw_l {
-                    let mut s = d_c[k][j];
-                    for i in 0..#cw_l {
-                        s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
-                    }
-                    jac[#nq_l + j][k] = s;
-                }
-            }
-        } else {
-            quote! {
-                for j in 0..#ns_l {
-                    jac[#nq_l + j][k] = dx[j];
-                }
-            }
-        };
-        // The power, and its columns: with moving constraints, `power + power_weights . x`,
-        // whose derivative also reads `dx` (so its columns are written in the loop over them).
-        let (power, power_column) = match (work, weighted) {
-            (true, false) => (
-                quote! {
-                    dstate[#last] = power;
-                    for k in 0..#nv_l {
-                        jac[#last][k] = d_power[k];
-                    }
-                },
-                TokenStream::new(),
-            ),
-            (true, true) => (
-                quote! {
-                    let mut p = power;
-                    for i in 0..#n_l {
-                        p += power_weights[i] * x[i];
-                    }
-                    dstate[#last] = p;
-                },
-                quote! {
-                    let mut p = d_power[k];
-                    for i in 0..#n_l {
-                        p += d_power_weights[k][i] * x[i] + power_weights[i] * dx[i];
-                    }
-                    jac[#last][k] = p;
-                },
-            ),
-            _ => (TokenStream::new(), TokenStream::new()),
-        };
+        // The parts `seam::rates::write_jacobian` reads besides the kept rates, the matrix and
+        // the forcing, in the values' block and in variable `k`'s.
+        let (mut parts, mut d_parts) = (Vec::new(), Vec::new());
+        if f.post.is_some() {
+            parts.push(quote!(w: w.as_flattened(), c: &c,));
+            d_parts.push(quote!(w: d_w[k].as_flattened(), c: &d_c[k],));
+        }
+        if work {
+            parts.push(quote!(power,));
+            d_parts.push(quote!(power: d_power[k],));
+        }
+        if weighted {
+            parts.push(quote!(power_weights: &power_weights,));
+            d_parts.push(quote!(power_weights: &d_power_weights[k],));
+        }
         let mut fields: Vec<(&str, TokenStream, TokenStream)> = vec![
             ("qdot", quote!([f64; #nq_l]), qd0),
             ("matrix", quote!([[f64; #n_l]; #n_l]), m0),
@@ -250,35 +195,11 @@ impl Emitter<'_> {
                 let #structure_i { #(#field_names),* } = #assemble_i(t, state, params, g_i);
                 let mut x = force;
                 #seam::check::nonsingular(t, &CONDITIONS, &checks, SINGULAR_TOLERANCE)?;
-                let pivots = match #seam::solve::lu_factor_array(&mut matrix) {
-                    Ok(p) => p,
-                    Err(column) => return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 }),
-                };
+                let pivots = #seam::solve::lu_factor_array(&mut matrix).map_err(|column| #seam::solve::singular(t, MATRIX_NAME, column))?;
                 #seam::solve::lu_solve_array(&matrix, &pivots, &mut x);
-                *jac = [[0.0; #columns]; STATES];
-                for j in 0..#nq_l {
-                    dstate[j] = qdot[j];
-                }
-                #speeds
-                #power
-                for k in 0..#nv_l {
-                    for j in 0..#nq_l {
-                        jac[j][k] = d_qdot[k][j];
-                    }
-                    let mut dx = [0.0f64; #n_l];
-                    for i in 0..#n_l {
-                        let mut s = d_force[k][i];
-                        for j in 0..#n_l {
-                            s -= d_matrix[k][i][j] * x[j];
-                        }
-                        dx[i] = s;
-                    }
-                    #seam::solve::lu_solve_array(&matrix, &pivots, &mut dx);
-                    #speed_columns
-                    #power_column
-                }
-                #seam::check::finite(t, dstate)?;
-                #seam::check::finite_after(t, STATES, jac.as_flattened())
+                let block = #seam::rates::Block { qdot: &qdot, #(#parts)* ..#seam::rates::Block::EMPTY };
+                let derivative = |k: usize| #seam::rates::Block { qdot: &d_qdot[k], matrix: d_matrix[k].as_flattened(), force: &d_force[k], #(#d_parts)* ..#seam::rates::Block::EMPTY };
+                #seam::rates::write_jacobian(t, LAYOUT, &block, &x, (&matrix, &pivots), (#nv_l, derivative), &mut [0.0; #n_l], dstate, (jac.as_flattened_mut(), #columns))
             }
         })
     }

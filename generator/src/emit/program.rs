@@ -67,6 +67,11 @@ impl FormShape {
         };
         &self.conditions[..self.conditions.len() - pivots]
     }
+
+    /// How the solution becomes the state's rates, for `seam::rates`.
+    pub fn layout(&self) -> seam::rates::Layout {
+        seam::rates::Layout { speeds: self.speeds, post: self.post, work: self.work }
+    }
 }
 
 /// Every function of a module as tapes, with the shapes around them.

@@ -6,9 +6,9 @@ use super::kernel::{Backend, Interpreter, Kernel};
 use super::{FormShape, Program};
 use crate::emit::tape::Tape;
 use crate::emit::{LdlPlan, Solve};
+use seam::rates::Block;
 use seam::solve::Rows;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
-use std::borrow::Cow;
 use std::sync::Arc;
 
 /// The tolerances of emitted modules (`generator::emit::module`), read from one place.
@@ -77,6 +77,26 @@ thread_local! {
 }
 
 /// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
+/// One block of a Jacobian tape's outputs (the values, or one variable's derivatives) as the
+/// parts `seam::rates` reads: kept rates, matrix, forcing, `W`, `c`, power, its weights.
+fn block_parts<'o>(s: &FormShape, b: &'o [f64]) -> Block<'o> {
+    let (nq, n) = (s.kept.len(), s.matrix_size);
+    let (rw, cw) = s.post.unwrap_or((0, 0));
+    let (m_at, f_at) = (nq, nq + n * n);
+    let (w_at, c_at) = (f_at + n, f_at + n + rw * cw);
+    let p_at = c_at + rw;
+    let weights = if s.power_weights { n } else { 0 };
+    Block {
+        qdot: &b[..nq],
+        matrix: &b[m_at..f_at],
+        force: &b[f_at..f_at + n],
+        w: &b[w_at..c_at],
+        c: &b[c_at..p_at],
+        power: if s.work { b[p_at] } else { 0.0 },
+        power_weights: &b[p_at + usize::from(s.work)..p_at + usize::from(s.work) + weights],
+    }
+}
+
 fn run<R>(tape: &dyn Kernel, t: f64, params: &[f64], a: &[f64], b: &[f64], then: impl FnOnce(&[f64]) -> R) -> R {
     INPUTS.with(|inputs| {
         OUTPUTS.with(|outputs| {
@@ -359,29 +379,10 @@ impl EvaluatedForm {
                     // The body's forcing slots hold the rates already.
                     Solve::Articulated { .. } => Ok(()),
                 };
-                if let Err(column) = solved {
-                    return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
-                }
-                dstate[..nq].copy_from_slice(qdot);
-                match post {
-                    None => dstate[nq..nq + s.speeds].copy_from_slice(&force[..s.speeds]),
-                    Some((w, c)) => {
-                        let (rw, cw) = s.post.expect("post");
-                        for j in 0..rw {
-                            // `w[j][0] * force[0] + ... + c[j]`, left to right as the module writes it.
-                            dstate[nq + j] = match cw {
-                                0 => c[j],
-                                _ => (1..cw).fold(w[j * cw] * force[0], |acc, k| acc + w[j * cw + k] * force[k]) + c[j],
-                            };
-                        }
-                    }
-                }
-                if let Some(p) = power {
-                    // With moving constraints, `power + power_weights . x`, left to right.
-                    let last = dstate.len() - 1;
-                    dstate[last] = power_weights.iter().zip(force.iter()).fold(p, |acc, (w, x)| acc + w * x);
-                }
-                seam::check::finite(t, dstate)
+                solved.map_err(|column| seam::solve::singular(t, s.matrix_name.clone(), column))?;
+                let (w, c) = post.unwrap_or_default();
+                let block = Block { qdot, w, c, power: power.unwrap_or(0.0), power_weights, ..Block::EMPTY };
+                seam::rates::write(t, s.layout(), &block, force, dstate)
             })
         })
     }
@@ -410,7 +411,7 @@ impl EvaluatedForm {
         let s = &self.shape;
         let (nq, n) = (s.kept.len(), s.matrix_size);
         let (rw, cw) = s.post.unwrap_or((0, 0));
-        // One block: kept rates, matrix, forcing, W, c, power, the power's weights.
+        // One block (`block_parts`): kept rates, matrix, forcing, W, c, power, its weights.
         let weights = if s.power_weights { n } else { 0 };
         let block = nq + n * n + n + rw * cw + rw + usize::from(s.work) + weights;
         run(tape, t, params, g_i, state, |o| {
@@ -419,85 +420,31 @@ impl EvaluatedForm {
             let conditions = s.formulation_conditions();
             let checks = &o[block..block + conditions.len()];
             let derivative = |k: usize| at(block + conditions.len() + k * block);
-            // The parts of one block.
-            let (m_at, f_at, w_at, c_at, p_at) = (nq, nq + n * n, nq + n * n + n, nq + n * n + n + rw * cw, nq + n * n + n + rw * cw + rw);
             seam::check::nonsingular(t, conditions, checks, SINGULAR_TOLERANCE)?;
             SOLVE.with(|solve| {
                 COLUMN.with(|column| {
                     let (matrix, x, pivots) = &mut *solve.borrow_mut();
                     let dx = &mut *column.borrow_mut();
+                    let values = block_parts(s, value);
                     matrix.clear();
-                    matrix.extend_from_slice(&value[m_at..f_at]);
+                    matrix.extend_from_slice(values.matrix);
                     x.clear();
-                    x.extend_from_slice(&value[f_at..f_at + n]);
+                    x.extend_from_slice(values.force);
                     pivots.resize(n, 0);
                     dx.resize(n, 0.0);
-                    if let Err(column) = seam::solve::lu_factor(&mut Rows::new(n, matrix), pivots) {
-                        return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
-                    }
+                    seam::solve::lu_factor(&mut Rows::new(n, matrix), pivots).map_err(|column| seam::solve::singular(t, s.matrix_name.clone(), column))?;
                     seam::solve::lu_solve(&Rows::new(n, matrix), pivots, x);
-                    jac.fill(0.0);
-                    dstate[..nq].copy_from_slice(&value[..nq]);
-                    let (w, c) = (&value[w_at..c_at], &value[c_at..p_at]);
-                    if s.post.is_some() {
-                        for j in 0..rw {
-                            let mut sum = c[j];
-                            for i in 0..cw {
-                                sum += w[j * cw + i] * x[i];
-                            }
-                            dstate[nq + j] = sum;
-                        }
-                    } else {
-                        dstate[nq..nq + s.speeds].copy_from_slice(&x[..s.speeds]);
-                    }
-                    let last = dstate.len() - 1;
-                    let pw_at = p_at + 1;
-                    if s.work {
-                        let w = &value[pw_at..pw_at + weights];
-                        dstate[last] = w.iter().zip(x.iter()).fold(value[p_at], |acc, (w, x)| acc + w * x);
-                        for k in 0..variables {
-                            jac[last * columns + k] = derivative(k)[p_at];
-                        }
-                    }
-                    for k in 0..variables {
-                        let d = derivative(k);
-                        for j in 0..nq {
-                            jac[j * columns + k] = d[j];
-                        }
-                        for i in 0..n {
-                            let mut sum = d[f_at + i];
-                            for j in 0..n {
-                                sum -= d[m_at + i * n + j] * x[j];
-                            }
-                            dx[i] = sum;
-                        }
-                        seam::solve::lu_solve(&Rows::new(n, matrix), pivots, dx);
-                        if s.post.is_some() {
-                            let (dw, dc) = (&d[w_at..c_at], &d[c_at..p_at]);
-                            for j in 0..rw {
-                                let mut sum = dc[j];
-                                for i in 0..cw {
-                                    sum += dw[j * cw + i] * x[i] + w[j * cw + i] * dx[i];
-                                }
-                                jac[(nq + j) * columns + k] = sum;
-                            }
-                        } else {
-                            for j in 0..s.speeds {
-                                jac[(nq + j) * columns + k] = dx[j];
-                            }
-                        }
-                        if s.power_weights {
-                            // `d power + d weights . x + weights . dx`, as the module sums it.
-                            let (w, dw) = (&value[pw_at..pw_at + n], &d[pw_at..pw_at + n]);
-                            let mut sum = d[p_at];
-                            for i in 0..n {
-                                sum += dw[i] * x[i] + w[i] * dx[i];
-                            }
-                            jac[last * columns + k] = sum;
-                        }
-                    }
-                    seam::check::finite(t, dstate)?;
-                    seam::check::finite_after(t, dstate.len(), jac)
+                    seam::rates::write_jacobian(
+                        t,
+                        s.layout(),
+                        &values,
+                        x,
+                        (&Rows::new(n, matrix), pivots),
+                        (variables, |k| block_parts(s, derivative(k))),
+                        dx,
+                        dstate,
+                        (jac, columns),
+                    )
                 })
             })
         })

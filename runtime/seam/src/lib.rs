@@ -10,6 +10,8 @@
 //! - [`Event`]: a named zero crossing a run locates, and what happens there.
 //! - [`Failure`]: the one error every function returns.
 //! - [`output_times`]: the output grid of a run, and why some settings are not one.
+//! - [`check`], [`solve`] and [`rates`]: what every model's right-hand side does after its
+//!   assembly (the checks, the dense solves, the state's rates from the solution), written once.
 //!
 //! The crate has no dependencies, so that a crate holding one generated module compiles it and
 //! this crate, nothing more.
@@ -23,6 +25,7 @@ mod grid;
 mod kind;
 mod model;
 pub mod check;
+pub mod rates;
 pub mod solve;
 
 pub use compiled::{InitialFn, JacobianFn, MarginFn, MatrixFn, PointFn, RhsFn, StabilizedFn, StaticFormulation, StaticModel, VelocitiesFn};

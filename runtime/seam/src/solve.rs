@@ -25,6 +25,9 @@
 //! assert_eq!(seam::solve::solve_dense_array(&mut singular, &mut [1.0, 1.0]), Err(1));
 //! ```
 
+use crate::Failure;
+use std::borrow::Cow;
+
 /// Relative size below which a pivot counts as zero.
 pub const PIVOT_TOLERANCE: f64 = 1e-13;
 
@@ -260,6 +263,19 @@ pub fn lu_factor_array<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; 
 #[inline]
 pub fn lu_solve_array<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
     lu_solve(a, pivots, b)
+}
+
+/// The failure of a numerical solve of the matrix named `condition`: [`Failure::Singular`] at
+/// time `t`, its value the pivot's column.
+///
+/// ```
+/// let failed = seam::solve::solve_dense_array(&mut [[1.0, 2.0], [2.0, 4.0]], &mut [1.0, 1.0]);
+/// let err = failed.map_err(|column| seam::solve::singular(0.5, "mass matrix", column)).unwrap_err();
+/// assert_eq!(err.to_string(), "singular configuration at t = 0.5: mass matrix (value 1e0)");
+/// ```
+#[cold]
+pub fn singular(t: f64, condition: impl Into<Cow<'static, str>>, column: usize) -> Failure {
+    Failure::Singular { t, condition: condition.into(), value: column as f64 }
 }
 
 /// Baumgarte's stabilization of the constraints' rows of a forcing: each constraint at
