@@ -48,6 +48,26 @@ fn the_example_outside_the_workspace_builds_tests_runs_and_uses_no_committed_mod
     }
 }
 
+/// The crate outside resolves every package to a version the workspace's lock holds, so that
+/// its nested build shares the workspace's artifacts: a newer `textwrap` in its lock (0.16.4,
+/// through miette) once pulled in twenty ICU crates and built the generator again, two minutes
+/// of the test command.
+#[test]
+fn the_crate_outside_locks_the_workspace_s_versions() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // (name, version) of every package of a Cargo.lock.
+    let packages = |path: &str| -> std::collections::BTreeSet<(String, String)> {
+        let text = std::fs::read_to_string(root.join(path)).unwrap();
+        let value = |line: &str, key: &str| line.strip_prefix(key).map(|v| v.trim_matches('"').to_string());
+        let lines: Vec<&str> = text.lines().collect();
+        lines.windows(2).filter_map(|w| Some((value(w[0], "name = ")?, value(w[1], "version = ")?))).collect()
+    };
+    let workspace = packages("Cargo.lock");
+    let outside = packages("examples/outside/Cargo.lock");
+    let foreign: Vec<_> = outside.iter().filter(|(name, _)| name != "outside").filter(|p| !workspace.contains(*p)).collect();
+    assert!(outside.len() > 50 && foreign.is_empty(), "versions the workspace does not lock (`cargo update --precise` them): {foreign:?}");
+}
+
 /// The JIT depends on the tapes and cranelift only: not on the generator (the symbolic core,
 /// syn, miette, the URDF reader), whose tapes it compiles. `cargo tree` of the package, normal
 /// edges, counts the crates it builds.
