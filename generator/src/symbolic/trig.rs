@@ -21,6 +21,7 @@ use super::expand::expand_rec;
 use super::expr::{Expr, Func, Node};
 use super::limits::{Budget, Limits, StopReason};
 use super::number::{Rat, rat_from_i64};
+use rustc_hash::FxHashMap;
 
 impl Expr {
     /// The trigonometric normal form (see the module docs), under `limits`.
@@ -243,6 +244,14 @@ fn contract(e: Expr) -> Expr {
         })
         .collect();
     'outer: loop {
+        // Each term's monomial once, and where each one is: the partner search below looks a
+        // target up instead of building every term's monomial again for every pair of every
+        // term (that was nine tenths of loading the bicycle, whose contact it contracts).
+        let monos: Vec<Expr> = terms.iter().map(|(fs, _)| Expr::make_mul(Rat::one(), fs.clone())).collect();
+        let mut at: FxHashMap<Expr, Vec<usize>> = FxHashMap::default();
+        for (j, m) in monos.iter().enumerate() {
+            at.entry(*m).or_default().push(j);
+        }
         for i in 0..terms.len() {
             let ti = trig_factors(&terms[i].0);
             for (x, fx, ax) in &ti {
@@ -260,8 +269,8 @@ fn contract(e: Expr) -> Expr {
                     target.push((want_x, Rat::one()));
                     target.push((want_y, Rat::one()));
                     let target_mono = Expr::make_mul(Rat::one(), target);
-                    for j in 0..terms.len() {
-                        if j == i || Expr::make_mul(Rat::one(), terms[j].0.clone()) != target_mono {
+                    for &j in at.get(&target_mono).map_or(&[][..], Vec::as_slice) {
+                        if j == i {
                             continue;
                         }
                         let (ci, cj) = (terms[i].1.clone(), terms[j].1.clone());
