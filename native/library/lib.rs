@@ -92,6 +92,10 @@ pub unsafe extern "C" fn multibody_call(
             (f.kind, f.t, f.value) = (fault::SINGULAR, *t, *value);
             condition
         }
+        seam::Failure::SingularMatrix { t, matrix, column } => {
+            (f.kind, f.t, f.index) = (fault::SINGULAR_MATRIX, *t, *column);
+            matrix
+        }
         seam::Failure::NonFinite { t, index } => {
             (f.kind, f.t, f.index) = (fault::NON_FINITE, *t, *index);
             ""

@@ -42,6 +42,7 @@ pub mod fault {
     pub const CONSTRAINT_VIOLATED: u32 = 3;
     pub const DIMENSION: u32 = 4;
     pub const MISSING: u32 = 5;
+    pub const SINGULAR_MATRIX: u32 = 6;
 }
 
 /// The function a call asks for, and the slices it passes: formulation functions read

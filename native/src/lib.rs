@@ -296,6 +296,7 @@ fn decode(f: &abi::Fault) -> Failure {
     };
     match f.kind {
         abi::fault::SINGULAR => Failure::Singular { t: f.t, condition: Cow::Owned(text), value: f.value },
+        abi::fault::SINGULAR_MATRIX => Failure::SingularMatrix { t: f.t, matrix: Cow::Owned(text), column: f.index },
         abi::fault::NON_FINITE => Failure::NonFinite { t: f.t, index: f.index },
         abi::fault::CONSTRAINT_VIOLATED => Failure::ConstraintViolated { constraint: Cow::Owned(text), residual: f.value, tolerance: f.bound },
         abi::fault::DIMENSION => Failure::Dimension { argument: intern(&text), expected: f.expected, got: f.got },

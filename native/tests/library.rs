@@ -91,6 +91,30 @@ fn failures_cross_with_their_text() {
         assert!(matches!(a, Err(seam::Failure::ConstraintViolated { .. })), "{a:?}");
         assert_eq!(a, b);
     }
+    // A matrix the numerical solve finds singular (every mass and inertia zero): the matrix's
+    // name and the pivot's column cross.
+    let (q0, qd0) = evaluated.initial.clone().unwrap();
+    let massless: Vec<f64> = evaluated
+        .parameter_names
+        .iter()
+        .zip(&params)
+        .map(|(n, v)| if n.starts_with('m') || n.starts_with('I') || n.starts_with('J') { 0.0 } else { *v })
+        .collect();
+    let mut solved = 0;
+    for (fe, fc) in evaluated.formulations.iter().zip(&compiled.formulations) {
+        let (mut y, mut g) = (vec![0.0; fe.states()], vec![0.0; evaluated.ignorable.len()]);
+        fe.initial_state(0.0, &q0, &qd0, &params, &mut y, &mut g).unwrap();
+        let mut d = vec![0.0; y.len()];
+        let a = fe.rhs(0.0, &y, &massless, &g, &mut d);
+        let b = fc.rhs(0.0, &y, &massless, &g, &mut d);
+        assert_eq!(a, b, "{}", fe.name());
+        if let Err(seam::Failure::SingularMatrix { matrix, .. }) = &a {
+            assert!(!matrix.is_empty(), "{}", fe.name());
+            assert!(a.as_ref().unwrap_err().to_string().contains("has no usable pivot in column"), "{a:?}");
+            solved += 1;
+        }
+    }
+    assert!(solved > 0, "no formulation's solve refused the massless disk");
 }
 
 /// The second build of the same module loads the cached library without building; another

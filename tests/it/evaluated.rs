@@ -214,8 +214,8 @@ fn a_singular_matrix_is_reported_at_the_first_pivot_of_the_sparse_plan() {
             let (state, g) = (vec![0.1; f.states()], vec![0.0; m.ignorable.len()]);
             let mut ds = vec![0.0; f.states()];
             match f.rhs(0.5, &state, &params, &g, &mut ds) {
-                Err(Failure::Singular { condition, value, .. }) => {
-                    assert_eq!((condition.as_ref(), value), (eqs.matrix_name, plan.order()[0] as f64), "{module} {kind}");
+                Err(Failure::SingularMatrix { matrix, column, .. }) => {
+                    assert_eq!((matrix.as_ref(), column), (eqs.matrix_name, plan.order()[0]), "{module} {kind}");
                 }
                 other => panic!("{module} {kind}: expected a singular matrix, got {other:?}"),
             }

@@ -9,9 +9,12 @@ use std::fmt;
 /// `Cow`s; nothing is allocated unless a function fails.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Failure {
-    /// The equations are singular at time `t`: `condition` vanishes (its value, or the pivot
-    /// column for the mass matrix).
+    /// The equations are singular at time `t`: `condition`, a factor of a symbolically solved
+    /// matrix or a pivot of the articulated-body recursion, vanishes (`value` is its value).
     Singular { t: f64, condition: Cow<'static, str>, value: f64 },
+    /// A numerical solve of `matrix` found no usable pivot in `column` (counted from 0) at time
+    /// `t`: the matrix is singular there (or, for `L D L^T`, not positive definite).
+    SingularMatrix { t: f64, matrix: Cow<'static, str>, column: usize },
     /// Output `index` is not a finite number at time `t`.
     NonFinite { t: f64, index: usize },
     /// A state violates `constraint`: its residual exceeds the tolerance.
@@ -27,6 +30,9 @@ impl fmt::Display for Failure {
         match self {
             Failure::Singular { t, condition, value } => {
                 write!(f, "singular configuration at t = {t}: {condition} (value {value:e})")
+            }
+            Failure::SingularMatrix { t, matrix, column } => {
+                write!(f, "singular configuration at t = {t}: {matrix} has no usable pivot in column {column}")
             }
             Failure::NonFinite { t, index } => write!(f, "non-finite value in output {index} at t = {t}"),
             Failure::ConstraintViolated { constraint, residual, tolerance } => {

@@ -265,17 +265,17 @@ pub fn lu_solve_array<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b:
     lu_solve(a, pivots, b)
 }
 
-/// The failure of a numerical solve of the matrix named `condition`: [`Failure::Singular`] at
-/// time `t`, its value the pivot's column.
+/// The failure of a numerical solve of the matrix named `matrix` at time `t`, which found no
+/// usable pivot in `column`: [`Failure::SingularMatrix`].
 ///
 /// ```
 /// let failed = seam::solve::solve_dense_array(&mut [[1.0, 2.0], [2.0, 4.0]], &mut [1.0, 1.0]);
 /// let err = failed.map_err(|column| seam::solve::singular(0.5, "mass matrix", column)).unwrap_err();
-/// assert_eq!(err.to_string(), "singular configuration at t = 0.5: mass matrix (value 1e0)");
+/// assert_eq!(err.to_string(), "singular configuration at t = 0.5: mass matrix has no usable pivot in column 1");
 /// ```
 #[cold]
-pub fn singular(t: f64, condition: impl Into<Cow<'static, str>>, column: usize) -> Failure {
-    Failure::Singular { t, condition: condition.into(), value: column as f64 }
+pub fn singular(t: f64, matrix: impl Into<Cow<'static, str>>, column: usize) -> Failure {
+    Failure::SingularMatrix { t, matrix: matrix.into(), column }
 }
 
 /// Baumgarte's stabilization of the constraints' rows of a forcing: each constraint at
