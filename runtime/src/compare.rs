@@ -63,6 +63,7 @@ pub struct Record {
     pub energy_balance: String,
     #[serde(deserialize_with = "null_as_nan")]
     pub energy_error_norm: f64,
+    /// Relative to the initial energy; NaN where that is zero (the table shows `-`).
     #[serde(deserialize_with = "null_as_nan")]
     pub energy_error_rel: f64,
     #[serde(deserialize_with = "null_as_nan")]
@@ -212,7 +213,8 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
         energy_column: model.energy_balance.column().to_string(),
         energy_balance: model.energy_balance.describe().to_string(),
         energy_error_norm: energy,
-        energy_error_rel: energy / invariants.energy0.abs(),
+        // Undefined (shown `-`) for a motion whose energy is zero, such as a robot at rest.
+        energy_error_rel: if invariants.energy0 != 0.0 { energy / invariants.energy0.abs() } else { f64::NAN },
         constraint_error_norm: norm(&invariants.velocity_constraint),
         position_constraint_error_norm: norm(&invariants.position_constraint),
         momentum_error_norm: momentum,
@@ -282,8 +284,18 @@ pub fn table_of(records: &[Record]) -> String {
         let fmt = |x: f64| if x.is_nan() { "-".to_string() } else { format!("{x:.2e}") };
         let momentum: String = r.momenta.iter().map(|m| format!(" {} | {} |", fmt(m.norm), fmt(m.rel))).collect();
         out += &format!(
-            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} |{} {} | {} | {:.1e} |\n",
-            r.method, r.states, r.equations, r.seconds, r.energy_error_norm, r.energy_error_rel, constraint, momentum, r.steps, r.rhs_calls, r.max_condition
+            "| {} | {} | {} | {:.2e} | {:.2e} | {} | {} |{} {} | {} | {:.1e} |\n",
+            r.method,
+            r.states,
+            r.equations,
+            r.seconds,
+            r.energy_error_norm,
+            fmt(r.energy_error_rel),
+            constraint,
+            momentum,
+            r.steps,
+            r.rhs_calls,
+            r.max_condition
         );
     }
     out
