@@ -279,12 +279,16 @@ pub fn write_work_precision(points: &[runtime::sweep::Point], path: &Path) -> Re
                 continue;
             }
             let style = color.stroke_width(if ii == 0 { 2 } else { 1 });
-            chart
-                .draw_series(LineSeries::new(curve.clone(), style))
-                .map_err(|e| err(path, e))?
-                .label(format!("{method} {integrator}"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
-            match ii % 3 {
+            // The legend shows each series as drawn: its line and its integrator's marker.
+            let marker = ii % 3;
+            let series = chart.draw_series(LineSeries::new(curve.clone(), style)).map_err(|e| err(path, e))?.label(format!("{method} {integrator}"));
+            let line = move |(x, y)| EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (16, 0)], style);
+            match marker {
+                0 => series.legend(move |c| line(c) + Circle::new((8, 0), 3, color.filled())),
+                1 => series.legend(move |c| line(c) + TriangleMarker::new((8, 0), 4, color.filled())),
+                _ => series.legend(move |c| line(c) + Cross::new((8, 0), 4, color)),
+            };
+            match marker {
                 0 => chart.draw_series(curve.iter().map(|&(x, y)| Circle::new((x, y), 3, color.filled()))),
                 1 => chart.draw_series(curve.iter().map(|&(x, y)| TriangleMarker::new((x, y), 4, color.filled()))),
                 _ => chart.draw_series(curve.iter().map(|&(x, y)| Cross::new((x, y), 4, color))),
@@ -340,6 +344,34 @@ pub fn write_eigenvalues(title: &str, swept: &str, rows: &[runtime::linearize::S
 
 #[cfg(test)]
 mod tests {
+    /// The work-precision legend draws each integrator's marker beside its series' line: a
+    /// circle, a triangle and a cross for three integrators.
+    #[test]
+    fn the_work_precision_legend_shows_the_markers() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("wp.svg");
+        let point = |integrator: &str, seconds: f64, error: f64| runtime::sweep::Point {
+            scene: "s".into(),
+            method: "kane".into(),
+            integrator: integrator.into(),
+            setting: 1e-6,
+            seconds,
+            rhs_calls: 100,
+            steps: 10,
+            error,
+            energy_error_norm: 0.0,
+            momentum_error_norm: 0.0,
+            constraint_error_norm: 0.0,
+            failure: None,
+        };
+        let points: Vec<_> = ["DOP853", "DOPRI5", "RK4"].iter().flat_map(|i| [point(i, 1e-4, 1e-8), point(i, 2e-4, 1e-10)]).collect();
+        super::write_work_precision(&points, &path).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        // Two points per series plus one in the legend: 3 circles; triangles are polygons.
+        assert_eq!(svg.matches("<circle").count(), 3, "{svg}");
+        assert_eq!(svg.matches("<polygon").count(), 3, "{svg}");
+    }
+
     #[test]
     fn ticks_read_as_numbers() {
         let t = super::tick;
