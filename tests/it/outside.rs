@@ -1,59 +1,83 @@
-//! The example crate outside the workspace (`examples/outside`, its own Cargo project that
-//! depends on the generator and the runtime by path): it builds, its tests pass, it prints its
-//! model's comparison table, and it compiles none of the project's committed modules, and
-//! neither clap nor mimalloc (the generator binary's).
+//! The crates of a user's own beside the workspace (`examples/outside` and
+//! `examples/downstream`, each its own Cargo project that depends on the generator in build.rs
+//! and the runtime by path): they build, their tests pass, they print their model's comparison
+//! table, and they compile none of the project's committed modules, and neither clap nor
+//! mimalloc (the generator binary's).
 //!
 //! The nested cargo commands share the workspace's target directory (cargo releases its lock
-//! before the tests run), so the generator, the runtime and their dependencies, already built
-//! for the workspace's tests, are not built again.
+//! before the tests run), and the two crates lock the same versions with the same features: the
+//! generator for their build scripts is built once for both.
 
 use std::path::Path;
 use std::process::Command;
 
-fn cargo(args: &[&str]) -> std::process::Output {
+/// `cargo ARGS` on the crate `examples/<name>`.
+fn cargo(name: &str, args: &[&str]) -> std::process::Output {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
         .args(args)
         .arg("--manifest-path")
-        .arg(root.join("examples/outside/Cargo.toml"))
+        .arg(root.join(format!("examples/{name}/Cargo.toml")))
         .env("CARGO_TARGET_DIR", root.join("target"))
         .output()
         .expect("cargo runs")
 }
 
-#[test]
-fn the_example_outside_the_workspace_builds_tests_runs_and_uses_no_committed_module() {
-    let tree = cargo(&["tree", "--edges", "normal,build", "--prefix", "none"]);
-    assert!(tree.status.success(), "{}", String::from_utf8_lossy(&tree.stderr));
+/// The crate `name` builds with the generator in its build script and nothing of the project's
+/// committed modules or the generator binary; its tests (each of `tests` passing) and its
+/// comparison table (each of `rows` in it).
+fn builds_tests_and_runs(name: &str, tests: &[&str], rows: &[&str]) {
+    let tree = cargo(name, &["tree", "--edges", "normal,build", "--prefix", "none"]);
+    assert!(tree.status.success(), "{name}: {}", String::from_utf8_lossy(&tree.stderr));
     let tree = String::from_utf8_lossy(&tree.stdout);
     assert!(tree.lines().any(|l| l.starts_with("runtime v")) && tree.lines().any(|l| l.starts_with("generator v")), "{tree}");
     assert!(tree.lines().any(|l| l.starts_with("seam v")), "{tree}");
-    assert!(!tree.lines().any(|l| l.starts_with("generated v")), "the committed modules are not a dependency:\n{tree}");
+    assert!(!tree.lines().any(|l| l.starts_with("generated v")), "{name}: the committed modules are not a dependency:\n{tree}");
     // A build script compiles the library only: the generator binary's command line and
     // allocator stay with the binary.
     for binary_only in ["clap v", "mimalloc v"] {
-        assert!(!tree.lines().any(|l| l.starts_with(binary_only)), "a build.rs user compiles {binary_only}:\n{tree}");
+        assert!(!tree.lines().any(|l| l.starts_with(binary_only)), "{name}: a build.rs user compiles {binary_only}:\n{tree}");
     }
 
-    let test = cargo(&["test", "--release"]);
+    let test = cargo(name, &["test", "--release"]);
     let log = String::from_utf8_lossy(&test.stdout);
-    assert!(test.status.success(), "{log}\n{}", String::from_utf8_lossy(&test.stderr));
-    assert!(log.contains("the_damper_s_work_balances_the_energy ... ok") && log.contains("the_typed_functions_and_the_seam_agree ... ok"), "{log}");
+    assert!(test.status.success(), "{name}: {log}\n{}", String::from_utf8_lossy(&test.stderr));
+    for t in tests {
+        assert!(log.contains(&format!("{t} ... ok")), "{name}: {t} in\n{log}");
+    }
 
-    let run = cargo(&["run", "--release", "-q"]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = cargo(name, &["run", "--release", "-q"]);
+    assert!(run.status.success(), "{name}: {}", String::from_utf8_lossy(&run.stderr));
     let table = String::from_utf8_lossy(&run.stdout);
-    for row in ["| lagrange | 5 | 2 |", "| kane | 5 | 2 |", "| reduced_volterra | 5 | 2 |"] {
-        assert!(table.contains(row), "{row} in\n{table}");
+    for row in rows {
+        assert!(table.contains(row), "{name}: {row} in\n{table}");
     }
 }
 
-/// The crate outside resolves every package to a version the workspace's lock holds, so that
-/// its nested build shares the workspace's artifacts: a newer `textwrap` in its lock (0.16.4,
+#[test]
+fn the_crates_of_a_user_s_own_build_test_run_and_use_no_committed_module() {
+    builds_tests_and_runs(
+        "outside",
+        &["the_damper_s_work_balances_the_energy", "the_typed_functions_and_the_seam_agree"],
+        &["| lagrange | 5 | 2 |", "| kane | 5 | 2 |", "| reduced_volterra | 5 | 2 |"],
+    );
+    builds_tests_and_runs(
+        "downstream",
+        &[
+            "the_runtime_integrates_the_crate_s_own_model_and_its_invariants_hold",
+            "the_four_formulations_agree_on_the_crane",
+            "a_wrong_slice_length_and_an_inadmissible_state_are_typed_errors",
+        ],
+        &["| lagrange |", "| reduced_volterra | 5 | 2 |"],
+    );
+}
+
+/// The crates beside the workspace resolve every package to a version the workspace's lock
+/// holds, so that their nested builds share the workspace's artifacts: a newer `textwrap` in its lock (0.16.4,
 /// through miette) once pulled in twenty ICU crates and built the generator again, two minutes
 /// of the test command.
 #[test]
-fn the_crate_outside_locks_the_workspace_s_versions() {
+fn the_crates_beside_the_workspace_lock_the_workspace_s_versions() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     // (name, version) of every package of a Cargo.lock.
     let packages = |path: &str| -> std::collections::BTreeSet<(String, String)> {
@@ -63,9 +87,11 @@ fn the_crate_outside_locks_the_workspace_s_versions() {
         lines.windows(2).filter_map(|w| Some((value(w[0], "name = ")?, value(w[1], "version = ")?))).collect()
     };
     let workspace = packages("Cargo.lock");
-    let outside = packages("examples/outside/Cargo.lock");
-    let foreign: Vec<_> = outside.iter().filter(|(name, _)| name != "outside").filter(|p| !workspace.contains(*p)).collect();
-    assert!(outside.len() > 50 && foreign.is_empty(), "versions the workspace does not lock (`cargo update --precise` them): {foreign:?}");
+    for name in ["outside", "downstream"] {
+        let own = packages(&format!("examples/{name}/Cargo.lock"));
+        let foreign: Vec<_> = own.iter().filter(|(n, _)| n != name).filter(|p| !workspace.contains(*p)).collect();
+        assert!(own.len() > 50 && foreign.is_empty(), "{name}: versions the workspace does not lock (`cargo update --precise` them): {foreign:?}");
+    }
 }
 
 /// The JIT depends on the tapes and cranelift only: not on the generator (the symbolic core,

@@ -1,4 +1,4 @@
-//! `cargo run --release -p downstream`: the comparison table of the crate's own model.
+//! `cargo run --release --manifest-path examples/downstream/Cargo.toml`: the comparison table of the crate's own model.
 
 fn main() -> std::process::ExitCode {
     match downstream::comparison(5) {
