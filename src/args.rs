@@ -245,9 +245,15 @@ impl RunArgs {
 /// The settings in one line, for every table and file header.
 pub fn describe(s: &Settings) -> String {
     match s.method {
-        Method::Rk4 { h } => format!("RK4, h {}", seam::short(h)),
-        m => format!("{m}, rtol {:e}, atol {:e}, h_max {}", s.rtol, s.atol, seam::short(s.h_max)),
+        Method::Rk4 { h } => format!("RK4, h {}", step(h)),
+        m => format!("{m}, rtol {:e}, atol {:e}, h_max {}", s.rtol, s.atol, step(s.h_max)),
     }
+}
+
+/// A step size as a person reads it: to 12 significant digits, so that one derived by a
+/// product (a tenth of a 0.1-s run, 0.010000000000000002) reads as the setting it is (0.01).
+fn step(h: f64) -> String {
+    seam::short(format!("{h:.11e}").parse().unwrap_or(h))
 }
 
 /// The requested formulations, checked against what the model has.
@@ -280,5 +286,17 @@ mod tests {
         assert_eq!(MethodArg::Dop853.adaptive(), Some(Method::Dop853));
         assert_eq!(MethodArg::Ros23.adaptive(), Some(Method::Rosenbrock23));
         assert_eq!(MethodArg::Rk4.adaptive(), None);
+    }
+
+    /// A step derived by a product reads as its setting; one with more digits keeps twelve.
+    #[test]
+    fn steps_read_as_their_settings() {
+        // A tenth of a 0.1-s run, as the paper's settings take it.
+        let tenth = Settings { h_max: 0.1 * 0.1, ..Settings::default() };
+        assert_ne!(0.1 * 0.1, 0.01);
+        assert!(describe(&tenth).ends_with("h_max 0.01"), "{}", describe(&tenth));
+        assert_eq!(step(0.4), "0.4");
+        assert_eq!(step(1.0 / 3.0), "3.33333333333e-1");
+        assert_eq!(step(1e-300), "1e-300");
     }
 }
