@@ -8,23 +8,18 @@
 //! cargo bench --bench watch
 //! ```
 
-use std::io::{BufRead, Read, Write};
+use std::io::BufRead;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 const SCENES: [&str; 3] = ["cart_pendulum", "three_body", "satellite_boom"];
 const SAVES: usize = 7;
 
-fn get(port: u16, path: &str) -> String {
-    let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
-    write!(stream, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n").unwrap();
-    let mut text = String::new();
-    stream.read_to_string(&mut text).unwrap();
-    text.split_once("\r\n\r\n").map_or(String::new(), |(_, b)| b.to_string())
-}
+#[path = "../tests/it/common/http.rs"]
+mod http;
 
 fn run_number(port: u16, token: &str) -> u64 {
-    let news: serde_json::Value = serde_json::from_str(&get(port, &format!("/status?token={token}"))).unwrap();
+    let news: serde_json::Value = serde_json::from_str(&http::get(port, &format!("/status?token={token}")).1).unwrap();
     assert!(news["error"].is_null(), "{news}");
     news["run"].as_u64().unwrap()
 }

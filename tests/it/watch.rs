@@ -2,7 +2,8 @@
 //! edits the file and waits for the new run; a broken edit shows its located error and keeps
 //! the loop going; the server answers nothing without its token.
 
-use std::io::{BufRead, Read, Write};
+use crate::common::http::get;
+use std::io::BufRead;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -37,18 +38,6 @@ fn watch(dir: &Path, args: &[&str]) -> (Watching, u16, String) {
     let (host, token) = address.split_once("/?token=").unwrap();
     let port: u16 = host.rsplit(':').next().unwrap().parse().unwrap();
     (watching, port, token.to_string())
-}
-
-/// `GET path` on 127.0.0.1:`port`: the status code and the body.
-fn get(port: u16, path: &str) -> (u16, String) {
-    let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
-    stream.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-    write!(stream, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut text = String::new();
-    stream.read_to_string(&mut text).unwrap();
-    let status = text.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
-    let body = text.split_once("\r\n\r\n").map_or(String::new(), |(_, b)| b.to_string());
-    (status, body)
 }
 
 /// The news the page polls for, once it satisfies `until` (within two minutes).

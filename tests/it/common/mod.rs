@@ -2,6 +2,8 @@
 
 #![allow(dead_code)] // each test file uses its own subset
 
+pub mod http;
+
 use generator::formulation::Derivation;
 use generator::formulation::volterra::Volterra;
 use generator::model::{self, Model};
