@@ -76,7 +76,6 @@ thread_local! {
     static COLUMN: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
 /// One block of a Jacobian tape's outputs (the values, or one variable's derivatives) as the
 /// parts `seam::rates` reads: kept rates, matrix, forcing, `W`, `c`, power, its weights.
 fn block_parts<'o>(s: &FormShape, b: &'o [f64]) -> Block<'o> {
@@ -97,6 +96,14 @@ fn block_parts<'o>(s: &FormShape, b: &'o [f64]) -> Block<'o> {
     }
 }
 
+/// The length of one block of a Jacobian tape's outputs ([`block_parts`]).
+fn block_len(s: &FormShape) -> usize {
+    let n = s.matrix_size;
+    let (rw, cw) = s.post.unwrap_or((0, 0));
+    s.kept.len() + n * n + n + rw * cw + rw + usize::from(s.work) + if s.power_weights { n } else { 0 }
+}
+
+/// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
 fn run<R>(tape: &dyn Kernel, t: f64, params: &[f64], a: &[f64], b: &[f64], then: impl FnOnce(&[f64]) -> R) -> R {
     INPUTS.with(|inputs| {
         OUTPUTS.with(|outputs| {
@@ -409,11 +416,9 @@ impl EvaluatedForm {
         check("dstate", dstate, self.states())?;
         check("jac", jac, self.states() * columns)?;
         let s = &self.shape;
-        let (nq, n) = (s.kept.len(), s.matrix_size);
-        let (rw, cw) = s.post.unwrap_or((0, 0));
+        let n = s.matrix_size;
         // One block (`block_parts`): kept rates, matrix, forcing, W, c, power, its weights.
-        let weights = if s.power_weights { n } else { 0 };
-        let block = nq + n * n + n + rw * cw + rw + usize::from(s.work) + weights;
+        let block = block_len(s);
         run(tape, t, params, g_i, state, |o| {
             let at = |b: usize| &o[b..b + block];
             let value = at(0);

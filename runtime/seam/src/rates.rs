@@ -125,20 +125,17 @@ pub fn write_jacobian<'a, M: Square>(
     let last = dstate.len() - 1;
     jac.fill(0.0);
     dstate[..nq].copy_from_slice(a.qdot);
-    let post = |w: &[f64], c: &[f64], out: &mut dyn FnMut(usize, f64)| {
-        if let Some((rows, cols)) = layout.post {
-            for j in 0..rows {
-                let mut sum = c[j];
-                for i in 0..cols {
-                    sum += w[j * cols + i] * x[i];
-                }
-                out(j, sum);
-            }
-        }
-    };
     match layout.post {
         None => dstate[nq..nq + layout.speeds].copy_from_slice(&x[..layout.speeds]),
-        Some(_) => post(a.w, a.c, &mut |j, v| dstate[nq + j] = v),
+        Some((rows, cols)) => {
+            for j in 0..rows {
+                let mut sum = a.c[j];
+                for i in 0..cols {
+                    sum += a.w[j * cols + i] * x[i];
+                }
+                dstate[nq + j] = sum;
+            }
+        }
     }
     if layout.work {
         dstate[last] = a.power_weights.iter().zip(x).fold(a.power, |sum, (w, x)| sum + w * x);
