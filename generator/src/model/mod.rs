@@ -612,7 +612,9 @@ impl Resolver for ScopedResolver<'_, '_> {
                 _ => return Err(format!("`{name}` takes one body name, as in `{name}(satellite)`")),
             };
             return b.body_omega.get(body).map(|w| w[k]).ok_or_else(|| {
-                let known: Vec<&str> = b.body_omega.keys().map(String::as_str).collect();
+                // Sorted: a map's order would change the message from run to run.
+                let mut known: Vec<&str> = b.body_omega.keys().map(String::as_str).collect();
+                known.sort_unstable();
                 format!("`{body}` is not a body (bodies: {})", known.join(", "))
             });
         }

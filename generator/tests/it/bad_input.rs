@@ -723,3 +723,11 @@ fn errors_name_the_place_and_the_fault() {
     // On the edge (a thin rod, a flat plate) it is a body.
     from_source("models/ok.ron", &scene2().replacen("Diagonal([\"J1\", \"J2\", \"J2\"])", "Diagonal([\"J1\", \"J1\", \"2*J1\"])", 1)).unwrap();
 }
+
+#[test]
+fn an_angular_velocity_of_no_body_lists_the_bodies_in_order() {
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/satellite_boom.ron")).unwrap();
+    let e = broken(&src, "full: [\"omega_x(satellite)\"", "full: [\"omega_x(satelite)\"");
+    // The bodies sorted by name, whatever the order of the map they are kept in.
+    check(&e, ErrorKind::UnknownName, &["`satelite` is not a body (bodies: satellite, tip)"]);
+}
