@@ -88,9 +88,14 @@ pub fn evaluate_with_backend(model: &Model, options: &Options, backend: &dyn ker
 /// ```
 pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     crate::model::in_own_context(model, |model| {
-        let d = formulation::derive(model, &Request::all())?;
-        let assemblies = emit::assemblies(model, &d, &Options::from_model(model))?;
-        Ok(crate::inspect::report(model, &d, &assemblies, latex))
+        // A spent node budget is reported as the budget, as `generate` reports it: not as the
+        // stage that met its placeholder symbol.
+        crate::symbolic::expr::catch_budget(|| {
+            let d = formulation::derive(model, &Request::all())?;
+            let assemblies = emit::assemblies(model, &d, &Options::from_model(model))?;
+            Ok(crate::inspect::report(model, &d, &assemblies, latex))
+        })
+        .unwrap_or_else(|spent| Err(model.budget_error(spent)))
     })
 }
 
@@ -127,7 +132,7 @@ fn on_two_threads(model: &Model, options: &Options) -> Result<Generated, ModelEr
             .name("emit".into())
             .stack_size(EMITTER_STACK)
             .spawn_scoped(scope, move || {
-                let part = Context::new().enter(|| decide_and_emit(inbox, ignorable_back, options, sent));
+                let part = Context::new().enter(|| decide_and_emit(inbox, ignorable_back, options, sent).map(|parts| (parts, Context::current_nodes())));
                 // This thread's spent budget is reported as the derivation's would be.
                 match crate::symbolic::expr::take_spent() {
                     Some(spent) => Err(model.budget_error(spent)),
@@ -147,9 +152,12 @@ fn on_two_threads(model: &Model, options: &Options) -> Result<Generated, ModelEr
         });
         let head = emitting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         let (tail, d) = tail?;
-        let mut parts = head?;
+        let (mut parts, emitting_nodes) = head?;
         parts.push(tail?);
-        Ok(emit::module(model, options, &d, parts, derive_time, emit_start.elapsed()))
+        // Both contexts' nodes: the work a derivation did, counted (the same for the same model
+        // and options, whatever the timing: each thread's input is fixed).
+        let work = emit::Work { derive_time, emit_time: emit_start.elapsed(), nodes: Context::current_nodes() + emitting_nodes };
+        Ok(emit::module(model, options, &d, parts, work))
     })
 }
 

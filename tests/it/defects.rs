@@ -220,3 +220,35 @@ fn a_sweep_with_events_leaves_out_what_cannot_run() {
         "{points:?}"
     );
 }
+
+/// A node budget spent while `inspect` builds the assemblies (past the derivation) is reported
+/// as the budget, as `generate` reports it; it was reported as the emission meeting the
+/// budget's placeholder ("symbol `node budget spent` has no value"), at a line of the robot's
+/// model text that the URDF does not have. The budgets span the derivation's end on this tree.
+#[test]
+fn inspect_reports_a_budget_spent_past_the_derivation_as_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/urdf/tree.urdf");
+    for budget in ["35000", "40000", "45000"] {
+        let out = multibody(dir.path(), &["inspect", tree, "--base", "floating", "--max-nodes", budget]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(&format!("needs more than {budget} expression nodes, the node budget")), "{budget}: {err}");
+        assert!(!err.contains("has no value"), "{budget}: {err}");
+    }
+}
+
+/// An error found past the reading of a URDF robot names the file and the place in the robot's
+/// model, with no line: the model is RON text made from the XML, whose lines are not the URDF's.
+#[test]
+fn a_urdf_robot_s_later_errors_point_at_no_line_of_another_text() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/urdf/tree.urdf");
+    let out = multibody(dir.path(), &["generate", tree, "--seam-path", "not a path", "-o", "tree.rs"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.starts_with(&format!("error: {tree}: in emit: `not a path` is not a Rust path")), "{err}");
+    assert!(!err.contains("emit: Emit("), "no line of the model text: {err}");
+    // A RON model's is located in its file.
+    let out = multibody(dir.path(), &["generate", "cart_pendulum", "--seam-path", "not a path", "-o", "cart.rs"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.starts_with("error: models/cart_pendulum.ron:") && err.contains("is not a Rust path"), "{err}");
+}

@@ -20,7 +20,6 @@ use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
-use std::time::Duration;
 
 /// Absolute size below which a singular factor of `[Y; M'; a]` counts as zero.
 pub(crate) const SINGULAR_TOLERANCE: f64 = 1e-12;
@@ -215,7 +214,7 @@ impl<'a> Emission<'a> {
 
 /// The module of `model` from its parts (in module order, the head's first) and what its
 /// derivation `d` found; `derive_time` and `emit_time` go to the summary.
-pub(crate) fn module(model: &Model, options: &Options, d: &formulation::Derivation, parts: Vec<Part>, derive_time: Duration, emit_time: Duration) -> Generated {
+pub(crate) fn module(model: &Model, options: &Options, d: &formulation::Derivation, parts: Vec<Part>, work: super::Work) -> Generated {
     let mut cuts = d.cuts.clone();
     let mut functions = Vec::new();
     let mut forms: Vec<(String, usize, usize, String)> = Vec::new();
@@ -250,8 +249,9 @@ pub(crate) fn module(model: &Model, options: &Options, d: &formulation::Derivati
         simplifier: d.mechanics.tidy.report(),
         cuts,
         stages: d.stages.clone(),
-        derive_time,
-        emit_time,
+        derive_time: work.derive_time,
+        emit_time: work.emit_time,
+        nodes: work.nodes,
     };
     Generated { code, summary, program: options.tapes.then_some(program) }
 }

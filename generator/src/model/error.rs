@@ -88,6 +88,12 @@ impl ModelError {
         }
     }
 
+    /// An error at `place` in a model that has no text of its own to point into (a URDF robot's,
+    /// whose model is made from the XML): the file and the place are named, with no line.
+    pub fn in_place(kind: ErrorKind, file: &str, place: &str, message: String, help: String) -> ModelError {
+        ModelError { place: shorten(&files::printable(place), 2 * MAX_QUOTED_CHARS), ..ModelError::unlocated(kind, file, message, help) }
+    }
+
     /// An error with no place in a file (the file cannot be read, for instance).
     pub fn unlocated(kind: ErrorKind, file: &str, message: String, help: String) -> ModelError {
         ModelError {

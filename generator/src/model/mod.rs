@@ -314,8 +314,19 @@ impl Model {
     /// `needle` inside it (the narrowing of `place_span` in `model/error.rs`).
     pub fn error(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: String) -> ModelError {
         let span = error::place_span(&self.source, &spans::Spans::new(&self.source), place, needle);
-        ModelError::at(kind, &self.file, &self.source, span, place, message, help)
+        located(kind, &self.file, &self.source, span, place, message, help)
     }
+}
+
+/// An error in the model text `source` of `file`, at `span`: located there, unless `file` is a
+/// URDF robot's, whose model is RON text made from the XML (a line of that text is in no file
+/// the user has, and the same line of the URDF is another thing): then the file and the place
+/// are named, with no line.
+fn located(kind: ErrorKind, file: &str, source: &str, span: Option<std::ops::Range<usize>>, place: &str, message: String, help: String) -> ModelError {
+    if std::path::Path::new(file).extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+        return ModelError::in_place(kind, file, place, message, help);
+    }
+    ModelError::at(kind, file, source, span, place, message, help)
 }
 
 /// Runs `f` on a copy of `model` in a new expression context, dropped when `f` returns: the
@@ -491,7 +502,7 @@ pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
             "fix the RON syntax at this place (strings in double quotes, items separated by commas, balanced brackets)".to_string()
         };
         let at = offset_of(source, line, col);
-        ModelError::at(ErrorKind::Syntax, file, source, Some(at..(at + 1).min(source.len()).max(at)), "", format!("malformed model: {code}"), help)
+        located(ErrorKind::Syntax, file, source, Some(at..(at + 1).min(source.len()).max(at)), "", format!("malformed model: {code}"), help)
     })?;
     if def.urdf.is_some() {
         // The robot first, then this file's items: validated as one model file would be.
@@ -645,7 +656,7 @@ impl<'a> Builder<'a> {
 
     fn err(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: &str) -> ModelError {
         let span = error::place_span(self.source, self.spans(), place, needle);
-        ModelError::at(kind, self.file, self.source, span, place, message, help.to_string())
+        located(kind, self.file, self.source, span, place, message, help.to_string())
     }
 
     /// The byte span of character `col` (1-based) of the expression `src` found at `place`.
@@ -665,7 +676,7 @@ impl<'a> Builder<'a> {
     /// Parses and resolves one expression string found at `place`.
     fn expr(&self, src: &str, place: &str, scope: Scope) -> Result<Expr, ModelError> {
         let ast = parse::parse(src).map_err(|e| {
-            ModelError::at(
+            located(
                 ErrorKind::ExpressionSyntax,
                 self.file,
                 self.source,
@@ -678,7 +689,7 @@ impl<'a> Builder<'a> {
         parse::lower(&ast, &ScopedResolver { b: self, scope }).map_err(|e| {
             let kind =
                 if e.message.starts_with("unknown") || e.message.contains("is not a body") { ErrorKind::UnknownName } else { ErrorKind::ExpressionSyntax };
-            ModelError::at(
+            located(
                 kind,
                 self.file,
                 self.source,
