@@ -189,8 +189,9 @@ pub(super) fn on_tree(t: &Tree, mech: &Mechanics, kane: &Volterra) -> Option<Art
     let mut bias = vec![still; nodes];
     for k in 1..nodes {
         let (Some(joint), Some(r)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };
-        let v = prog.motion(velocity[joint.parent].in_child(joint).add(&r.relative));
-        bias[k] = prog.motion(v.cross_motion(&r.relative).add(&r.drift));
+        let vp = velocity[joint.parent];
+        let v = prog.motion(vp.in_child(joint).add(&r.relative));
+        bias[k] = prog.motion(r.transport(&vp, &v).add(&r.drift));
         velocity[k] = v;
     }
     // Backward: articulated inertias and bias forces.

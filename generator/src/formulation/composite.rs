@@ -78,6 +78,17 @@ pub(super) struct JointRates {
     pub(super) drift: Motion,
 }
 
+impl JointRates {
+    /// `V x v_rel` for the frame's velocity `v` below a parent moving with `parent` (its own
+    /// components): the velocity product of the frame's acceleration. It is `(X V_parent) x
+    /// v_rel` (a motion crossed with itself is zero), so zero below a still parent (a floating
+    /// base on the world), where `v`'s names would hide the cancelling of `v_rel x v_rel` from
+    /// the symbolic core and the emitted code would compute `u3 u2 - u3 u2`.
+    pub(super) fn transport(&self, parent: &Motion, v: &Motion) -> Motion {
+        if parent.is_zero() { Motion { w: zero3(), v: zero3() } } else { v.cross_motion(&self.relative) }
+    }
+}
+
 /// A model's frames as a tree of rigid bodies in Kane's quasi-velocities, built once and shared
 /// by the recursions ([`derive`], [`super::articulated`]).
 #[derive(Debug)]
@@ -146,7 +157,21 @@ pub(super) fn tree(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<T
                     (!col.is_zero()).then_some((c, col))
                 })
                 .collect();
-            let drift = Motion { w: relative.w.map(|e| tidy.of(chain.dt(e))), v: relative.v.map(|e| tidy.of(chain.dt(e))) };
+            let mut drift = Motion { w: relative.w.map(|e| tidy.of(chain.dt(e))), v: relative.v.map(|e| tidy.of(chain.dt(e))) };
+            // `v_rel = R^T t'` moves with the joint's turning too: `d/dt v_rel = -omega_rel x
+            // v_rel + R^T t''`. Differentiated as an expression, the turning's rate comes
+            // through the attitude's own rates: on a floating base's quaternion, a term over
+            // its norm for each entry of `R` (about 40 operations a component where the
+            // identity takes 5); the smaller form is kept.
+            if !relative.v.iter().all(|e| e.is_zero()) && !relative.w.iter().all(|e| e.is_zero()) {
+                let t_rate = by_rates.dt3(&joint.translation).map(|e| e.subs(&to_u));
+                let turned = crate::kinematics::mat_vec(&joint.rotation.transpose(), &t_rate.map(|e| chain.dt(e)));
+                let spun = crate::kinematics::cross(&relative.w, &relative.v);
+                let by_identity = [0, 1, 2].map(|i| tidy.of(turned[i] - spun[i]));
+                if crate::symbolic::expr::dag_ops(&by_identity) < crate::symbolic::expr::dag_ops(&drift.v) {
+                    drift.v = by_identity;
+                }
+            }
             Some(JointRates { relative, columns, drift })
         })
         .collect();
@@ -176,7 +201,7 @@ pub(super) fn on_tree(t: &Tree, kane: &Volterra) -> Option<Recursion> {
         let (Some(joint), Some(r)) = (joints[k].as_ref(), rates[k].as_ref()) else { continue };
         let (vp, ap) = (velocity[joint.parent], accel[joint.parent]);
         let v = prog.motion(vp.in_child(joint).add(&r.relative));
-        let a = ap.in_child(joint).add(&v.cross_motion(&r.relative)).add(&r.drift);
+        let a = ap.in_child(joint).add(&r.transport(&vp, &v)).add(&r.drift);
         velocity[k] = v;
         accel[k] = prog.motion(a);
     }
