@@ -181,7 +181,7 @@ pub(super) fn on_tree(t: &Tree, mech: &Mechanics, kane: &Volterra) -> Option<Art
     for (at, &(d, c)) in order.iter().enumerate().rev() {
         let later = order[at + 1..].iter().filter_map(|&(e, _)| coefficient(&axes[e].row, c).map(|k| k * tau[e]));
         let pivot = coefficient(&axes[d].row, c).expect("the pivot is in its row");
-        tau[d] = prog.bind((kane.u_ni[c] - Expr::sum(later)) / pivot);
+        tau[d] = prog.bind((t.applied[c] - Expr::sum(later)) / pivot);
     }
     // Forward: velocities and bias accelerations.
     let still = Motion { w: zero3(), v: zero3() };
@@ -233,8 +233,9 @@ pub(super) fn on_tree(t: &Tree, mech: &Mechanics, kane: &Volterra) -> Option<Art
         inertia[joint.parent] = inertia[joint.parent].add(&ia_passed.to_parent(joint));
         force[joint.parent] = force[joint.parent].add(&pa_passed.in_parent(joint));
     }
-    // Forward: accelerations.
+    // Forward: accelerations, from the world's (`-g`: gravity).
     let mut accel = vec![still; nodes];
+    accel[0] = t.world;
     let mut w_dot = vec![Expr::zero(); p];
     for k in 1..nodes {
         let (Some(joint), Some(_)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };

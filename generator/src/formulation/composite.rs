@@ -100,6 +100,12 @@ pub struct Tree {
     pub(super) own: Vec<Inertia>,
     /// The joints' rates, for the nodes with mass in their subtree (`None` elsewhere).
     pub(super) rates: Vec<Option<JointRates>>,
+    /// The world's acceleration, `-g` (Featherstone's way with gravity: each body's inertia
+    /// force then carries its weight, at the cost of the accelerations the recursion forms
+    /// anyway).
+    pub(super) world: Motion,
+    /// `U_K` without gravity: `W^T (Q - dV/dq)` of the other forces and potentials.
+    pub(super) applied: Vec<Expr>,
 }
 
 /// The tree of `model`'s frames in the quasi-velocities of `kane`. `None` when no body hangs
@@ -175,7 +181,16 @@ pub(super) fn tree(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<T
             Some(JointRates { relative, columns, drift })
         })
         .collect();
-    Some(Tree { joints, own, rates })
+    let world = Motion { w: zero3(), v: mech.gravity.map(|g| -g) };
+    let applied = if world.is_zero() {
+        kane.u_ni.clone()
+    } else {
+        // As `volterra::derive` forms `U_K`, without gravity's potential.
+        let forces: Vec<Expr> = (0..mech.m).map(|j| mech.q_forces[j] - mech.potential_gradient_without_gravity[j]).collect();
+        let in_u = Expr::subs_all(&forces, &to_u);
+        (0..p).map(|c| tidy.of(Expr::sum((0..mech.m).filter(|&i| !kane.w.get(i, c).is_zero()).map(|i| kane.w.get(i, c) * in_u[i])))).collect()
+    };
+    Some(Tree { joints, own, rates, world, applied })
 }
 
 /// Kane's equations of `model` by the recursion over its frames, from its Kane form `kane`
@@ -197,6 +212,7 @@ pub(super) fn on_tree(t: &Tree, kane: &Volterra) -> Option<Recursion> {
     let still = Motion { w: zero3(), v: zero3() };
     let mut velocity = vec![still; nodes];
     let mut accel = vec![still; nodes];
+    accel[0] = t.world;
     for k in 1..nodes {
         let (Some(joint), Some(r)) = (joints[k].as_ref(), rates[k].as_ref()) else { continue };
         let (vp, ap) = (velocity[joint.parent], accel[joint.parent]);
@@ -228,7 +244,7 @@ pub(super) fn on_tree(t: &Tree, kane: &Volterra) -> Option<Recursion> {
         }
     }
     // L_K = U_K - sum_k S_k^T f^c_k.
-    let mut forcing: Vec<Vec<Expr>> = kane.u_ni.iter().map(|e| vec![*e]).collect();
+    let mut forcing: Vec<Vec<Expr>> = t.applied.iter().map(|e| vec![*e]).collect();
     // M_K from the composite inertias, walking each joint's columns up to the root.
     let mut mass: Vec<Vec<Vec<Expr>>> = vec![vec![Vec::new(); p]; p];
     for a in 1..nodes {

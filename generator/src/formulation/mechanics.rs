@@ -277,6 +277,13 @@ pub struct Mechanics {
     /// `W^T h`), so Kane's form from the bodies' velocities (scenes 2 and 3) never simplifies
     /// it. Not among the [`Quantities`]: the emitting thread, which gets those, never reads it.
     pub inertial_built: Vec<Expr>,
+    /// Uniform gravity, world components (the sum of the model's gravity forces; zero for none).
+    pub gravity: [Expr; 3],
+    /// `dV/dq` without gravity's potential: the recursions over a tree take gravity as the
+    /// world's acceleration `-g` instead (Featherstone's way), where its potential's gradient
+    /// sums, for every coordinate, a term for every body beyond it (a floating humanoid's
+    /// gravity was 28 % of its Kane's operations this way).
+    pub potential_gradient_without_gravity: Vec<Expr>,
 }
 
 impl std::ops::Deref for Mechanics {
@@ -466,6 +473,9 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
 
     // Forces: potentials into V, the rest into Q by virtual power.
     let mut potential_terms = Vec::new();
+    // Gravity's terms of V, and the other potentials' (`potential_gradient_without_gravity`).
+    let mut other_potentials = Vec::new();
+    let mut gravity = [Expr::zero(); 3];
     let mut q_forces = vec![Expr::zero(); m];
     let add_power = |q: &mut Vec<Expr>, force: &[Expr; 3], vel: &[Expr; 3]| {
         for (j, v) in model.velocities.iter().enumerate() {
@@ -476,6 +486,7 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
     for f in &model.forces {
         match f {
             Force::Gravity { vector } => {
+                gravity = add3(&gravity, vector);
                 for body in &model.bodies {
                     let pos = model.frames[body.frame].point(&body.com);
                     potential_terms.push(-dot(vector, &pos) * body.mass);
@@ -491,7 +502,9 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
             }
             Force::Spring { a, b, stiffness, rest_length, .. } => {
                 let len = spring_length(model, &tidy, a, b);
-                potential_terms.push((len - *rest_length).powi(2) * *stiffness / 2);
+                let energy = (len - *rest_length).powi(2) * *stiffness / 2;
+                potential_terms.push(energy);
+                other_potentials.push(energy);
             }
             Force::Damper { a, b, damping, .. } => {
                 // Force -c L' along the line: Q_j = -c L' dL/dq_j.
@@ -506,7 +519,10 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
                     q_forces[j] += components[j];
                 }
             }
-            Force::Potential { expr, .. } => potential_terms.push(*expr),
+            Force::Potential { expr, .. } => {
+                potential_terms.push(*expr);
+                other_potentials.push(*expr);
+            }
         }
     }
     let q_forces: Vec<Expr> = q_forces.into_iter().map(|e| tidy.of(e)).collect();
@@ -515,6 +531,12 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
     // of each body's simplified term, as built.
     let potential = if is_small(m) { tidy.of(Expr::sum(potential_terms)) } else { Expr::sum(potential_terms.into_iter().map(|t| tidy.of(t))) };
     let potential_gradient: Vec<Expr> = model.coordinates.iter().map(|q| tidy.of(potential.diff(*q))).collect();
+    let potential_gradient_without_gravity: Vec<Expr> = if gravity.iter().all(|g| g.is_zero()) {
+        potential_gradient.clone()
+    } else {
+        let other = Expr::sum(other_potentials.into_iter().map(|t| tidy.of(t)));
+        model.coordinates.iter().map(|q| tidy.of(other.diff(*q))).collect()
+    };
 
     // Constraints a q' + b = 0.
     let r = model.constraints.len();
@@ -541,6 +563,8 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
         quantities: Quantities { m, r, p: m - r, bodies, kinetic, potential, mass, n, t0, q_forces, potential_gradient, a, b, holonomic, constraint_names },
         tidy,
         inertial_built,
+        gravity,
+        potential_gradient_without_gravity,
     }
 }
 
