@@ -145,6 +145,13 @@ fn on_two_threads(model: &Model, options: &Options) -> Result<Generated, ModelEr
         drop(handing);
         let derive_time = start.elapsed();
         let emit_start = Instant::now();
+        // Emission simplifies nothing, and differentiates only for the exact Jacobians: the
+        // simplifier's memo of forms and the derivatives' memo (most of the deriving thread's
+        // memory past its nodes) are freed before the last group is emitted.
+        if let Ok(d) = &derived {
+            d.mechanics.tidy.forget();
+            Context::forget_derivatives();
+        }
         let tail = derived.map(|d| {
             let names = d.equations.iter().map(|e| e.name().to_string()).collect();
             let last = d.equations.iter().filter(|e| kept.contains(&e.kind));

@@ -114,6 +114,11 @@ impl Tidy {
     pub fn report(&self) -> SimplifyReport {
         self.0.borrow().report()
     }
+    /// Frees the memo of the forms simplified so far ([`Simplifier::forget`]): for a stage that
+    /// simplifies nothing more (emission), which would hold it to its end.
+    pub fn forget(&self) {
+        self.0.borrow_mut().forget();
+    }
     /// The limits it runs under.
     pub fn limits(&self) -> FourierLimits {
         self.0.borrow().limits()

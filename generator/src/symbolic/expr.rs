@@ -291,6 +291,12 @@ impl Context {
     pub fn current_nodes() -> usize {
         with_pool(|p| p.nodes.len())
     }
+
+    /// Frees the current context's memo of derivatives (a cache: a derivative taken again is
+    /// computed again, to the same node), keeping every node.
+    pub fn forget_derivatives() {
+        with_pool(|p| p.diff_memo = FxHashMap::default());
+    }
 }
 
 /// A 64-bit mixing step (splitmix64's finalizer): stable across runs and toolchains.

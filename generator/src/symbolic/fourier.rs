@@ -291,6 +291,14 @@ impl Simplifier {
         self.report
     }
 
+    /// Frees the memo of every form computed so far (a cache: later calls compute again what
+    /// they need, to the same results), keeping the limits and what they cut.
+    pub fn forget(&mut self) {
+        let report = self.report;
+        *self = Simplifier::new(self.limits);
+        self.report = report;
+    }
+
     /// The limits it runs under.
     pub fn limits(&self) -> FourierLimits {
         self.limits
