@@ -1072,6 +1072,23 @@ impl std::iter::Sum for Expr {
 mod tests {
     use super::*;
 
+    /// Forgetting the derivatives' memo frees it and changes no answer: a derivative taken
+    /// again is the same node, and builds none.
+    #[test]
+    fn forgetting_the_derivatives_keeps_the_answers_and_builds_no_node() {
+        Context::new().enter(|| {
+            let (x, y) = (Symbol::new("dx"), Symbol::new("dy"));
+            let e = (x.expr() * y.expr()).sin() * x.expr().powi(3);
+            let d = e.diff(x);
+            assert!(with_pool(|p| !p.diff_memo.is_empty()));
+            Context::forget_derivatives();
+            assert!(with_pool(|p| p.diff_memo.is_empty()));
+            let nodes = Context::current_nodes();
+            assert_eq!(e.diff(x), d);
+            assert_eq!(Context::current_nodes(), nodes);
+        });
+    }
+
     #[test]
     fn like_terms_collect_and_cancel() {
         let x = Expr::sym("x");

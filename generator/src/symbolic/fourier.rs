@@ -746,6 +746,23 @@ mod tests {
         assert!(zero_test(r - e).is_zero());
     }
 
+    /// Forgetting the memo frees it and changes no answer: the same simplified forms after it,
+    /// the limits' report kept.
+    #[test]
+    fn forgetting_the_memo_keeps_the_answers_and_the_report() {
+        let (a, b) = (Expr::sym("fa"), Expr::sym("fb"));
+        let e = a.sin() * b.cos() + a.cos() * b.sin() + (a.sin().powi(2) + a.cos().powi(2)) * b;
+        let mut s = Simplifier::new(FourierLimits::default());
+        let first = s.simplify(e);
+        assert_eq!(first, (a + b).sin() + b);
+        assert!(!s.memo.is_empty());
+        let report = s.report();
+        s.forget();
+        assert!(s.memo.is_empty() && s.costs.is_empty());
+        assert_eq!(s.report(), report);
+        assert_eq!(s.simplify(e), first);
+    }
+
     #[test]
     fn limits_keep_expressions_as_they_are() {
         let qs: Vec<Expr> = (0..8).map(|i| Expr::sym(&format!("lq{i}"))).collect();
