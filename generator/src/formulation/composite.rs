@@ -25,7 +25,7 @@
 use super::mechanics::Mechanics;
 use super::spatial::{Force, Inertia, Motion, Program, zero3};
 use super::volterra::Volterra;
-use crate::kinematics::{Joint, TimeChain};
+use crate::kinematics::{Joint, TimeChain, cross, mat_vec};
 use crate::model::Model;
 use crate::symbolic::transfer::{Transfer, Visitor};
 use crate::symbolic::{Expr, Matrix, Symbol};
@@ -171,8 +171,8 @@ pub(super) fn tree(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<T
             // identity takes 5); the smaller form is kept.
             if !relative.v.iter().all(|e| e.is_zero()) && !relative.w.iter().all(|e| e.is_zero()) {
                 let t_rate = by_rates.dt3(&joint.translation).map(|e| e.subs(&to_u));
-                let turned = crate::kinematics::mat_vec(&joint.rotation.transpose(), &t_rate.map(|e| chain.dt(e)));
-                let spun = crate::kinematics::cross(&relative.w, &relative.v);
+                let turned = mat_vec(&joint.rotation.transpose(), &t_rate.map(|e| chain.dt(e)));
+                let spun = cross(&relative.w, &relative.v);
                 let by_identity = [0, 1, 2].map(|i| tidy.of(turned[i] - spun[i]));
                 if crate::symbolic::expr::dag_ops(&by_identity) < crate::symbolic::expr::dag_ops(&drift.v) {
                     drift.v = by_identity;
@@ -182,14 +182,8 @@ pub(super) fn tree(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<T
         })
         .collect();
     let world = Motion { w: zero3(), v: mech.gravity.map(|g| -g) };
-    let applied = if world.is_zero() {
-        kane.u_ni.clone()
-    } else {
-        // As `volterra::derive` forms `U_K`, without gravity's potential.
-        let forces: Vec<Expr> = (0..mech.m).map(|j| mech.q_forces[j] - mech.potential_gradient_without_gravity[j]).collect();
-        let in_u = Expr::subs_all(&forces, &to_u);
-        (0..p).map(|c| tidy.of(Expr::sum((0..mech.m).filter(|&i| !kane.w.get(i, c).is_zero()).map(|i| kane.w.get(i, c) * in_u[i])))).collect()
-    };
+    let applied =
+        if world.is_zero() { kane.u_ni.clone() } else { super::volterra::applied_forces(mech, &kane.w, &to_u, &mech.potential_gradient_without_gravity) };
     Some(Tree { joints, own, rates, world, applied })
 }
 

@@ -535,13 +535,10 @@ pub fn derive_for(model: &Model, classical: bool) -> Mechanics {
     // the pendulum on a cart, each link's mass its own symbol): past 8 coordinates it is the sum
     // of each body's simplified term, as built.
     let potential = if is_small(m) { tidy.of(Expr::sum(potential_terms)) } else { Expr::sum(potential_terms.into_iter().map(|t| tidy.of(t))) };
-    let potential_gradient: Vec<Expr> = model.coordinates.iter().map(|q| tidy.of(potential.diff(*q))).collect();
-    let potential_gradient_without_gravity: Vec<Expr> = if gravity.iter().all(|g| g.is_zero()) {
-        potential_gradient.clone()
-    } else {
-        let other = Expr::sum(other_potentials.into_iter().map(|t| tidy.of(t)));
-        model.coordinates.iter().map(|q| tidy.of(other.diff(*q))).collect()
-    };
+    let gradient = |v: Expr| -> Vec<Expr> { model.coordinates.iter().map(|q| tidy.of(v.diff(*q))).collect() };
+    let potential_gradient = gradient(potential);
+    let potential_gradient_without_gravity =
+        if gravity.iter().all(|g| g.is_zero()) { potential_gradient.clone() } else { gradient(Expr::sum(other_potentials.into_iter().map(|t| tidy.of(t)))) };
 
     // Constraints a q' + b = 0.
     let r = model.constraints.len();

@@ -403,10 +403,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     let drift: Vec<Expr> = qdot.iter().map(|e| tidy.of(chain.dt(*e))).collect();
     // U_NI = W^T (Q - dV/dq), the rates replaced by W u + X (Eq. 33).
     let to_u: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
-    let wt = w.transpose();
-    let project = |v: Vec<Expr>| -> Vec<Expr> { wt.mul(&Matrix::column(v)).col(0) };
-    let applied: Vec<Expr> = (0..m).map(|j| mech.q_forces[j] - mech.potential_gradient[j]).collect();
-    let u_ni: Vec<Expr> = project(Expr::subs_all(&applied, &to_u)).into_iter().map(|e| tidy.of(e)).collect();
+    let u_ni = applied_forces(mech, &w, &to_u, &mech.potential_gradient);
     // M_NI and K_NI - A_NI from the coordinates' M and h; where the quasi-velocities are not
     // plain rates (a body's angular velocity), also from the bodies' velocities in u, which
     // cancels the rate transformation body by body; the smaller is kept (both are exact).
@@ -464,6 +461,14 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         l_ni,
         route,
     })
+}
+
+/// `W^T (Q - dV/dq)` with the rates `q'` replaced by `to_u` (Eq. 33's `U_NI`), `dV/dq` given:
+/// the whole potential's, or all but gravity's where a recursion takes gravity as the world's
+/// acceleration (`composite::tree`).
+pub(super) fn applied_forces(mech: &Mechanics, w: &Matrix, to_u: &HashMap<Symbol, Expr>, potential_gradient: &[Expr]) -> Vec<Expr> {
+    let applied: Vec<Expr> = (0..mech.m).map(|j| mech.q_forces[j] - potential_gradient[j]).collect();
+    w.transpose().mul(&Matrix::column(Expr::subs_all(&applied, to_u))).col(0).into_iter().map(|e| mech.tidy.of(e)).collect()
 }
 
 /// `M_NI` and `K_NI - A_NI` from the bodies' velocities in the quasi-velocities (Kane's

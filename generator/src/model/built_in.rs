@@ -75,7 +75,7 @@ pub fn source_with(argument: &Path, robot: &super::urdf::UrdfOptions) -> Result<
     let looks_like_a_path = argument.extension().is_some() || text.contains(['/', '\\']) || argument.is_file();
     if looks_like_a_path {
         let (file, text) = super::read_source(argument)?;
-        if argument.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+        if super::is_urdf(argument) {
             let def = super::urdf::model_file(&file, &text, robot)?;
             if def.coordinates.is_empty() {
                 // Alone, a robot with nothing to move is a mistake (a drone's URDF, one link,

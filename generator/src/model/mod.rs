@@ -318,12 +318,17 @@ impl Model {
     }
 }
 
+/// True for a URDF robot's path (`.urdf`, in any case): read as XML, its model made from it.
+pub(crate) fn is_urdf(path: &std::path::Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+}
+
 /// An error in the model text `source` of `file`, at `span`: located there, unless `file` is a
 /// URDF robot's, whose model is RON text made from the XML (a line of that text is in no file
 /// the user has, and the same line of the URDF is another thing): then the file and the place
 /// are named, with no line.
 fn located(kind: ErrorKind, file: &str, source: &str, span: Option<std::ops::Range<usize>>, place: &str, message: String, help: String) -> ModelError {
-    if std::path::Path::new(file).extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+    if is_urdf(std::path::Path::new(file)) {
         return ModelError::in_place(kind, file, place, message, help);
     }
     ModelError::at(kind, file, source, span, place, message, help)

@@ -78,61 +78,41 @@ impl std::hash::Hash for Repr {
     }
 }
 
-/// Binary gcd (no division: several times faster than Euclid's on 64-bit words).
-fn gcd_u64(mut a: u64, mut b: u64) -> u64 {
-    if a == 0 {
+/// Binary gcd (no division: several times faster than Euclid's, whose steps on 128-bit words
+/// were a 128-bit division each: `__umodti3`, a sixth of deriving a floating tree whose URDF has
+/// long decimals, `perf`).
+fn binary_gcd<T: num_traits::PrimInt>(a: T, b: T) -> T {
+    if a.is_zero() {
         return b;
     }
-    if b == 0 {
+    if b.is_zero() {
         return a;
     }
-    let shift = (a | b).trailing_zeros();
-    a >>= a.trailing_zeros();
+    let shift = (a | b).trailing_zeros() as usize;
+    let (mut a, mut b) = (a >> a.trailing_zeros() as usize, b >> b.trailing_zeros() as usize);
     // A power of two against anything (the halves of product-to-sum coefficients): no loop.
-    if a == 1 || (b >> b.trailing_zeros()) == 1 {
-        return 1 << shift;
+    if a.is_one() || b.is_one() {
+        return T::one() << shift;
     }
     loop {
-        b >>= b.trailing_zeros();
         if a > b {
             std::mem::swap(&mut a, &mut b);
         }
-        b -= a;
-        if b == 0 {
+        b = b - a;
+        if b.is_zero() {
             return a << shift;
         }
+        b = b >> b.trailing_zeros() as usize;
     }
 }
 
-/// Binary gcd on 128-bit words, down to [`gcd_u64`] once both fit 64 bits: Euclid's steps
-/// here were a 128-bit division each (`__umodti3`, a sixth of deriving a floating tree whose
-/// URDF has 15-digit decimals, `perf`).
-fn gcd_u128(mut a: u128, mut b: u128) -> u128 {
-    if a == 0 {
-        return b;
-    }
-    if b == 0 {
-        return a;
-    }
-    let shift = (a | b).trailing_zeros();
-    a >>= a.trailing_zeros();
-    loop {
-        b >>= b.trailing_zeros();
-        if a <= u64::MAX as u128 && b <= u64::MAX as u128 {
-            return (gcd_u64(a as u64, b as u64) as u128) << shift;
-        }
-        if a > b {
-            std::mem::swap(&mut a, &mut b);
-        }
-        b -= a;
-        if b == 0 {
-            return a << shift;
-        }
-    }
+/// On 64-bit words where both fit.
+fn gcd_u128(a: u128, b: u128) -> u128 {
+    if a <= u64::MAX as u128 && b <= u64::MAX as u128 { binary_gcd(a as u64, b as u64) as u128 } else { binary_gcd(a, b) }
 }
 
 fn gcd_i64(a: i64, b: i64) -> i64 {
-    gcd_u64(a.unsigned_abs(), b.unsigned_abs()) as i64
+    binary_gcd(a.unsigned_abs(), b.unsigned_abs()) as i64
 }
 
 impl Rat {
