@@ -93,7 +93,7 @@ pub enum CliError {
     Plot(#[from] plot::PlotError),
     #[error("the animation: {0}")]
     Animate(#[from] animate::AnimateError),
-    #[error("no {what} `{name}` (known: {known})")]
+    #[error("no {what} `{name}` ({})", known_or_none(.known))]
     UnknownName { what: &'static str, name: String, known: String },
     #[error("model `{model}` has no formulation `{kind}` (it has: {available})")]
     UnknownFormulation { model: String, kind: seam::FormulationKind, available: String },
@@ -111,6 +111,12 @@ pub enum CliError {
     WatchNeedsFile { given: String },
     #[error("cannot serve the page on 127.0.0.1:{port}: {reason} (give another --port, or none for one the system picks)")]
     Serve { port: u16, reason: String },
+}
+
+/// The names a model knows, for an unknown one: "known: a, b", or that it has none (a model
+/// with no inputs, asked for one).
+fn known_or_none(known: &str) -> String {
+    if known.is_empty() { "the model has none".to_string() } else { format!("known: {known}") }
 }
 
 fn main() -> ExitCode {

@@ -75,6 +75,9 @@ pub enum BuildError {
     NoOutDir,
     #[error("`{first}` and `{second}` both define a model named `{name}`: their modules would be the same file; rename one model")]
     DuplicateName { name: String, first: PathBuf, second: PathBuf },
+    /// The path given to [`Builder::seam_path`] is not a Rust path.
+    #[error("Builder::seam_path: {message}; {}", crate::emit::SEAM_PATH_HELP)]
+    SeamPath { message: String },
 }
 
 impl Builder {
@@ -207,6 +210,7 @@ impl Builder {
                 );
             }
         }
+        crate::emit::parse_seam_path(&self.seam_path).map_err(|message| BuildError::SeamPath { message })?;
         let out_dir = match &self.out_dir {
             Some(d) => d.clone(),
             None => std::env::var_os("OUT_DIR").map(PathBuf::from).ok_or(BuildError::NoOutDir)?,
@@ -285,5 +289,14 @@ mod tests {
         let e = Builder::new().model(&bad).out_dir(&dir).cargo_metadata(false).generate().unwrap_err();
         assert!(matches!(e, BuildError::Model(_)) && e.to_string().contains("bad.ron"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_seam_path_that_is_not_a_path_is_refused_before_anything_is_read() {
+        let dir = std::env::temp_dir().join(format!("builder-seam-{}", std::process::id()));
+        let e = Builder::new().model(models().join("no_such.ron")).seam_path("not a path").out_dir(&dir).cargo_metadata(false).generate().unwrap_err();
+        assert!(matches!(e, BuildError::SeamPath { .. }), "{e}");
+        assert!(e.to_string().starts_with("Builder::seam_path: `not a path` is not a Rust path") && e.to_string().contains("runtime::seam"), "{e}");
+        assert!(!dir.exists());
     }
 }

@@ -218,6 +218,9 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     if let Some(out) = &args.output {
         refuse_overwriting_a_model(&file, out, args.force)?;
     }
+    // An option of the command line: said before the model is read, and named as given.
+    crate::emit::parse_seam_path(&args.seam_path)
+        .map_err(|message| Failure::Message(format!("error: --seam-path: {message}\n  help: {}", crate::emit::SEAM_PATH_HELP)))?;
     let model = crate::model::source_with(&file, &args.robot.options())?.model()?;
     if let Some(out) = &args.output {
         // The model read, the output may not be it (by any path), whatever `--force` says.

@@ -489,6 +489,10 @@ fn simulate_drives_an_input_from_a_time_series() {
     let unknown = multibody(dir.path(), &["simulate", "inverted_pendulum", "--input", "G=push.csv", "--out", "b"]);
     let err = String::from_utf8_lossy(&unknown.stderr);
     assert!(!unknown.status.success() && err.contains("no input `G` (known: F)"), "{err}");
+    // A model with no inputs says so, not an empty list.
+    let none = multibody(dir.path(), &["simulate", "cart_pendulum", "--input", "F=push.csv", "--out", "b"]);
+    let err = String::from_utf8_lossy(&none.stderr);
+    assert!(!none.status.success() && err.contains("no input `F` (the model has none)"), "{err}");
 }
 
 /// Scene 2 in quaternions through `simulate` and `inspect` by name: the trajectory's file has the

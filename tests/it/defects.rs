@@ -239,16 +239,34 @@ fn inspect_reports_a_budget_spent_past_the_derivation_as_the_budget() {
 
 /// An error found past the reading of a URDF robot names the file and the place in the robot's
 /// model, with no line: the model is RON text made from the XML, whose lines are not the URDF's.
+/// A RON model's is located in its file.
 #[test]
 fn a_urdf_robot_s_later_errors_point_at_no_line_of_another_text() {
+    use generator::model::ErrorKind;
+    let error = |model: &generator::model::Model| model.error(ErrorKind::Emission, "emit", "emit", "a later error".into(), "a fix".into()).to_string();
+    let tree = fixture("urdf/tree.urdf");
+    let robot = generator::model::source(std::path::Path::new(&tree)).unwrap().model().unwrap();
+    let err = error(&robot);
+    assert!(err.starts_with(&format!("error: {tree}: in emit: a later error")), "{err}");
+    let a_line = (0..10).any(|d| err.contains(&format!("{tree}:{d}")));
+    assert!(!err.contains("emit: Emit(") && !a_line, "no line of the model text: {err}");
+    let cart = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/models/cart_pendulum.ron")).unwrap();
+    let err = error(&cart);
+    assert!(err.contains("models/cart_pendulum.ron:") && err.contains("a later error"), "{err}");
+}
+
+/// A seam path that is not a Rust path is an option's mistake: said before the model is read,
+/// naming the option (it was located at the model file's `emit` section, which does not hold it).
+#[test]
+fn a_seam_path_that_is_not_a_path_names_the_option() {
     let dir = tempfile::tempdir().unwrap();
-    let tree = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/urdf/tree.urdf");
-    let out = multibody(dir.path(), &["generate", tree, "--seam-path", "not a path", "-o", "tree.rs"]);
+    let out = multibody(dir.path(), &["generate", "no_such_model.ron", "--seam-path", "not a path", "-o", "x.rs"]);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.starts_with(&format!("error: {tree}: in emit: `not a path` is not a Rust path")), "{err}");
-    assert!(!err.contains("emit: Emit("), "no line of the model text: {err}");
-    // A RON model's is located in its file.
-    let out = multibody(dir.path(), &["generate", "cart_pendulum", "--seam-path", "not a path", "-o", "cart.rs"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.starts_with("error: models/cart_pendulum.ron:") && err.contains("is not a Rust path"), "{err}");
+    assert!(!out.status.success() && err.starts_with("error: --seam-path: `not a path` is not a Rust path"), "{err}");
+    assert!(err.contains("help: give the seam crate's path") && !err.contains("no_such_model"), "{err}");
+    assert!(!dir.path().join("x.rs").exists());
+    // A path is taken.
+    let out = multibody(dir.path(), &["generate", "cart_pendulum", "--seam-path", "runtime::seam", "-o", "cart.rs"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read_to_string(dir.path().join("cart.rs")).unwrap().contains("runtime::seam::"));
 }

@@ -76,6 +76,16 @@ pub struct Options {
 /// The seam crate's path when nothing else is asked for.
 pub const DEFAULT_SEAM_PATH: &str = "::seam";
 
+/// What to give as the seam crate's path when one is not a Rust path.
+pub(crate) const SEAM_PATH_HELP: &str = "give the seam crate's path, such as `::seam` or `runtime::seam`";
+
+/// `path` parsed as the seam crate's path in emitted code, or what is wrong with it. The
+/// callers check it where the option comes from (`--seam-path`, `Builder::seam_path`), before
+/// any derivation, and name that place.
+pub(crate) fn parse_seam_path(path: &str) -> Result<syn::Path, String> {
+    syn::parse_str(path).map_err(|e| format!("`{}` is not a Rust path: {e}", files::printable(path)))
+}
+
 impl Options {
     /// The options the model file asks for.
     pub fn from_model(model: &Model) -> Options {

@@ -287,17 +287,11 @@ pub(crate) fn assemblies(model: &Model, d: &formulation::Derivation, options: &O
     Ok(out)
 }
 
-/// The seam crate's path in emitted code, from the options.
+/// The seam crate's path in emitted code, from the options (set by a library caller: the
+/// command line and the builder check theirs first, and name the option).
 fn seam_path(model: &Model, options: &Options) -> Result<syn::Path, ModelError> {
-    syn::parse_str(&options.seam_path).map_err(|e| {
-        model.error(
-            ErrorKind::Emission,
-            "emit",
-            "seam_path",
-            format!("`{}` is not a Rust path: {e}", options.seam_path),
-            "give the seam crate's path, such as `::seam` or `runtime::seam`".into(),
-        )
-    })
+    super::parse_seam_path(&options.seam_path)
+        .map_err(|message| ModelError::in_place(ErrorKind::Emission, &model.file, "options.seam_path", message, super::SEAM_PATH_HELP.into()))
 }
 
 /// The symbols' identifiers in emitted code (a model's names, made unique and valid).
