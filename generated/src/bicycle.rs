@@ -2019,9 +2019,9 @@ pub mod kane {
         "thR",
         "delta",
         "thF",
-        "u1",
-        "u2",
-        "u3",
+        "phi'",
+        "delta'",
+        "thR'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;

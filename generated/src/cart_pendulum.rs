@@ -1798,7 +1798,14 @@ pub mod kane {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 2;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "u2", "W"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta1' - theta2'",
+        "x'",
+        "W",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
@@ -2609,7 +2616,13 @@ pub mod reduced_volterra {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 1;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "W"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta2' - theta1'",
+        "W",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.

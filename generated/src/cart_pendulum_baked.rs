@@ -1166,7 +1166,13 @@ pub mod kane {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 2;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "u2"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta1' - theta2'",
+        "x'",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
@@ -1690,7 +1696,12 @@ pub mod reduced_volterra {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 1;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta2' - theta1'",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.

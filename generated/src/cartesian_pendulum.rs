@@ -1006,7 +1006,7 @@ pub mod kane {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 1;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "u1", "W"];
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "x*y' - y*x'", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
@@ -1403,7 +1403,7 @@ pub mod reduced_volterra {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 1;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "u1", "W"];
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "x*y' - y*x'", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.

@@ -2335,12 +2335,12 @@ pub mod kane {
         "q3",
         "q4",
         "q5",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
-        "u6",
+        "q0'",
+        "q1'",
+        "q2'",
+        "q3'",
+        "q4'",
+        "q5'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
@@ -3251,11 +3251,11 @@ pub mod reduced_volterra {
         "q3",
         "q4",
         "q5",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
+        "q1'",
+        "q2'",
+        "q3'",
+        "q4'",
+        "q5'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;

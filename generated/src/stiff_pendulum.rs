@@ -1753,7 +1753,7 @@ pub mod kane {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 3;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["th", "x", "y", "u1", "u2", "u3", "W"];
+    pub const STATE_NAMES: [&str; STATES] = ["th", "x", "y", "th'", "x'", "y'", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
@@ -2476,7 +2476,7 @@ pub mod reduced_volterra {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 3;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["th", "x", "y", "u1", "u2", "u3", "W"];
+    pub const STATE_NAMES: [&str; STATES] = ["th", "x", "y", "th'", "x'", "y'", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.

@@ -5548,14 +5548,14 @@ pub mod kane {
         "X",
         "Y",
         "Z",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
-        "u6",
-        "u7",
-        "u8",
+        "omega_x(middle)",
+        "omega_y(middle)",
+        "omega_z(middle)",
+        "gamma1'",
+        "gamma2'",
+        "X'",
+        "Y'",
+        "Z'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
@@ -7061,11 +7061,11 @@ pub mod reduced_volterra {
         "X",
         "Y",
         "Z",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
+        "omega_x(middle)",
+        "omega_y(middle)",
+        "omega_z(middle)",
+        "gamma1'",
+        "gamma2'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;

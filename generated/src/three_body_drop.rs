@@ -389,11 +389,11 @@ pub mod reduced_volterra {
         "phi",
         "gamma1",
         "gamma2",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
+        "omega_x(middle)",
+        "omega_y(middle)",
+        "omega_z(middle)",
+        "gamma1'",
+        "gamma2'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = false;

@@ -2072,7 +2072,15 @@ pub mod kane {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 3;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["e0", "e1", "e2", "e3", "u1", "u2", "u3"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "e0",
+        "e1",
+        "e2",
+        "e3",
+        "omega_x(body)",
+        "omega_y(body)",
+        "omega_z(body)",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
@@ -2598,7 +2606,15 @@ pub mod reduced_volterra {
     ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 3;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["e0", "e1", "e2", "e3", "u1", "u2", "u3"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "e0",
+        "e1",
+        "e2",
+        "e3",
+        "omega_x(body)",
+        "omega_y(body)",
+        "omega_z(body)",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.

@@ -68,6 +68,32 @@ fn the_paper_s_scenes_use_the_paper_s_settings_and_the_same_numbers_as_compiled_
     assert!(table.starts_with("my_model: DOPRI5, rtol 1e-3, atol 1e-6"), "{table}");
 }
 
+/// Kane's and the reduced form's speeds are named in the state as the model writes its
+/// quasi-velocities (they were `u1, u2, ...`, the derivation's own symbols): the trajectory's
+/// columns, and `linearize`'s note on the entry moving fastest.
+#[test]
+fn the_state_names_the_quasi_velocities_as_the_model_writes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = |file: &str| std::fs::read_to_string(dir.path().join(file)).unwrap().lines().next().unwrap().to_string();
+    let states = |file: &str| header(file).split(',').filter_map(|c| c.strip_prefix("state:").map(str::to_string)).collect::<Vec<_>>();
+    ok(&multibody(dir.path(), &["simulate", "three_body", "--formulation", "kane", "--t-end", "0.1", "--dt-out", "0.05", "--out", "k"]));
+    let speeds = ["omega_x(middle)", "omega_y(middle)", "omega_z(middle)", "gamma1'", "gamma2'", "X'", "Y'", "Z'"];
+    assert_eq!(states("k/three_body_kane.csv")[8..], speeds.map(String::from), "{}", header("k/three_body_kane.csv"));
+    ok(&multibody(dir.path(), &["simulate", "three_body", "--formulation", "reduced", "--t-end", "0.1", "--dt-out", "0.05", "--out", "r"]));
+    assert_eq!(states("r/three_body_reduced_volterra.csv")[8..], speeds[..5].iter().map(|s| s.to_string()).collect::<Vec<_>>());
+    // Lagrange's speeds are the rates.
+    ok(&multibody(dir.path(), &["simulate", "cart_pendulum", "--formulation", "lagrange", "--t-end", "0.1", "--dt-out", "0.05", "--out", "l"]));
+    assert_eq!(states("l/cart_pendulum_lagrange.csv")[3..6], ["theta1'", "theta2'", "x'"].map(String::from));
+    // A URDF robot's: its base's angular velocity and its joints' rates.
+    let tree = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/urdf/tree.urdf");
+    ok(&multibody(dir.path(), &["simulate", tree, "--base", "floating", "--formulation", "kane", "--t-end", "0.1", "--dt-out", "0.05", "--out", "t"]));
+    let names = states("t/tree_kane.csv");
+    assert!(names.iter().any(|n| n == "omega_z(base)") && names.iter().any(|n| n == "left_elbow'") && !names.iter().any(|n| n.starts_with('u')), "{names:?}");
+    // linearize names the entry moving fastest by the same names (here the fall, in Kane's z').
+    let text = ok(&multibody(dir.path(), &["linearize", tree, "--base", "floating", "--formulation", "kane"]));
+    assert!(text.contains("not an equilibrium nor a steady motion: base_z'' = -9.81"), "{text}");
+}
+
 #[test]
 fn simulate_writes_the_trajectory_and_its_plots() {
     let (dir, _) = user_model();

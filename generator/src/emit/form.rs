@@ -14,7 +14,7 @@ use super::ops::OpCount;
 use super::syntax::{doc, usize_lit};
 use super::{Function, FunctionCost};
 use crate::formulation::Equations;
-use crate::model::ModelError;
+use crate::model::{Model, ModelError};
 use crate::symbolic::expr::any_contains;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
@@ -122,7 +122,7 @@ impl Emitter<'_> {
         let work = self.scope.work;
         let n_states = f.states(work);
         let mut state_names: Vec<String> = f.kept.iter().map(|&j| model.coordinates[j].name()).collect();
-        state_names.extend(f.speeds.iter().map(|s| s.name()));
+        state_names.extend(speed_names(model, f));
         if work {
             state_names.push("W".into());
         }
@@ -706,4 +706,18 @@ impl FunctionCost {
     pub fn total(&self) -> usize {
         self.ops.total() + self.solve.total()
     }
+}
+
+/// The speeds' names in a formulation's state: the rates' (`x'`) in Lagrange's and Maggi's
+/// forms; in Kane's and the reduced form the quasi-velocities as the model writes them
+/// (`omega_x(middle)`, `gamma1'`), which the derivation calls `u1, u2, ...`: a state column,
+/// or `linearize`'s note on the fastest-moving entry, names what the user chose.
+fn speed_names(model: &Model, f: &Equations) -> Vec<String> {
+    let written = match f.kind {
+        seam::FormulationKind::Kane => &model.def.quasi_velocities.full,
+        seam::FormulationKind::ReducedVolterra => &model.def.quasi_velocities.reduced,
+        _ => return f.speeds.iter().map(|s| s.name()).collect(),
+    };
+    let tidy = |w: &String| w.split_whitespace().collect::<Vec<_>>().join(" ");
+    f.speeds.iter().enumerate().map(|(k, s)| written.get(k).map_or_else(|| s.name(), tidy)).collect()
 }
