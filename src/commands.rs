@@ -312,9 +312,11 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
             let (b, exact) = runtime::linearize::input_matrix(&model, kind, &at, &inputs)?;
             text += &format!("B ({}), columns {}:\n", if exact { "exact" } else { "finite differences" }, args.input.join(", "));
             let names = model.formulation(kind).map(|f| f.state_names.clone()).unwrap_or_default();
+            // Right-aligned to the longest name (a robot's joints' rates run long).
+            let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
             for (r, name) in (0..b.nrows()).zip(names) {
                 let row: Vec<String> = b.row(r).iter().map(|x| format!("{x:+.9e}")).collect();
-                text += &format!("  {name:>12}: {}\n", row.join(" "));
+                text += &format!("  {name:>width$}: {}\n", row.join(" "));
             }
         }
         return print(&text);

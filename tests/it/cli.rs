@@ -92,6 +92,12 @@ fn the_state_names_the_quasi_velocities_as_the_model_writes_them() {
     // linearize names the entry moving fastest by the same names (here the fall, in Kane's z').
     let text = ok(&multibody(dir.path(), &["linearize", tree, "--base", "floating", "--formulation", "kane"]));
     assert!(text.contains("not an equilibrium nor a steady motion: base_z'' = -9.81"), "{text}");
+    // B's rows by the same names, their colons in one column however long the names run.
+    let text = ok(&multibody(dir.path(), &["linearize", tree, "--formulation", "kane", "--input", "damping_waist"]));
+    let rows: Vec<&str> = text.lines().skip_while(|l| !l.starts_with("B (")).skip(1).collect();
+    assert!(rows.iter().any(|r| r.trim_start().starts_with("right_shoulder':")), "{text}");
+    let colons: std::collections::BTreeSet<usize> = rows.iter().map(|r| r.find(": ").unwrap()).collect();
+    assert!(rows.len() == 10 && colons.len() == 1, "{text}");
 }
 
 #[test]
