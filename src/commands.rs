@@ -267,7 +267,7 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
         // A swept parameter takes the values its file may hold (a mass stays positive): checked
         // at the ends of the range before anything is derived (the checks are on convex sets
         // of the values, so the ends decide).
-        let source = load::model_with(&args.model, &args.values.robot.options())?.with_parameters(&args.values.param)?;
+        let source = load::model_with(&args.model, &args.values.robot.options_for(std::path::Path::new(&args.model))?)?.with_parameters(&args.values.param)?;
         if source.parameters.iter().any(|(p, _)| p.name() == *name) {
             for v in [from, to] {
                 source.with_parameters(&[(name.clone(), v)]).map_err(|mut e| {

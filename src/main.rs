@@ -109,6 +109,8 @@ pub enum CliError {
         "`watch` follows a model file, and `{given}` is none: give the path of a RON or URDF file (the built-in models are the files of the repository's `models/` folder)"
     )]
     WatchNeedsFile { given: String },
+    #[error(transparent)]
+    RobotOptions(#[from] generator::command::RobotOptionsNotRead),
     #[error("cannot serve the page on 127.0.0.1:{port}: {reason} (give another --port, or none for one the system picks)")]
     Serve { port: u16, reason: String },
 }
@@ -125,10 +127,12 @@ fn main() -> ExitCode {
     generator::symbolic::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
-        Command::Inspect { model, latex, robot } => match load::model_with(&model, &robot.options()) {
-            Ok(model) => return generator::command::exit(generator::command::print_inspection(&model, latex)),
-            Err(e) => Err(e.into()),
-        },
+        Command::Inspect { model, latex, robot } => {
+            match robot.options_for(std::path::Path::new(&model)).map_err(CliError::from).and_then(|o| Ok(load::model_with(&model, &o)?)) {
+                Ok(model) => return generator::command::exit(generator::command::print_inspection(&model, latex)),
+                Err(e) => Err(e.into()),
+            }
+        }
         Command::Simulate(args) => simulate::simulate(&args),
         Command::Compare(args) => commands::compare(&args),
         Command::Sweep(args) => commands::sweep(&args),
@@ -174,7 +178,7 @@ pub fn evaluated(
     route: load::Route,
     only: &dyn Fn(&generator::model::Model) -> Option<seam::FormulationKind>,
 ) -> Result<(seam::Model, generator::model::Model), CliError> {
-    let model = load::model_with(argument, &values.robot.options())?.with_parameters(&values.param)?;
+    let model = load::model_with(argument, &values.robot.options_for(std::path::Path::new(argument))?)?.with_parameters(&values.param)?;
     args::check_names(&model, values, more)?;
     if let Some(run) = run {
         run.check_span(&model)?;

@@ -209,7 +209,8 @@ pub fn run(args: &SimulateArgs) -> Result<Option<runtime::integrate::RunError>, 
     }
     text += &format!("  wrote {0}.csv, {0}.json", files::printable_path(&base));
     if let Some(page) = &args.animate {
-        let source = load::model_with(&args.model, &args.run.values.robot.options())?.with_parameters(&args.run.values.param)?;
+        let source =
+            load::model_with(&args.model, &args.run.values.robot.options_for(std::path::Path::new(&args.model))?)?.with_parameters(&args.run.values.param)?;
         let q: Vec<f64> = inv.coordinates.concat();
         animate::write(page, &source, &reference.params, &animate::Motion { formulation: kind.name(), times: &solution.times, q: &q })?;
         text += &format!(", {}", files::printable_path(page));

@@ -40,7 +40,8 @@ impl From<FormulationArg> for Formulation {
     }
 }
 
-/// How a URDF robot is read (ignored for a RON model): `--base`, `--gravity`, `--limits`.
+/// How a URDF robot is read: `--base`, `--gravity`, `--limits` (refused for a model that is
+/// not a URDF file, which would not read them: [`RobotArgs::options_for`]).
 #[derive(Args, Debug, Clone, PartialEq, Default)]
 pub struct RobotArgs {
     /// A URDF robot's base: fixed to the world (default), or floating (three translations and a
@@ -80,7 +81,34 @@ fn gravity(s: &str) -> Result<[f64; 3], String> {
     }
 }
 
+/// URDF options given for a model that is not a URDF file, which would not read them.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{} {} read for a URDF robot only, and `{model}` is not a URDF file: {} would be ignored\n  help: leave {} out; a RON model that includes a robot sets its base, gravity and limits in its `urdf: Urdf(file: ..., base: Floating, gravity: (0.0, 0.0, 0.0), limits: Stop)` section",
+    given.join(", "), if given.len() == 1 { "is" } else { "are" }, if given.len() == 1 { "it" } else { "they" }, if given.len() == 1 { "it" } else { "them" }
+)]
+pub struct RobotOptionsNotRead {
+    /// The options given, as on the command line (`--base`, ...).
+    pub given: Vec<&'static str>,
+    /// The model as given.
+    pub model: String,
+}
+
 impl RobotArgs {
+    /// [`RobotArgs::options`] for the model `argument` (a path or a built-in name): refused
+    /// where they were given for a model that is not a URDF file (they were silently ignored).
+    pub fn options_for(&self, argument: &Path) -> Result<crate::model::urdf::UrdfOptions, RobotOptionsNotRead> {
+        let given: Vec<&'static str> = [(self.base.is_some(), "--base"), (self.gravity.is_some(), "--gravity"), (self.limits.is_some(), "--limits")]
+            .into_iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, name)| name)
+            .collect();
+        if !given.is_empty() && !crate::model::is_urdf(argument) {
+            return Err(RobotOptionsNotRead { given, model: files::printable_path(argument) });
+        }
+        Ok(self.options())
+    }
+
     /// The URDF options these arguments ask for.
     pub fn options(&self) -> crate::model::urdf::UrdfOptions {
         use crate::model::urdf::{Base, LimitAction, UrdfOptions};
@@ -221,7 +249,8 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     // An option of the command line: said before the model is read, and named as given.
     crate::emit::parse_seam_path(&args.seam_path)
         .map_err(|message| Failure::Message(format!("error: --seam-path: {message}\n  help: {}", crate::emit::SEAM_PATH_HELP)))?;
-    let model = crate::model::source_with(&file, &args.robot.options())?.model()?;
+    let robot = args.robot.options_for(&file).map_err(|e| Failure::Message(format!("error: {e}")))?;
+    let model = crate::model::source_with(&file, &robot)?.model()?;
     if let Some(out) = &args.output {
         // The model read, the output may not be it (by any path), whatever `--force` says.
         files::check_output(out).map_err(|e| Failure::Message(format!("error: {e}")))?;

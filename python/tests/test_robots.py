@@ -58,3 +58,12 @@ def test_a_bad_urdf_is_located(tmp_path):
 def test_a_base_that_is_neither_is_refused():
     with pytest.raises((ValueError, multibody.ModelError), match="floating"):
         multibody.load(TREE, base="flying")
+
+
+def test_robot_options_for_a_model_that_is_no_urdf_are_refused():
+    # They were silently ignored: a RON model sets its robot's in its `urdf` section.
+    with pytest.raises(ValueError, match=r"base= is read for a URDF robot only, and `cart_pendulum` is not a URDF file"):
+        multibody.load("cart_pendulum", base="floating")
+    with pytest.raises(ValueError, match=r"gravity=, limits= are read for a URDF robot only"):
+        multibody.load("three_body", gravity=(0, 0, 0), limits="stop")
+    assert multibody.load("cart_pendulum").coordinates == ["theta1", "theta2", "x"]

@@ -2,7 +2,7 @@
 //! that failed before its fix: linearizing a spinning top, a steady motion and a sweep of a
 //! conservative system; names checked before anything is derived; built-in names everywhere.
 
-use crate::common::multibody;
+use crate::common::{multibody, ok};
 use runtime::linearize::{Motion, Operating, Swept, crossings, eigenvalues, linearize, sweep};
 use seam::FormulationKind;
 
@@ -269,4 +269,24 @@ fn a_seam_path_that_is_not_a_path_names_the_option() {
     let out = multibody(dir.path(), &["generate", "cart_pendulum", "--seam-path", "runtime::seam", "-o", "cart.rs"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(std::fs::read_to_string(dir.path().join("cart.rs")).unwrap().contains("runtime::seam::"));
+}
+
+/// `--base`, `--gravity` and `--limits` given for a model that is not a URDF file were silently
+/// ignored (a RON model sets its robot's in its `urdf` section): refused on every command,
+/// naming the options given.
+#[test]
+fn robot_options_for_a_model_that_is_no_urdf_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for command in ["simulate", "compare", "sweep", "linearize", "inspect", "generate"] {
+        let out = multibody(dir.path(), &[command, "cart_pendulum", "--base", "floating"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("--base is read for a URDF robot only, and `cart_pendulum` is not a URDF file"), "{command}: {err}");
+    }
+    let out = multibody(dir.path(), &["simulate", "three_body", "--gravity", "0,0,0", "--limits", "stop"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--gravity, --limits are read for a URDF robot only") && err.contains("urdf: Urdf("), "{err}");
+    // A URDF robot takes them.
+    let tree = fixture("urdf/tree.urdf");
+    let text = ok(&multibody(dir.path(), &["inspect", &tree, "--base", "floating", "--gravity", "0,0,0"]));
+    assert!(text.contains("base_qw"), "{text}");
 }

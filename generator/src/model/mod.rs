@@ -319,7 +319,7 @@ impl Model {
 }
 
 /// True for a URDF robot's path (`.urdf`, in any case): read as XML, its model made from it.
-pub(crate) fn is_urdf(path: &std::path::Path) -> bool {
+pub fn is_urdf(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
 }
 
