@@ -179,9 +179,16 @@ fn simplifier_cell((work, over, reached): (u64, usize, bool)) -> String {
     format!("{:.2}, {over}{}", work as f64 / 1e6, if reached { " (work limit reached)" } else { "" })
 }
 
-/// The issue "Robots"' goals for chains at robot scale: `(model, n, fresh runs, CPU s, MB)`.
-const AT_SCALE: [(&str, usize, usize, f64, f64); 3] =
-    [("pendulum", 100, 3, 10.0, 1000.0), ("pendulum", 200, 1, 60.0, 4000.0), ("planar", 50, 3, 3.0, f64::INFINITY)];
+/// The issue "Robots"' goals for chains at robot scale: `(model, n, fresh runs, CPU s, MB, node
+/// budget)`. The goals are for the default settings (budget 0: the default); the pendulum at
+/// n = 200 is measured again with the budget raised to what it builds, to say by how much it
+/// misses them past the budget.
+const AT_SCALE: [(&str, usize, usize, f64, f64, usize); 4] = [
+    ("pendulum", 100, 3, 10.0, 1000.0, 0),
+    ("pendulum", 200, 1, 60.0, 4000.0, 0),
+    ("pendulum", 200, 1, 60.0, 4000.0, 12_000_000),
+    ("planar", 50, 3, 3.0, f64::INFINITY, 0),
+];
 
 /// `--at-scale`: each model of [`AT_SCALE`] generated (derive and emit, the default settings)
 /// in fresh processes, its CPU (both threads) and peak memory, or the error that stopped it;
@@ -190,11 +197,11 @@ const AT_SCALE: [(&str, usize, usize, f64, f64); 3] =
 fn at_scale(path: &Path) {
     let exe = std::env::current_exe().expect("this program's path");
     let mut rows = Vec::new();
-    for (kind, n, runs, goal_cpu, goal_mb) in AT_SCALE {
+    for (kind, n, runs, goal_cpu, goal_mb, budget) in AT_SCALE {
         let mut done: Vec<serde_json::Value> = (0..runs)
             .map(|k| {
                 eprintln!("at scale: {kind} n = {n}, run {} of {runs} ...", k + 1);
-                let child = Command::new(&exe).args(["--at-scale-one", kind, &n.to_string()]).output().expect("the child runs");
+                let child = Command::new(&exe).args(["--at-scale-one", kind, &n.to_string(), &budget.to_string()]).output().expect("the child runs");
                 assert!(child.status.success(), "{kind} n = {n}: {}", String::from_utf8_lossy(&child.stderr));
                 let r: serde_json::Value = serde_json::from_slice(&child.stdout).expect("the child's record");
                 eprintln!("at scale: {kind} n = {n}: {r}");
@@ -208,6 +215,8 @@ fn at_scale(path: &Path) {
         rows.push(serde_json::json!({
             "model": kind,
             "n": n,
+            "max_nodes": if budget == 0 { serde_json::Value::Null } else { serde_json::json!(budget) },
+            "nodes": done[done.len() / 2]["nodes"],
             "runs": done.len(),
             "cpu_s": median,
             "spread": cpu(&done[done.len() - 1]) / cpu(&done[0]),
@@ -219,7 +228,7 @@ fn at_scale(path: &Path) {
     }
     let json = serde_json::json!({
         "command": "cargo bench -p generator --bench scaling -- --at-scale",
-        "about": "chains at robot scale (the issue Robots, item 3): derive and emit all four formulations with the default settings, in fresh processes; the median CPU (both threads), the spread of the runs (largest over smallest CPU) and the largest peak memory, or the error that stopped the generation",
+        "about": "chains at robot scale (the issue Robots, item 3): derive and emit all four formulations with the default settings (max_nodes null; a raised node budget otherwise, to say by how much a model stopped at the default one misses its goals), in fresh processes; the median CPU (both threads), the spread of the runs (largest over smallest CPU), the largest peak memory and the expression nodes built, or the error that stopped the generation",
         "cores": std::thread::available_parallelism().map_or(1, |n| n.get()),
         "records": rows,
     });
@@ -364,12 +373,18 @@ fn main() {
         return;
     }
     if args.first().map(String::as_str) == Some("--at-scale-one") {
+        // `--at-scale-one KIND N [MAX_NODES]` (0 or none: the default budget).
         let (kind, n) = (&args[1], args[2].parse().expect("--at-scale-one KIND N"));
+        let budget: usize = args.get(3).map_or(0, |b| b.parse().expect("--at-scale-one KIND N MAX_NODES"));
+        if budget > 0 {
+            generator::symbolic::set_max_nodes(budget);
+        }
         let model = scaled_model(kind, n);
         let out = generate(&model, &Options::from_model(&model));
         let (cpu_s, peak_mb) = (cpu_seconds(), peak_mb());
+        let nodes = out.as_ref().ok().map(|g| g.summary.nodes);
         let error = out.err().map(|e| e.to_string().lines().next().unwrap_or_default().to_string());
-        println!("{}", serde_json::json!({ "cpu_s": cpu_s, "peak_mb": peak_mb, "error": error }));
+        println!("{}", serde_json::json!({ "cpu_s": cpu_s, "peak_mb": peak_mb, "error": error, "nodes": nodes }));
         return;
     }
     if args.first().map(String::as_str) == Some("--at-scale") {
