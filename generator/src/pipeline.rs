@@ -27,7 +27,7 @@ use crate::formulation::mechanics::{Mechanics, Quantities};
 use crate::formulation::{self, Equations, Request, ignorable};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::Context;
-use crate::symbolic::transfer::Parcel;
+use crate::symbolic::transfer::{Packer, Parcel, Unpacker};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
@@ -140,7 +140,7 @@ fn on_two_threads(model: &Model, options: &Options) -> Result<Generated, ModelEr
                 }
             })
             .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("cannot start the emitting thread: {e}"), String::new()))?;
-        let mut handing = Handing { model, jobs, ignorable: ignorable_here, to_send };
+        let mut handing = Handing { model, jobs, packer: Packer::default(), ignorable: ignorable_here, to_send };
         let derived = formulation::derive_with(model, &request, &mut handing);
         drop(handing);
         let derive_time = start.elapsed();
@@ -192,6 +192,9 @@ fn emit_last<'e>(
 struct Handing<'a> {
     model: &'a Model,
     jobs: Sender<Job>,
+    /// The jobs' expressions, each node packed once on the channel (a formulation refers to the
+    /// mechanics' nodes the emitting thread already has).
+    packer: Packer,
     ignorable: Receiver<Decided>,
     /// Formulations still to send (the last group's stay here).
     to_send: usize,
@@ -199,7 +202,7 @@ struct Handing<'a> {
 
 impl formulation::Stages for Handing<'_> {
     fn mechanics(&mut self, mech: &Mechanics) {
-        let _ = self.jobs.send(Job::Mechanics(Box::new(Parcel::pack(&(self.model.clone(), mech.quantities.clone())))));
+        let _ = self.jobs.send(Job::Mechanics(Box::new(self.packer.pack(&(self.model.clone(), mech.quantities.clone())))));
     }
 
     fn ignorable(&mut self, model: &Model, _: &Mechanics) -> Result<formulation::Ignorable, ModelError> {
@@ -213,7 +216,7 @@ impl formulation::Stages for Handing<'_> {
     fn equations(&mut self, eqs: &Equations) {
         if self.to_send > 0 {
             self.to_send -= 1;
-            let _ = self.jobs.send(Job::Form(Box::new(Parcel::pack(eqs))));
+            let _ = self.jobs.send(Job::Form(Box::new(self.packer.pack(eqs))));
         }
     }
 }
@@ -230,7 +233,9 @@ fn decide_and_emit(
     // No mechanics: the deriving thread stopped first, and reports why.
     crate::symbolic::report::take();
     let Ok(Job::Mechanics(parcel)) = inbox.recv() else { return Ok(Vec::new()) };
-    let (model, mech) = parcel.unpack();
+    // The jobs' parcels are unpacked in the order they were sent, as one stream.
+    let mut unpacker = Unpacker::default();
+    let (model, mech) = unpacker.unpack(*parcel);
     let clock = Instant::now();
     let chosen = ignorable::choose(&model, &ignorable::analyze(&model, &mech));
     let _ = ignorable_back.send(chosen.clone().map(|c| (c, clock.elapsed())));
@@ -251,7 +256,7 @@ fn decide_and_emit(
         }
         // A parcel missing: the deriving thread stopped at an error, which it reports.
         for parcel in inbox.by_ref().take(group.len()) {
-            emission.form(&parcel.unpack())?;
+            emission.form(&unpacker.unpack(*parcel))?;
         }
         parts.push(emission.finish());
     }

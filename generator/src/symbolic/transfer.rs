@@ -7,7 +7,7 @@
 //! a value holds is said by its [`Transfer`] impl, which visits every expression and symbol in
 //! a fixed order.
 
-use super::expr::post_order;
+use super::expr::post_order_pruned;
 use super::number::Rat;
 use super::{Expr, Func, Matrix, Node, Symbol};
 use rustc_hash::FxHashMap;
@@ -40,7 +40,11 @@ enum Packed {
 #[derive(Clone, Debug)]
 pub struct Parcel<T> {
     value: T,
-    /// The DAG, children before parents.
+    /// How many nodes the parcels before this one on its channel carried ([`Packer`]): node
+    /// numbers below it are theirs.
+    base: u32,
+    /// The DAG the parcels before did not carry, children before parents, numbered on from
+    /// `base`.
     nodes: Vec<Packed>,
     /// The node of each expression the value holds, in visiting order.
     roots: Vec<u32>,
@@ -82,13 +86,40 @@ impl Visitor for Replace<'_> {
 }
 
 impl<T: Transfer + Clone> Parcel<T> {
-    /// Packs `value` (expressions of the current context).
+    /// Packs `value` (expressions of the current context) alone: [`Parcel::unpack`] rebuilds it.
     pub fn pack(value: &T) -> Parcel<T> {
+        Packer::default().pack(value)
+    }
+
+    /// The value, its expressions rebuilt in the current context (a parcel packed alone).
+    pub fn unpack(self) -> T {
+        Unpacker::default().unpack(self)
+    }
+}
+
+/// The sending end of a channel of parcels between two contexts: a node one parcel carried is
+/// referred to by the next ones, not packed again (Lagrange's matrix is the mechanics' `M`:
+/// on the pendulum on a cart at n = 100, handing the formulations to the emitting thread
+/// packed most of the DAG again for each). The parcels are unpacked in the order packed, by
+/// one [`Unpacker`].
+#[derive(Default)]
+pub struct Packer {
+    /// The stream's number of every node sent.
+    sent: FxHashMap<Expr, u32>,
+}
+
+impl Packer {
+    /// `value` packed with the nodes its expressions reach that no earlier parcel carried.
+    pub fn pack<T: Transfer + Clone>(&mut self, value: &T) -> Parcel<T> {
         let mut value = value.clone();
         let mut held = Collect::default();
         value.visit(&mut held);
-        let order = post_order(&held.exprs);
-        let index: FxHashMap<Expr, u32> = order.iter().enumerate().map(|(i, e)| (*e, i as u32)).collect();
+        let base = self.sent.len() as u32;
+        let order = post_order_pruned(&held.exprs, |e| self.sent.contains_key(&e));
+        for (i, e) in order.iter().enumerate() {
+            self.sent.insert(*e, base + i as u32);
+        }
+        let index = &self.sent;
         let mut names = Vec::new();
         let mut name_index: FxHashMap<Symbol, u32> = FxHashMap::default();
         let mut name_of = |s: Symbol| {
@@ -111,14 +142,26 @@ impl<T: Transfer + Clone> Parcel<T> {
             .collect();
         let roots = held.exprs.iter().map(|e| index[e]).collect();
         let symbols = held.symbols.iter().map(|s| name_of(*s)).collect();
-        Parcel { value, nodes, roots, names, symbols }
+        Parcel { value, base, nodes, roots, names, symbols }
     }
+}
 
-    /// The value, its expressions rebuilt in the current context.
-    pub fn unpack(self) -> T {
-        let Parcel { mut value, nodes, roots, names, symbols } = self;
+/// The receiving end of a [`Packer`]'s channel: the nodes rebuilt so far, by the stream's
+/// numbers.
+#[derive(Default)]
+pub struct Unpacker {
+    received: Vec<Expr>,
+}
+
+impl Unpacker {
+    /// The value of the next parcel of the channel, its expressions rebuilt in the current
+    /// context.
+    pub fn unpack<T: Transfer>(&mut self, parcel: Parcel<T>) -> T {
+        let Parcel { mut value, base, nodes, roots, names, symbols } = parcel;
+        assert_eq!(base as usize, self.received.len(), "parcels are unpacked in the order they were packed");
         let syms: Vec<Symbol> = names.iter().map(|n| Symbol::from_interned_name(n)).collect();
-        let mut built: Vec<Expr> = Vec::with_capacity(nodes.len());
+        let built = &mut self.received;
+        built.reserve(nodes.len());
         for node in nodes {
             let pairs = |v: Vec<(u32, Rat)>, built: &[Expr]| v.into_iter().map(|(i, r)| (built[i as usize], r)).collect();
             // Each node was canonical where it was built, and canonical order depends only on
@@ -126,8 +169,8 @@ impl<T: Transfer + Clone> Parcel<T> {
             let e = match node {
                 Packed::Num(r) => Expr::num(r),
                 Packed::Sym(s) => syms[s as usize].expr(),
-                Packed::Add { constant, terms } => Expr::intern(Node::Add { constant, terms: pairs(terms, &built) }),
-                Packed::Mul { coefficient, factors } => Expr::intern(Node::Mul { coefficient, factors: pairs(factors, &built) }),
+                Packed::Add { constant, terms } => Expr::intern(Node::Add { constant, terms: pairs(terms, built) }),
+                Packed::Mul { coefficient, factors } => Expr::intern(Node::Mul { coefficient, factors: pairs(factors, built) }),
                 Packed::Fun(f, a) => Expr::intern(Node::Fun(f, built[a as usize])),
                 Packed::Apply(s, a) => Expr::intern(Node::Apply(syms[s as usize], built[a as usize])),
             };
@@ -240,6 +283,28 @@ mod tests {
             assert_eq!(v[0].0, Symbol::internal("u1"));
             assert_ne!(v[0].1, Symbol::internal("u1").expr());
             assert_eq!(v[0].1, Expr::sym("u1"));
+        });
+    }
+
+    /// Parcels on one channel: a node the first carried is referred to by the second, not
+    /// packed again, and both arrive equal to what is built there.
+    #[test]
+    fn a_channel_packs_each_node_once() {
+        let shared = || parse("2*sin(x + y)^2 - cos(x)/3 + x*y");
+        let (first, second, alone) = Context::new().enter(|| {
+            let mut packer = Packer::default();
+            let first = packer.pack(&vec![shared()]);
+            let second = packer.pack(&vec![shared() * Expr::sym("z"), shared()]);
+            (first, second, Parcel::pack(&vec![shared() * Expr::sym("z"), shared()]))
+        });
+        // The second parcel carries only the product and `z`.
+        assert_eq!((second.base as usize, second.nodes.len()), (first.nodes.len(), 2));
+        assert!(alone.nodes.len() > first.nodes.len());
+        Context::new().enter(|| {
+            let _ = Expr::sym("unrelated").cos();
+            let mut unpacker = Unpacker::default();
+            assert_eq!(unpacker.unpack(first), vec![shared()]);
+            assert_eq!(unpacker.unpack(second), vec![shared() * Expr::sym("z"), shared()]);
         });
     }
 
