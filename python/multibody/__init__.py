@@ -249,14 +249,23 @@ class Model:
         ``Trajectory`` of numpy arrays). Defaults: the file's run, DOP853 at rtol = atol =
         1e-10 (the paper's DOPRI5 where the file asks for it); ``method`` is one of
         ``METHODS``. Ctrl-C stops the run within a few milliseconds (``KeyboardInterrupt``, its
-        note saying the time reached)."""
-        kind, columns, table, events, used = self._native.simulate_columns(
-            formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start
-        )
-        result = Trajectory(columns, table, events, self.name, kind, zip(self.params, used), self.units)
+        note saying the time reached). A run that stops early (a singular attitude, a matrix
+        that turned singular) raises ``SimulationError`` whose ``trajectory`` holds the outputs
+        up to the stop (``None`` when there were fewer than two)."""
         if frame is None:
             frame = _has_pandas()
-        return result.to_pandas() if frame else result
+
+        def made(kind, columns, table, events, used):
+            result = Trajectory(columns, table, events, self.name, kind, zip(self.params, used), self.units)
+            return result.to_pandas() if frame else result
+
+        try:
+            return made(*self._native.simulate_columns(formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start))
+        except SimulationError as e:
+            # A run that stopped early keeps its outputs up to the stop: ``e.trajectory``.
+            partial = getattr(e, "partial", None)
+            e.trajectory = None if partial is None else made(*partial)
+            raise
 
     def linearize(self, formulation=None, q=None, qdot=None, params=None) -> Linear:
         """The linear model about ``q``, ``qdot``: ``Linear(A, B, eigenvalues)``, B by the

@@ -67,6 +67,17 @@ fn run_error(e: impl std::fmt::Display) -> PyErr {
     SimulationError::new_err(e.to_string())
 }
 
+/// A trajectory's rows as a numpy table (rows x columns).
+fn table_of<'py>(py: Python<'py>, run: &runtime::trajectory::Trajectory) -> Bound<'py, PyArray2<f64>> {
+    let (rows, width) = (run.rows.len(), run.columns.len());
+    Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py)
+}
+
+/// A trajectory's events as (name, t, q).
+fn events_of(events: Vec<runtime::trajectory::Crossing>) -> Vec<(String, f64, Vec<f64>)> {
+    events.into_iter().map(|e| (e.name, e.t, e.q)).collect()
+}
+
 /// Ctrl-C during a run: the interpreter's signal handlers, run every
 /// [`runtime::events::INTERRUPT_CHECK_CALLS`] right-hand sides from the thread that holds the
 /// run with the GIL released (the caller's: Python runs its handlers on the main thread). The
@@ -460,12 +471,20 @@ impl Model {
                 Err(TrajectoryError::Run(e)) if e.reason == Reason::Interrupted => {
                     return Err(interrupt.into_error(py, format!("the run stopped at t = {} (its last accepted step)", e.t)));
                 }
+                // A run that stops early (gimbal lock, a singular matrix) keeps its outputs up
+                // to the stop, as `multibody simulate` writes them: carried by the error as
+                // `partial` (the wrapper makes it the exception's `trajectory`).
+                Err(TrajectoryError::Run(e)) => {
+                    let err = run_error(&e);
+                    if let Some(kept) = py.detach(|| runtime::trajectory::up_to(&sys, &y0, &times, &settings, &e)) {
+                        err.value(py).setattr("partial", (kind.name(), kept.columns.clone(), table_of(py, &kept), events_of(kept.events), params.clone()))?;
+                    }
+                    return Err(err);
+                }
                 run => run.map_err(run_error)?,
             };
-            let (rows, width) = (run.rows.len(), run.columns.len());
-            let table = Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py);
-            let events = run.events.into_iter().map(|e| (e.name, e.t, e.q)).collect();
-            Ok((kind.name(), run.columns, table, events, params))
+            let table = table_of(py, &run);
+            Ok((kind.name(), run.columns, table, events_of(run.events), params))
         })
     }
 

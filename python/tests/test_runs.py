@@ -3,6 +3,8 @@ reference trajectory of scene 2, the built-in integrators, and ensembles."""
 
 import _thread
 import csv
+import math
+import pathlib
 import threading
 
 import numpy as np
@@ -222,3 +224,21 @@ def test_bad_arguments_say_what_is_wrong():
     run = multibody.load("spring_cart").simulate("kane", t_end=0.1, dt_out=0.05)
     with pytest.raises(ValueError, match="the run is of model `spring_cart`, not of `cart_pendulum`"):
         m.animate(run, "never.html")
+
+
+def test_a_run_stopped_early_keeps_its_trajectory_up_to_the_stop():
+    # Euler angles pitched up to their singular attitude (cos(theta) = 0 at t = 0.1414): the run
+    # stops there, as `multibody simulate` does, and the error carries the outputs before it.
+    m = multibody.load(str(pathlib.Path(__file__).parents[2] / "tests" / "fixtures" / "tumbling_euler.ron"))
+    ask = dict(t_end=1.0, dt_out=0.01, q={"psi": 0.1, "theta": 1.5, "phi": 0.3}, qdot={"psi": 0.0, "theta": 0.5, "phi": 0.0})
+    for frame in [False, True]:
+        with pytest.raises(multibody.SimulationError, match=r"cos\(theta\) = 0") as info:
+            m.simulate("lagrange", frame=frame, **ask)
+        kept = info.value.trajectory
+        t = np.asarray(kept["t"])
+        assert len(t) == 15 and math.isclose(t[-1], 0.14, abs_tol=1e-12), t
+        # The same outputs as a run asked to end there.
+        ended = m.simulate("lagrange", frame=False, **{**ask, "t_end": 0.14})
+        for name in ["psi", "theta", "phi", "energy"]:
+            assert np.allclose(np.asarray(kept[name]), ended[name], rtol=0, atol=1e-8), name
+        assert np.asarray(kept["theta"])[-1] > 1.5
