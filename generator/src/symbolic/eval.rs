@@ -110,12 +110,22 @@ pub fn pow_f64(b: f64, e: f64, integer: bool) -> f64 {
 /// products products of magnitudes. A residual is negligible against it when it is a few
 /// rounding errors of this size.
 pub fn magnitude(e: Expr) -> Expr {
-    match &*e.node() {
+    magnitude_memo(e, &mut rustc_hash::FxHashMap::default())
+}
+
+/// [`magnitude`] over the DAG, each shared node once: walked as a tree, a long chain's
+/// expressions (a node reached along every path through the shared ones above it) took
+/// minutes, and built a node per path (a 20-joint floating chain's pivot checks).
+fn magnitude_memo(e: Expr, memo: &mut rustc_hash::FxHashMap<Expr, Expr>) -> Expr {
+    if let Some(m) = memo.get(&e) {
+        return *m;
+    }
+    let m = match &*e.node() {
         Node::Num(r) => Expr::num(r.abs()),
         Node::Add { constant, terms } => {
             let mut out = Expr::num(constant.abs());
             for (t, c) in terms {
-                out += magnitude(*t).scale(&c.abs());
+                out += magnitude_memo(*t, memo).scale(&c.abs());
             }
             out
         }
@@ -123,12 +133,14 @@ pub fn magnitude(e: Expr) -> Expr {
             let mut out = Expr::num(coefficient.abs());
             for (b, ex) in factors {
                 let positive_integer = ex.is_integer() && !ex.is_negative() && !ex.is_zero();
-                out = out * if positive_integer { magnitude(*b).pow_rat(ex) } else { b.abs().pow_rat(ex) };
+                out = out * if positive_integer { magnitude_memo(*b, memo).pow_rat(ex) } else { b.abs().pow_rat(ex) };
             }
             out
         }
         _ => e.abs(),
-    }
+    };
+    memo.insert(e, m);
+    m
 }
 
 /// The examples that were this module's documentation when it was public.
