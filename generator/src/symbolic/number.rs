@@ -111,6 +111,43 @@ fn gcd_u128(a: u128, b: u128) -> u128 {
     if a <= u64::MAX as u128 && b <= u64::MAX as u128 { binary_gcd(a as u64, b as u64) as u128 } else { binary_gcd(a, b) }
 }
 
+/// `n / d` (`n, d > 0`, both below `2^127`) rounded to the nearest float, ties to even: the
+/// quotient's bits by 128-bit division, 64 at a time, until 65 are known (the last ones and
+/// whether the remainder is zero decide the rounding). `None` where the result would not be a
+/// normal float (the caller's big-integer route handles those).
+fn quotient_to_f64(n: u128, d: u128) -> Option<f64> {
+    let (mut q, mut r, mut exp) = (n / d, n % d, 0i32);
+    while q < (1u128 << 65) && r != 0 {
+        // r < d < 2^127: r << k fits for k below r's leading zeros, and q << k below q's.
+        let k = (r.leading_zeros().min(q.leading_zeros()) - 1).min(64);
+        if k == 0 {
+            return None;
+        }
+        let wide = r << k;
+        q = (q << k) | (wide / d);
+        r = wide % d;
+        exp -= k as i32;
+    }
+    if q == 0 {
+        return None;
+    }
+    let drop = (128 - q.leading_zeros()).saturating_sub(53);
+    let mut mantissa = (q >> drop) as u64;
+    if drop > 0 {
+        let (dropped, half) = (q & ((1u128 << drop) - 1), 1u128 << (drop - 1));
+        if dropped > half || (dropped == half && (r != 0 || mantissa & 1 == 1)) {
+            mantissa += 1;
+        }
+    } else if r != 0 && q < (1u128 << 53) {
+        // Fewer than 54 bits and a remainder: only when the quotient's bits ran out exactly,
+        // which the loop does not stop at.
+        return None;
+    }
+    let scale = exp + drop as i32;
+    // mantissa <= 2^53: exact in a float; times a power of two within the normal range.
+    (-1000..=1000).contains(&scale).then(|| mantissa as f64 * 2f64.powi(scale))
+}
+
 fn gcd_i64(a: i64, b: i64) -> i64 {
     binary_gcd(a.unsigned_abs(), b.unsigned_abs()) as i64
 }
@@ -156,7 +193,18 @@ impl Rat {
         if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
             Rat(Repr::Small(n as i64, d as i64))
         } else {
-            Rat::from_big(BigRational::new_raw(BigInt::from(n), BigInt::from(d)))
+            Rat::from_wide(n, d)
+        }
+    }
+
+    /// `n / d` in lowest terms (`d > 0`) that does not fit machine integers: an integer stays
+    /// exact, any other rational becomes the nearest float, as [`Rat::from_big`] makes it,
+    /// without big integers ([`quotient_to_f64`]): their conversion was a quarter of deriving
+    /// a floating chain whose origins turn by 0.1 rad.
+    fn from_wide(n: i128, d: i128) -> Rat {
+        match quotient_to_f64(n.unsigned_abs(), d as u128) {
+            Some(x) if d != 1 => Rat::inexact(if n < 0 { -x } else { x }),
+            _ => Rat::from_big(BigRational::new_raw(BigInt::from(n), BigInt::from(d))),
         }
     }
 
@@ -467,7 +515,7 @@ fn mul(a: &Rat, b: &Rat) -> Rat {
             if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
                 Rat(Repr::Small(n as i64, d as i64))
             } else {
-                Rat::from_big(BigRational::new_raw(BigInt::from(n), BigInt::from(d)))
+                Rat::from_wide(n, d)
             }
         }
         (Repr::Float(_), _) | (_, Repr::Float(_)) => Rat::inexact(a.to_f64() * b.to_f64()),
@@ -661,6 +709,37 @@ mod tests {
                 assert_eq!(gcd_u128(*a, *b), euclid(*a, *b), "gcd({a}, {b})");
             }
         }
+    }
+
+    /// The quotient of wide words rounds as the big rationals' conversion does (to the nearest
+    /// float, ties to even), on quotients of every size, ties and exact ones among them.
+    #[test]
+    fn the_quotient_of_wide_words_is_the_big_rational_s_float() {
+        let big = |n: u128, d: u128| BigRational::new(BigInt::from(n), BigInt::from(d)).to_f64().unwrap();
+        let mut x: u128 = 0x2545_F491_4F6C_DD1D_9E37_79B9_7F4A_7C15;
+        let mut pairs = vec![(1, 3), (2, 3), (1, 10), (7, 1 << 60), ((1 << 53) + 1, 1), ((1 << 54) + 2, 4), (3 << 100, 7), (1, (1 << 125) + 1), ((1 << 125) - 1, 3)];
+        // Ties: an odd 54-bit numerator over 2 rounds to even.
+        pairs.extend([((1u128 << 53) + 1, 2), ((1u128 << 53) + 3, 2), ((1u128 << 80) + (1 << 27), 1 << 20)]);
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let (n, d) = ((x >> 2) >> (x % 120) as u32, ((x.rotate_left(64) >> 2) >> ((x >> 8) % 120) as u32).max(1));
+            pairs.push((n.max(1), d));
+        }
+        let mut checked = 0;
+        for (n, d) in pairs {
+            if let Some(q) = quotient_to_f64(n, d) {
+                assert_eq!(q.to_bits(), big(n, d).to_bits(), "{n} / {d}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 19_000, "{checked}");
+        // In the arithmetic: a product that outgrows machine integers, as the big route made it.
+        let (a, b) = (Rat::frac(994_996_671_102_073_589, 999_999_999_999_999_999), Rat::frac(99_833_416_646_828_153, 1_000_000_000_000_000_007));
+        let wide = BigRational::new(BigInt::from(994_996_671_102_073_589i64), BigInt::from(999_999_999_999_999_999i64))
+            * BigRational::new(BigInt::from(99_833_416_646_828_153i64), BigInt::from(1_000_000_000_000_000_007i64));
+        assert_eq!((&a * &b).to_f64().to_bits(), wide.to_f64().unwrap().to_bits());
     }
 
     #[test]
