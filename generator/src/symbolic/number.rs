@@ -190,11 +190,7 @@ impl Rat {
             n /= g;
             d /= g;
         }
-        if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
-            Rat(Repr::Small(n as i64, d as i64))
-        } else {
-            Rat::from_wide(n, d)
-        }
+        if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 { Rat(Repr::Small(n as i64, d as i64)) } else { Rat::from_wide(n, d) }
     }
 
     /// `n / d` in lowest terms (`d > 0`) that does not fit machine integers: an integer stays
@@ -512,11 +508,7 @@ fn mul(a: &Rat, b: &Rat) -> Rat {
             let n = n1 as i128 * n2 as i128;
             let d = d1 as i128 * d2 as i128;
             // Cross-cancelled factors of coprime pairs: already in lowest terms.
-            if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
-                Rat(Repr::Small(n as i64, d as i64))
-            } else {
-                Rat::from_wide(n, d)
-            }
+            if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 { Rat(Repr::Small(n as i64, d as i64)) } else { Rat::from_wide(n, d) }
         }
         (Repr::Float(_), _) | (_, Repr::Float(_)) => Rat::inexact(a.to_f64() * b.to_f64()),
         _ => Rat::from_big(a.to_big() * b.to_big()),
@@ -717,7 +709,8 @@ mod tests {
     fn the_quotient_of_wide_words_is_the_big_rational_s_float() {
         let big = |n: u128, d: u128| BigRational::new(BigInt::from(n), BigInt::from(d)).to_f64().unwrap();
         let mut x: u128 = 0x2545_F491_4F6C_DD1D_9E37_79B9_7F4A_7C15;
-        let mut pairs = vec![(1, 3), (2, 3), (1, 10), (7, 1 << 60), ((1 << 53) + 1, 1), ((1 << 54) + 2, 4), (3 << 100, 7), (1, (1 << 125) + 1), ((1 << 125) - 1, 3)];
+        let mut pairs =
+            vec![(1, 3), (2, 3), (1, 10), (7, 1 << 60), ((1 << 53) + 1, 1), ((1 << 54) + 2, 4), (3 << 100, 7), (1, (1 << 125) + 1), ((1 << 125) - 1, 3)];
         // Ties: an odd 54-bit numerator over 2 rounds to even.
         pairs.extend([((1u128 << 53) + 1, 2), ((1u128 << 53) + 3, 2), ((1u128 << 80) + (1 << 27), 1 << 20)]);
         for _ in 0..20_000 {
