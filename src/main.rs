@@ -130,7 +130,7 @@ fn main() -> ExitCode {
         Command::Inspect { model, latex, robot } => {
             match robot.options_for(std::path::Path::new(&model)).map_err(CliError::from).and_then(|o| Ok(load::model_with(&model, &o)?)) {
                 Ok(model) => return generator::command::exit(generator::command::print_inspection(&model, latex)),
-                Err(e) => Err(e.into()),
+                Err(e) => Err(e),
             }
         }
         Command::Simulate(args) => simulate::simulate(&args),
