@@ -112,7 +112,7 @@ fn gcd_u128(a: u128, b: u128) -> u128 {
 }
 
 /// `n / d` (`n, d > 0`, both below `2^127`) rounded to the nearest float, ties to even: the
-/// quotient's bits by 128-bit division, 64 at a time, until 65 are known (the last ones and
+/// quotient's bits by 128-bit division, up to 64 at a time, until more than 65 are known (the last ones and
 /// whether the remainder is zero decide the rounding). `None` where the result would not be a
 /// normal float (the caller's big-integer route handles those).
 fn quotient_to_f64(n: u128, d: u128) -> Option<f64> {
@@ -138,9 +138,8 @@ fn quotient_to_f64(n: u128, d: u128) -> Option<f64> {
         if dropped > half || (dropped == half && (r != 0 || mantissa & 1 == 1)) {
             mantissa += 1;
         }
-    } else if r != 0 && q < (1u128 << 53) {
-        // Fewer than 54 bits and a remainder: only when the quotient's bits ran out exactly,
-        // which the loop does not stop at.
+    } else if r != 0 {
+        // Not reached: the loop leaves a remainder only past 65 bits.
         return None;
     }
     let scale = exp + drop as i32;
@@ -190,14 +189,17 @@ impl Rat {
             n /= g;
             d /= g;
         }
-        if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 { Rat(Repr::Small(n as i64, d as i64)) } else { Rat::from_wide(n, d) }
+        Rat::from_lowest_terms(n, d)
     }
 
-    /// `n / d` in lowest terms (`d > 0`) that does not fit machine integers: an integer stays
-    /// exact, any other rational becomes the nearest float, as [`Rat::from_big`] makes it,
-    /// without big integers ([`quotient_to_f64`]): their conversion was a quarter of deriving
-    /// a floating chain whose origins turn by 0.1 rad.
-    fn from_wide(n: i128, d: i128) -> Rat {
+    /// `n / d` in lowest terms (`d > 0`): machine integers where they fit; else an integer
+    /// stays exact and any other rational becomes the nearest float, as [`Rat::from_big`] makes
+    /// it, without big integers ([`quotient_to_f64`]): their conversion was a quarter of
+    /// deriving a floating chain whose origins turn by 0.1 rad.
+    fn from_lowest_terms(n: i128, d: i128) -> Rat {
+        if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
+            return Rat(Repr::Small(n as i64, d as i64));
+        }
         match quotient_to_f64(n.unsigned_abs(), d as u128) {
             Some(x) if d != 1 => Rat::inexact(if n < 0 { -x } else { x }),
             _ => Rat::from_big(BigRational::new_raw(BigInt::from(n), BigInt::from(d))),
@@ -508,7 +510,7 @@ fn mul(a: &Rat, b: &Rat) -> Rat {
             let n = n1 as i128 * n2 as i128;
             let d = d1 as i128 * d2 as i128;
             // Cross-cancelled factors of coprime pairs: already in lowest terms.
-            if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 { Rat(Repr::Small(n as i64, d as i64)) } else { Rat::from_wide(n, d) }
+            Rat::from_lowest_terms(n, d)
         }
         (Repr::Float(_), _) | (_, Repr::Float(_)) => Rat::inexact(a.to_f64() * b.to_f64()),
         _ => Rat::from_big(a.to_big() * b.to_big()),
