@@ -110,7 +110,7 @@ pub enum CliError {
     )]
     WatchNeedsFile { given: String },
     #[error(transparent)]
-    RobotOptions(#[from] generator::command::RobotOptionsNotRead),
+    RobotOptions(#[from] generator::model::OptionsNotRead),
     #[error("cannot serve the page on 127.0.0.1:{port}: {reason} (give another --port, or none for one the system picks)")]
     Serve { port: u16, reason: String },
 }

@@ -81,31 +81,12 @@ fn gravity(s: &str) -> Result<[f64; 3], String> {
     }
 }
 
-/// URDF options given for a model that is not a URDF file, which would not read them.
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "{} {} read for a URDF robot only, and `{model}` is not a URDF file: {} would be ignored\n  help: leave {} out; a RON model that includes a robot sets its base, gravity and limits in its `urdf: Urdf(file: ..., base: Floating, gravity: (0.0, 0.0, 0.0), limits: Stop)` section",
-    given.join(", "), if given.len() == 1 { "is" } else { "are" }, if given.len() == 1 { "it" } else { "they" }, if given.len() == 1 { "it" } else { "them" }
-)]
-pub struct RobotOptionsNotRead {
-    /// The options given, as on the command line (`--base`, ...).
-    pub given: Vec<&'static str>,
-    /// The model as given.
-    pub model: String,
-}
-
 impl RobotArgs {
     /// [`RobotArgs::options`] for the model `argument` (a path or a built-in name): refused
     /// where they were given for a model that is not a URDF file (they were silently ignored).
-    pub fn options_for(&self, argument: &Path) -> Result<crate::model::urdf::UrdfOptions, RobotOptionsNotRead> {
-        let given: Vec<&'static str> = [(self.base.is_some(), "--base"), (self.gravity.is_some(), "--gravity"), (self.limits.is_some(), "--limits")]
-            .into_iter()
-            .filter(|(on, _)| *on)
-            .map(|(_, name)| name)
-            .collect();
-        if !given.is_empty() && !crate::model::is_urdf(argument) {
-            return Err(RobotOptionsNotRead { given, model: files::printable_path(argument) });
-        }
+    pub fn options_for(&self, argument: &Path) -> Result<crate::model::urdf::UrdfOptions, crate::model::OptionsNotRead> {
+        let given = [(self.base.is_some(), "--base"), (self.gravity.is_some(), "--gravity"), (self.limits.is_some(), "--limits")];
+        crate::model::refuse_options_unless_urdf(argument, given.into_iter().filter(|(on, _)| *on).map(|(_, name)| name).collect())?;
         Ok(self.options())
     }
 

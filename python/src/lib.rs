@@ -723,19 +723,9 @@ fn load_model(path: &Bound<'_, PyAny>, base: Option<&str>, gravity: Option<[f64;
     guarded(|| {
         use generator::model::{Base, LimitAction, UrdfOptions};
         let argument: std::path::PathBuf = path.extract()?;
-        // Given for a RON model (which sets its robot's in its `urdf` section), they would be
-        // ignored.
-        let given: Vec<&str> =
-            [(base.is_some(), "base"), (gravity.is_some(), "gravity"), (limits.is_some(), "limits")].into_iter().filter(|g| g.0).map(|g| g.1).collect();
-        if !given.is_empty() && !generator::model::is_urdf(&argument) {
-            return Err(PyValueError::new_err(format!(
-                "{}= {} read for a URDF robot only, and `{}` is not a URDF file: leave {} out (a RON model that includes a robot sets them in its `urdf: Urdf(...)` section)",
-                given.join("=, "),
-                if given.len() == 1 { "is" } else { "are" },
-                argument.display(),
-                if given.len() == 1 { "it" } else { "them" }
-            )));
-        }
+        let given = [(base.is_some(), "base="), (gravity.is_some(), "gravity="), (limits.is_some(), "limits=")];
+        generator::model::refuse_options_unless_urdf(&argument, given.into_iter().filter(|g| g.0).map(|g| g.1).collect())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let base = match base {
             None | Some("fixed") => Base::Fixed,
             Some("floating") => Base::Floating,

@@ -22,7 +22,7 @@ pub use error::{ErrorKind, ModelError};
 pub use mesh::{MeshFormat, TriangleMesh};
 pub use schema::*;
 pub use shape::{Shape, Solid, rpy_rotation};
-pub use urdf::{UrdfOptions, ident as urdf_ident, model_file as urdf_model_file, world_rotation};
+pub use urdf::{OptionsNotRead, UrdfOptions, ident as urdf_ident, model_file as urdf_model_file, refuse_options_unless_urdf, world_rotation};
 
 use crate::kinematics::{Axis, FrameKinematics, TimeChain, Turn};
 use crate::symbolic::eval::Env;

@@ -83,6 +83,39 @@ pub fn world_rotation(coordinates: &[String], q: &[f64], axis: [f64; 3]) -> Opti
 // names them too): they live with its schema.
 pub use super::schema::{Base, LimitAction};
 
+/// URDF options given for a model that is not a URDF file, which would not read them (a RON
+/// model that includes a robot sets them in its `urdf` section).
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{} {} read for a URDF robot only, and `{model}` is not a URDF file: {} would be ignored\n  help: leave {} out; a RON model that includes a robot sets its base, gravity and limits in its `urdf: Urdf(file: ..., base: Floating, gravity: (0.0, 0.0, 0.0), limits: Stop)` section",
+    given.join(", "), if given.len() == 1 { "is" } else { "are" }, if given.len() == 1 { "it" } else { "they" }, if given.len() == 1 { "it" } else { "them" }
+)]
+pub struct OptionsNotRead {
+    /// The options given, as the caller names them (`--base`, `base=`).
+    pub given: Vec<&'static str>,
+    /// The model as given.
+    pub model: String,
+}
+
+/// Refuses the options `given` (as the caller names them; empty: none given) for the model
+/// `argument` unless it is a URDF file: given for another, they were silently ignored. The
+/// command line and Python's `load` both ask here.
+///
+/// ```
+/// use generator::model::refuse_options_unless_urdf;
+/// use std::path::Path;
+/// assert!(refuse_options_unless_urdf(Path::new("arm.urdf"), vec!["--base"]).is_ok());
+/// assert!(refuse_options_unless_urdf(Path::new("cart_pendulum"), vec![]).is_ok());
+/// let e = refuse_options_unless_urdf(Path::new("cart_pendulum"), vec!["--base"]).unwrap_err();
+/// assert!(e.to_string().starts_with("--base is read for a URDF robot only"));
+/// ```
+pub fn refuse_options_unless_urdf(argument: &std::path::Path, given: Vec<&'static str>) -> Result<(), OptionsNotRead> {
+    if given.is_empty() || super::is_urdf(argument) {
+        return Ok(());
+    }
+    Err(OptionsNotRead { given, model: files::printable_path(argument) })
+}
+
 /// How a URDF becomes a model.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, rename = "Urdf")]
