@@ -1,8 +1,8 @@
 //! The motion shown: a trajectory written as one self-contained HTML page that plays it in 3-D
-//! (its script and data inside, no network needed), each body as its equivalent inertia box
-//! (the uniform box with the body's mass and principal moments, along its principal axes; a
-//! point mass as a small cube), each frame as its axes, with a time slider, play/pause and the
-//! time shown. The command line's `simulate --animate OUT.html` and the Python wheel's
+//! (its scripts and data inside, no network needed; the solids drawn in WebGL by three.js), each
+//! body as the shapes the model gives it or as its equivalent inertia box (the uniform box with
+//! the body's mass and principal moments, along its principal axes; a point mass as a small
+//! cube), each frame as its axes, with a time slider, play/pause and the time shown. The command line's `simulate --animate OUT.html` and the Python wheel's
 //! `Model.animate` write it.
 //!
 //! ```
@@ -17,8 +17,13 @@ use generator::model::Model;
 use generator::pose::Poser;
 use nalgebra::{Matrix3, SymmetricEigen};
 
-/// The page's template: its script reads the JSON the writer puts in place of `/*DATA*/`.
+/// The page's template: its script reads the JSON the writer puts in place of `/*DATA*/`, and
+/// draws with the three.js that goes in place of `/*THREE*/`.
 const TEMPLATE: &str = include_str!("page.html");
+
+/// three.js, the parts the page uses, bundled and minified (`animate/three/build.sh` makes it
+/// from the versions `animate/three/package.json` pins; MIT license, its notice inside).
+const THREE: &str = include_str!("three.min.js");
 
 /// A run to show: its output times and the coordinates at each, row-major (`times.len()` rows
 /// of the model's coordinates).
@@ -68,10 +73,10 @@ pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
     (half, std::array::from_fn(|k| v[(k / 3, k % 3)]))
 }
 
-/// The most mesh triangles a page draws, all meshes together: the page fills every face it
-/// keeps at every frame on a 2-D canvas (about 10 microseconds a face in software), so a robot
-/// of 30 meshed links shares them (docs/benchmarks/page.json has the frame time).
-const MAX_PAGE_MESH_TRIANGLES: usize = 2400;
+/// The most mesh triangles a page carries, all meshes together: each costs about 60 bytes of
+/// the page, so a robot's meshes of hundreds of thousands of triangles share 20,000 (1.2 MB),
+/// which WebGL draws in a few milliseconds (docs/benchmarks/page.json has the frame time).
+const MAX_PAGE_MESH_TRIANGLES: usize = 20_000;
 
 /// The meshes of `poser` (its bodies' and its scenery's) simplified further where they hold
 /// more than `total` triangles together: each mesh keeps a share in proportion to its scaled
@@ -112,7 +117,7 @@ fn scaled_vertices(s: &generator::pose::ShapeValues) -> impl Iterator<Item = [f6
 fn shape_json(s: &generator::pose::ShapeValues) -> serde_json::Value {
     let mut json = serde_json::json!({ "solid": s.solid, "sizes": s.sizes, "o": s.origin, "r": s.rotation });
     if let Some(m) = &s.mesh {
-        json["points"] = scaled_vertices(s).flatten().collect::<Vec<f64>>().into();
+        json["points"] = scaled_vertices(s).flatten().map(compact).collect::<Vec<_>>().into();
         json["triangles"] = m.triangles.iter().flatten().copied().collect::<Vec<u32>>().into();
     }
     json
@@ -206,13 +211,14 @@ pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> R
         "overlays": overlays,
         "scenery": poser.scenery.iter().map(shape_json).collect::<Vec<_>>(),
     });
-    Ok(TEMPLATE.replacen("/*DATA*/", &script_json(&data), 1))
+    Ok(TEMPLATE.replacen("/*THREE*/", THREE, 1).replacen("/*DATA*/", &script_json(&data), 1))
 }
 
 /// `value` as JSON to put inside a script element: `</` would end the element, so it is written
-/// `<\/` (the same string to the script).
+/// `<\/`, and `/*` (the template's places, which a name could otherwise imitate) `/\u002a`: the
+/// same strings to the script.
 fn script_json(value: &serde_json::Value) -> String {
-    serde_json::to_string(value).expect("plain data").replace("</", "<\\/")
+    serde_json::to_string(value).expect("plain data").replace("</", "<\\/").replace("/*", "/\\u002a")
 }
 
 /// `page` (as [`page`] made it) made live for `multibody watch`: it asks `status?token=TOKEN`
@@ -321,6 +327,19 @@ mod tests {
         assert_eq!(html.matches("</script>").count(), TEMPLATE.matches("</script>").count());
     }
 
+    /// A name that imitates the template's places (`/*LIVE*/null`, where `watch` makes the page
+    /// live) reaches the page as data: three.js is in it once and the page can still be served.
+    #[test]
+    fn a_name_cannot_take_a_place_of_the_template() {
+        let (model, params) = cart_pendulum();
+        let html = page(&model, &params, &Motion { formulation: "/*LIVE*/null /*THREE*/ /*DATA*/", times: &[0.0], q: &[0.0; 3] }).unwrap();
+        assert_eq!(html.matches("/*LIVE*/null").count(), 1);
+        assert_eq!(html.matches(THREE).count(), 1);
+        assert!(html.contains(r#""formulation":"/\u002aLIVE*/null /\u002aTHREE*/ /\u002aDATA*/""#), "{html:.200}");
+        let served = live(&html, 7, "abc").unwrap();
+        assert!(served.contains(r#"const live = {"run":7,"token":"abc"};"#));
+    }
+
     /// A centre of mass that moves with a coordinate (scene 3's tip sliding along its boom,
     /// `l/2 + rho`) is drawn where it is at every sample.
     #[test]
@@ -390,8 +409,8 @@ mod tests {
             }
         }
         std::fs::write(dir.path().join("sphere.stl"), stl + "endsolid s\n").unwrap();
-        // Eight small spheres and one twice as wide: 9 x 400 triangles, more than the page's
-        // 2,400; beside them a body drawn as a cylinder and one as a sphere, whose sizes are
+        // Eight small spheres and one twice as wide: 9 x 6,400 triangles, more than the page's
+        // 20,000; beside them a body drawn as a cylinder and one as a sphere, whose sizes are
         // not a mesh's scale.
         let mut bodies: Vec<String> = (0..9)
             .map(|k| {

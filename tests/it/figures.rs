@@ -87,7 +87,11 @@ fn the_page_figures_are_the_benchmark_file() {
     assert_quoted(&docs, &format!("40 capsules {}", said("carousel_40_capsules")), "docs/benchmarks/page.json");
     assert_quoted(&docs, &format!("40 STL meshes {}", said("carousel_40_meshes")), "docs/benchmarks/page.json");
     assert_quoted(&docs, &format!("40 inertia cubes {}", said("pendulum_on_cart_39")), "docs/benchmarks/page.json");
-    let met = file["results"]["carousel_40_capsules"]["frames_per_second"].as_f64().unwrap() >= 60.0;
+    assert_quoted(&docs, &format!("antialiasing asked for, {}", said("carousel_40_capsules_antialiased")), "docs/benchmarks/page.json");
+    // The goal is met by the page as it draws by default.
+    let met = ["carousel_40_capsules", "carousel_40_meshes", "pendulum_on_cart_39"]
+        .iter()
+        .all(|name| file["results"][name]["frames_per_second"].as_f64().unwrap() >= 60.0);
     assert_quoted(&docs, &format!("60 frames per second for 40 bodies: {}", if met { "met" } else { "missed" }), "docs/benchmarks/page.json");
 }
 

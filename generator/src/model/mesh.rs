@@ -7,10 +7,10 @@
 //! `<up_axis>` is not applied: RViz, for which robots' meshes are made, does not apply it either
 //! (ros-visualization/rviz#1045), so a `Y_UP` file draws as it does there.
 
-/// The most triangles a mesh keeps when read ([`TriangleMesh::simplified`]): the page sorts and
-/// fills every face at every frame (and shares a total among a model's meshes, the animation's
-/// own bound), so a finer mesh would only cost memory and reading time.
-pub const MAX_DRAWN_TRIANGLES: usize = 400;
+/// The most triangles a mesh keeps when read ([`TriangleMesh::simplified`]): the page carries a
+/// total for all of a model's meshes (the animation's own bound, 20,000), so a finer mesh would
+/// only cost memory and reading time.
+pub const MAX_DRAWN_TRIANGLES: usize = 4000;
 
 /// The most bytes a mesh file may hold (64 MiB: a scanned part of a million triangles).
 pub const MAX_MESH_BYTES: u64 = 64 << 20;

@@ -1454,9 +1454,10 @@ impl<'a> Builder<'a> {
             self.err(ErrorKind::Io, place, &format!("\"{file}\""), format!("the mesh `{}` {why}", files::printable_path(&path)), help)
         };
         mesh::drawn_mesh(&path).map_err(|e| match e {
-            mesh::MeshError::Read(files::FileError::TooLarge { limit, .. }) => {
-                refuse(format!("holds more than {limit} bytes"), "give a smaller mesh: it is drawn with at most 400 triangles")
-            }
+            mesh::MeshError::Read(files::FileError::TooLarge { limit, .. }) => refuse(
+                format!("holds more than {limit} bytes"),
+                &format!("give a smaller mesh: it is drawn with at most {} triangles", mesh::MAX_DRAWN_TRIANGLES),
+            ),
             mesh::MeshError::Read(e) => {
                 refuse(format!("cannot be read: {}", e.source_message()), "give the path of a mesh file, relative to the model file's folder")
             }

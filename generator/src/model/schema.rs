@@ -311,7 +311,7 @@ pub enum ShapeDef {
     /// OBJ by its extension, `file` relative to the model
     /// file's folder (or absolute), its vertices multiplied by `scale` (default 1, 1, 1: a mesh
     /// drawn in millimetres takes `["0.001", "0.001", "0.001"]`). Drawn simplified to at most
-    /// 400 triangles.
+    /// 4,000 triangles (`mesh::MAX_DRAWN_TRIANGLES`).
     Mesh {
         file: String,
         #[serde(default, skip_serializing_if = "Option::is_none")]

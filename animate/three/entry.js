@@ -1,0 +1,26 @@
+// The parts of three.js the animation page uses (animate/src/page.html): esbuild keeps these
+// and what they need, nothing else.
+export {
+  AmbientLight,
+  BoxGeometry,
+  BufferGeometry,
+  Camera,
+  CapsuleGeometry,
+  Color,
+  ColorManagement,
+  CylinderGeometry,
+  DirectionalLight,
+  DoubleSide,
+  EqualStencilFunc,
+  Float32BufferAttribute,
+  Group,
+  IncrementStencilOp,
+  LinearSRGBColorSpace,
+  Matrix4,
+  Mesh,
+  MeshBasicMaterial,
+  MeshLambertMaterial,
+  Scene,
+  SphereGeometry,
+  WebGLRenderer,
+} from "three";
