@@ -39,11 +39,16 @@ def chromium(tmp_path, *args):
     return out.stdout
 
 
-def page_state(tmp_path, url):
-    dom = chromium(tmp_path, "--dump-dom", url)
+def page_dom(tmp_path, url, *flags):
+    """The page as the browser left it, and the state it drew (no script error asserted)."""
+    dom = chromium(tmp_path, *flags, "--dump-dom", url)
     errors = re.search(r'<pre id="errors">(.*?)</pre>', dom, re.S).group(1)
     assert errors.strip() == "", errors
-    return json.loads(re.search(r'<pre id="state">(.*?)</pre>', dom, re.S).group(1).replace("&quot;", '"'))
+    return dom, json.loads(re.search(r'<pre id="state">(.*?)</pre>', dom, re.S).group(1).replace("&quot;", '"'))
+
+
+def page_state(tmp_path, url):
+    return page_dom(tmp_path, url)[1]
 
 
 def hue_at(image, x, y, radius=4):
@@ -338,8 +343,7 @@ def test_the_view_moves_and_plays_faster_when_asked(tmp_path):
     # motion's pace a page that ignored the speed would be 63 times that behind, many samples.
     long = m.simulate("kane", t_end=100.0, dt_out=0.05, frame=False)
     m.animate(long, path)
-    dom = chromium(tmp_path, "--virtual-time-budget=2000", "--dump-dom", path.as_uri() + "#size=800x520&speed=64")
-    state = json.loads(re.search(r'<pre id="state">(.*?)</pre>', dom, re.S).group(1).replace("&quot;", '"'))
+    _, state = page_dom(tmp_path, path.as_uri() + "#size=800x520&speed=64", "--virtual-time-budget=2000")
     played = state["played"]
     assert state["speed"] == 64 and played["ms"] >= 1, state
     due = played["from"] + 64 * played["ms"] / 1000
@@ -441,9 +445,7 @@ def test_without_webgl_the_bodies_are_drawn_as_their_links_and_centres(tmp_path)
     path = tmp_path / "plain.html"
     m.animate(run, path)
     url = path.as_uri() + "#t=0.5&size=800x520"
-    dom = chromium(tmp_path, "--disable-webgl", "--dump-dom", url)
-    assert re.search(r'<pre id="errors">(.*?)</pre>', dom, re.S).group(1).strip() == ""
-    state = json.loads(re.search(r'<pre id="state">(.*?)</pre>', dom, re.S).group(1).replace("&quot;", '"'))
+    dom, state = page_dom(tmp_path, url, "--disable-webgl")
     assert state["webgl"] is False and state["shadows"] == 0
     assert "offers no WebGL" in re.search(r'<p id="notice"[^>]*>(.*?)</p>', dom, re.S).group(1)
     shot = tmp_path / "plain.png"
