@@ -2,13 +2,15 @@
 //! prost-build or bindgen. It writes each module into `OUT_DIR` (atomically, and only when its
 //! bytes change), prints `cargo:rerun-if-changed` for every model file itself, and warns when
 //! the build script runs the generator unoptimized (cargo builds build dependencies at
-//! `opt-level = 0` unless the crate says otherwise; derivation is then about ten times slower):
+//! `opt-level = 0` unless the crate says otherwise; derivation is then about ten times slower).
+//! The generator alone needs optimizing: `build-override` would optimize every build
+//! dependency and proc macro too (syn, serde's derive...), which only lengthens the first build.
 //!
 //! ```toml
 //! # Cargo.toml of the crate whose build.rs runs the generator
-//! [profile.dev.build-override]
+//! [profile.dev.package.generator]
 //! opt-level = 3
-//! [profile.release.build-override]
+//! [profile.release.package.generator]
 //! opt-level = 3
 //! ```
 
@@ -206,7 +208,7 @@ impl Builder {
             }
             if unoptimized() {
                 println!(
-                    "cargo:warning=the generator runs unoptimized in this build script (about ten times slower); add `[profile.dev.build-override] opt-level = 3` and `[profile.release.build-override] opt-level = 3` to Cargo.toml"
+                    "cargo:warning=the generator runs unoptimized in this build script (about ten times slower); add `[profile.dev.package.generator] opt-level = 3` and `[profile.release.package.generator] opt-level = 3` to Cargo.toml"
                 );
             }
         }
