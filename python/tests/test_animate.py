@@ -40,7 +40,8 @@ def chromium(tmp_path, *args):
 
 
 def page_dom(tmp_path, url, *flags):
-    """The page as the browser left it, and the state it drew (no script error asserted)."""
+    """The page as the browser left it and the state it drew, asserting that no script error
+    and nothing from the console (three.js's errors and warnings) showed."""
     dom = chromium(tmp_path, *flags, "--dump-dom", url)
     errors = re.search(r'<pre id="errors">(.*?)</pre>', dom, re.S).group(1)
     assert errors.strip() == "", errors
