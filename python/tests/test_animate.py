@@ -486,3 +486,24 @@ def test_every_built_in_model_and_family_is_drawn(tmp_path, name, n):
         shots.append(Image.open(shot).convert("RGB").crop((0, 60, 800, 560)))
         assert coverage(shots[-1]) >= 0.005, (name, t, coverage(shots[-1]))
     assert shots[0].tobytes() != shots[1].tobytes(), name
+
+
+def test_the_frames_axes_can_be_left_out(tmp_path):
+    # `&axes=0` (the Axes box): the frames' axes (x red, y green, z blue, over the bodies) are
+    # not drawn; the world's axes, under the bodies, still are.
+    from PIL import Image
+
+    m = multibody.load("cart_pendulum")
+    run = m.simulate("kane", t_end=1.0, dt_out=0.05, frame=False)
+    path = tmp_path / "axes.html"
+    m.animate(run, path)
+    counts = {}
+    for name, extra in [("shown", ""), ("left out", "&axes=0")]:
+        url = path.as_uri() + "#t=0.5&size=800x520&follow=0" + extra
+        assert page_state(tmp_path, url)["axes"] is (name == "shown")
+        shot = tmp_path / f"{name}.png"
+        chromium(tmp_path, f"--screenshot={shot}", url)
+        image = Image.open(shot).convert("RGB").crop((0, 60, 800, 560))
+        # The axes' green and blue (the bodies' hues are 30, 167.5 and 305 degrees).
+        counts[name] = [hue_count(image, 120, 8), hue_count(image, 205, 8)]
+    assert all(shown > left + 20 and left > 0 for shown, left in zip(counts["shown"], counts["left out"])), counts
