@@ -211,7 +211,19 @@ pub fn page_overlaid(model: &Model, params: &[f64], motions: &[Motion<'_>]) -> R
         "overlays": overlays,
         "scenery": poser.scenery.iter().map(shape_json).collect::<Vec<_>>(),
     });
-    Ok(TEMPLATE.replacen("/*THREE*/", THREE, 1).replacen("/*DATA*/", &script_json(&data), 1))
+    Ok(assembled(&script_json(&data)))
+}
+
+/// The template with three.js and `data` in their places, written once into one string (the
+/// page is mostly three.js: replacing place after place copied it each time).
+fn assembled(data: &str) -> String {
+    let (head, rest) = TEMPLATE.split_once("/*DATA*/").expect("the template has a place for the data");
+    let (middle, tail) = rest.split_once("/*THREE*/").expect("the template has a place for three.js after the data");
+    let mut page = String::with_capacity(TEMPLATE.len() + THREE.len() + data.len());
+    for piece in [head, data, middle, THREE, tail] {
+        page.push_str(piece);
+    }
+    page
 }
 
 /// `value` as JSON to put inside a script element: `</` would end the element, so it is written

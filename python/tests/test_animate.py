@@ -52,6 +52,13 @@ def page_state(tmp_path, url):
     return page_dom(tmp_path, url)[1]
 
 
+def animated(m, path, *args, **kwargs):
+    """`m`'s run (``m.simulate(*args, **kwargs)``, as arrays) written as a page at `path`."""
+    run = m.simulate(*args, frame=False, **kwargs)
+    m.animate(run, path)
+    return path, run
+
+
 def hue_at(image, x, y, radius=4):
     """The hues (degrees) of the saturated pixels in a square around (x, y)."""
     hues = []
@@ -68,9 +75,7 @@ def test_the_page_shows_the_bodies_where_the_trajectory_puts_them(tmp_path):
     from PIL import Image
 
     m = multibody.load("cart_pendulum")
-    run = m.simulate("kane", t_end=3.0, dt_out=0.01, frame=False)
-    path = tmp_path / "cart pendulum.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "cart pendulum.html", "kane", t_end=3.0, dt_out=0.01)
     html = path.read_text()
     # Self-contained: no address the page would fetch (the XHTML namespace's name, with which
     # three.js makes its canvas, is a name, never fetched).
@@ -171,9 +176,7 @@ def test_the_bodies_fill_a_fair_part_of_the_view(tmp_path, name):
     from PIL import Image
 
     m = multibody.pendulum_on_cart(10) if name == "pendulum_on_cart_10" else multibody.load(name)
-    run = m.simulate(m.formulations[-1], t_end=3.0, dt_out=0.05, frame=False)
-    path = tmp_path / f"{name}.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / f"{name}.html", m.formulations[-1], t_end=3.0, dt_out=0.05)
     shots = []
     for t in [0.5, 2.5]:
         url = path.as_uri() + f"#t={t}&size=800x520"
@@ -191,9 +194,7 @@ def test_the_bodies_fill_a_fair_part_of_the_view(tmp_path, name):
 
 def test_the_camera_follows_a_travelling_system(tmp_path):
     m = multibody.load("bicycle")
-    run = m.simulate("kane", t_end=3.0, dt_out=0.05, frame=False)
-    path = tmp_path / "bicycle.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "bicycle.html", "kane", t_end=3.0, dt_out=0.05)
     # The bicycle rides away further than its size: the camera follows its centre by default,
     # and the bodies stay in the middle of the view.
     middles = []
@@ -213,9 +214,7 @@ def test_a_long_chain_s_bobs_do_not_overlap(tmp_path):
     # Point masses a link apart: each is drawn as a cube of 0.9 of its link, where a twentieth of
     # the view would make the 20-link chain's cubes overlap.
     m = multibody.pendulum_on_cart(20)
-    run = m.simulate(m.formulations[-1], t_end=1.0, dt_out=0.1, frame=False)
-    path = tmp_path / "chain.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "chain.html", m.formulations[-1], t_end=1.0, dt_out=0.1)
     state = page_state(tmp_path, path.as_uri() + "#t=0.5&size=800x520")
     assert math.isclose(state["typicalLink"], m.params["l1"], rel_tol=1e-6)
     assert 2 * state["pointSize"] <= 0.9 * state["typicalLink"] * (1 + 1e-12)
@@ -226,9 +225,7 @@ def test_a_trail_draws_where_a_body_has_been(tmp_path):
     from PIL import Image
 
     m = multibody.load("cart_pendulum")
-    run = m.simulate("kane", t_end=3.0, dt_out=0.01, frame=False)
-    path = tmp_path / "trail.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "trail.html", "kane", t_end=3.0, dt_out=0.01)
     view = "&size=800x520&follow=0"
     now = page_state(tmp_path, path.as_uri() + "#t=3" + view + "&trail=bar2")
     assert now["trail"] == {"body": "bar2", "points": now["index"] + 1}
@@ -291,9 +288,7 @@ def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
 
     # cart_pendulum gives its bodies shapes: the cart a box, the bars cylinders.
     m = multibody.load("cart_pendulum")
-    run = m.simulate("kane", t_end=1.0, dt_out=0.05, frame=False)
-    path = tmp_path / "shapes.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "shapes.html", "kane", t_end=1.0, dt_out=0.05)
     url = path.as_uri() + "#t=0.5&size=800x520&follow=0"
     state = page_state(tmp_path, url)
     assert state["shaped"] == 3 and state["shadows"] > 0, state
@@ -330,9 +325,7 @@ def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
 
 def test_the_view_moves_and_plays_faster_when_asked(tmp_path):
     m = multibody.load("cart_pendulum")
-    run = m.simulate("kane", t_end=10.0, dt_out=0.01, frame=False)
-    path = tmp_path / "view.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "view.html", "kane", t_end=10.0, dt_out=0.01)
     # Moved on the page (shift-drag; `&pan=` in the address): every body by the same pixels.
     still = page_state(tmp_path, path.as_uri() + "#t=1&size=800x520")
     moved = page_state(tmp_path, path.as_uri() + "#t=1&size=800x520&pan=40,-20")
@@ -373,9 +366,7 @@ def test_a_mesh_is_drawn_from_every_side(tmp_path):
     )"""
     )
     m = multibody.load(str(tmp_path / "tetra.ron"))
-    run = m.simulate("kane", t_end=1.0, dt_out=0.05, frame=False)
-    path = tmp_path / "tetra.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "tetra.html", "kane", t_end=1.0, dt_out=0.05)
     state = page_state(tmp_path, path.as_uri() + "#t=0.5&size=800x520")
     assert state["shaped"] == 1 and state["triangles"] == 4 and state["shadows"] > 0, state
     # Its file gone, the model still loads and runs (a worker elsewhere has no mesh files), and
@@ -422,9 +413,7 @@ def test_a_body_inside_another_is_hidden(tmp_path):
     (tmp_path / "core.ron").write_text(NESTED.replace(SHELL, ""))
     for name in ["nested", "core"]:
         m = multibody.load(str(tmp_path / f"{name}.ron"))
-        run = m.simulate("kane", t_end=2.0, dt_out=0.1, frame=False)
-        path = tmp_path / f"{name}.html"
-        m.animate(run, path)
+        path, run = animated(m, tmp_path / f"{name}.html", "kane", t_end=2.0, dt_out=0.1)
         for t in [0.0, 1.5]:
             url = path.as_uri() + f"#t={t}&size=800x520"
             assert page_state(tmp_path, url)["webgl"] is True
@@ -442,9 +431,7 @@ def test_without_webgl_the_bodies_are_drawn_as_their_links_and_centres(tmp_path)
     from PIL import Image
 
     m = multibody.load("cart_pendulum")
-    run = m.simulate("kane", t_end=1.0, dt_out=0.05, frame=False)
-    path = tmp_path / "plain.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "plain.html", "kane", t_end=1.0, dt_out=0.05)
     url = path.as_uri() + "#t=0.5&size=800x520"
     dom, state = page_dom(tmp_path, url, "--disable-webgl")
     assert state["webgl"] is False and state["shadows"] == 0
@@ -472,9 +459,7 @@ def test_every_built_in_model_and_family_is_drawn(tmp_path, name, n):
     from PIL import Image
 
     m = multibody.load(name) if n is None else getattr(multibody, name)(n)
-    run = m.simulate(m.formulations[-1], t_end=1.0, dt_out=0.05, frame=False)
-    path = tmp_path / "page.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "page.html", m.formulations[-1], t_end=1.0, dt_out=0.05)
     shots = []
     for t in [0.2, 0.8]:
         url = path.as_uri() + f"#t={t}&size=800x520"
@@ -494,9 +479,7 @@ def test_the_frames_axes_can_be_left_out(tmp_path):
     from PIL import Image
 
     m = multibody.load("cart_pendulum")
-    run = m.simulate("kane", t_end=1.0, dt_out=0.05, frame=False)
-    path = tmp_path / "axes.html"
-    m.animate(run, path)
+    path, run = animated(m, tmp_path / "axes.html", "kane", t_end=1.0, dt_out=0.05)
     counts = {}
     for name, extra in [("shown", ""), ("left out", "&axes=0")]:
         url = path.as_uri() + "#t=0.5&size=800x520&follow=0" + extra
