@@ -75,7 +75,7 @@ pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
 
 /// The most mesh triangles a page carries, all meshes together: each costs about 60 bytes of
 /// the page, so a robot's meshes of hundreds of thousands of triangles share 20,000 (1.2 MB),
-/// which WebGL draws in a few milliseconds (docs/benchmarks/page.json has the frame time).
+/// which WebGL draws in a few milliseconds (docs/benchmarks/page.json has the frame rate).
 const MAX_PAGE_MESH_TRIANGLES: usize = 20_000;
 
 /// The meshes of `poser` (its bodies' and its scenery's) simplified further where they hold

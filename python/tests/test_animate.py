@@ -323,6 +323,20 @@ def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
 
 
 
+def test_round_shapes_take_as_many_sides_as_their_size_on_the_page(tmp_path):
+    # cart_pendulum's bars are cylinders: drawn small they take fewer sides than drawn large,
+    # and the triangles drawn are those sides' (a cylinder four to a side: two in its wall, one
+    # in each end; the cart's box twelve).
+    m = multibody.load("cart_pendulum")
+    path, _ = animated(m, tmp_path / "sides.html", "kane", t_end=1.0, dt_out=0.05)
+    states = [page_state(tmp_path, path.as_uri() + f"#t=0.5&size={size}&follow=0") for size in ["300x200", "1800x1200"]]
+    sides = [[n for body in state["sides"] for n in body] for state in states]
+    for state, counts in zip(states, sides):
+        assert state["shaped"] == 3 and len(counts) == 2, state
+        assert state["triangles"] == 12 + sum(4 * n for n in counts), (state["triangles"], counts)
+    assert all(small < large for small, large in zip(*sides)), sides
+
+
 def test_the_view_moves_and_plays_faster_when_asked(tmp_path):
     m = multibody.load("cart_pendulum")
     path, run = animated(m, tmp_path / "view.html", "kane", t_end=10.0, dt_out=0.01)

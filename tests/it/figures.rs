@@ -73,26 +73,30 @@ fn the_watch_figures_are_the_benchmark_file() {
     assert_quoted(&docs, &format!("under one second from a save: {}", if met { "met" } else { "missed" }), "docs/benchmarks/watch.json");
 }
 
-/// The page's frame times in docs/tool.md are the page benchmark's file, and the goal's verdict
+/// The page's frame rates in docs/tool.md are the page benchmark's file, and the goal's verdict
 /// follows from it.
 #[test]
 fn the_page_figures_are_the_benchmark_file() {
     let file = json("docs/benchmarks/page.json");
     // Lines wrap where they will: the figures are read as words.
     let docs = read("docs/tool.md").split_whitespace().collect::<Vec<_>>().join(" ");
-    let said = |name: &str| {
-        let r = &file["results"][name];
-        format!("{:.1} ms a frame ({:.0} frames per second)", r["median_frame_ms"].as_f64().unwrap(), r["frames_per_second"].as_f64().unwrap())
-    };
-    assert_quoted(&docs, &format!("40 capsules {}", said("carousel_40_capsules")), "docs/benchmarks/page.json");
-    assert_quoted(&docs, &format!("40 STL meshes {}", said("carousel_40_meshes")), "docs/benchmarks/page.json");
-    assert_quoted(&docs, &format!("40 inertia cubes {}", said("pendulum_on_cart_39")), "docs/benchmarks/page.json");
-    assert_quoted(&docs, &format!("antialiasing asked for, {}", said("carousel_40_capsules_antialiased")), "docs/benchmarks/page.json");
-    // The goal is met by the page as it draws by default.
-    let met = ["carousel_40_capsules", "carousel_40_meshes", "pendulum_on_cart_39"]
-        .iter()
-        .all(|name| file["results"][name]["frames_per_second"].as_f64().unwrap() >= 60.0);
-    assert_quoted(&docs, &format!("60 frames per second for 40 bodies: {}", if met { "met" } else { "missed" }), "docs/benchmarks/page.json");
+    let fps = |name: &str| file["results"][name]["frames_per_second"].as_f64().unwrap();
+    let script = |name: &str| file["results"][name]["script_median_ms"].as_f64().unwrap();
+    let cases = ["carousel_40_capsules", "carousel_40_meshes", "pendulum_on_cart_39"];
+    for (said, name) in ["40 capsules", "40 STL meshes", "the 39-link pendulum on a cart's 40 inertia cubes"].iter().zip(cases) {
+        assert_quoted(&docs, &format!("{said} {:.1} frames per second", fps(name)), "docs/benchmarks/page.json");
+    }
+    assert_quoted(&docs, &format!("antialiasing asked for, {:.1} frames per second", fps("carousel_40_capsules_antialiased")), "docs/benchmarks/page.json");
+    let scripts = format!("{:.1} ms (capsules), {:.1} ms (meshes) and {:.1} ms (cubes)", script(cases[0]), script(cases[1]), script(cases[2]));
+    assert_quoted(&docs, &scripts, "docs/benchmarks/page.json");
+    let display = file["display_frames_per_second"].as_f64().unwrap();
+    assert_quoted(&docs, &format!("an empty page plays at {display:.1} frames per second"), "docs/benchmarks/page.json");
+    let empty = file["empty_layers_frames_per_second"].as_f64().unwrap();
+    assert_quoted(&docs, &format!("nothing drawn, at {empty:.1}."), "docs/benchmarks/page.json");
+    // The goal is met by the page as it draws by default: every model at 95 % of the display's
+    // rate (57 of 60), measured in the same run.
+    let met = cases.iter().all(|name| fps(name) >= 0.95 * display);
+    assert_quoted(&docs, &format!("60 frames per second for 40 bodies (95 % of the display's rate, each model): {}", if met { "met" } else { "missed" }), "docs/benchmarks/page.json");
 }
 
 #[test]
