@@ -109,16 +109,37 @@ fn share_mesh_triangles(poser: &mut generator::pose::Poser, total: usize) {
 
 /// A mesh shape's vertices in its own axes, scaled; none for a solid.
 fn scaled_vertices(s: &generator::pose::ShapeValues) -> impl Iterator<Item = [f64; 3]> + '_ {
-    s.mesh.iter().flat_map(|m| m.vertices.iter()).map(|v| std::array::from_fn(|i| v[i] * s.sizes[i]))
+    s.mesh.iter().flat_map(|m| scaled(m, &s.sizes))
 }
 
+/// A mesh's vertices scaled by `sizes` along its axes.
+fn scaled<'a>(mesh: &'a generator::model::TriangleMesh, sizes: &'a [f64]) -> impl Iterator<Item = [f64; 3]> + 'a {
+    mesh.vertices.iter().map(|v| std::array::from_fn(|i| v[i] * sizes[i]))
+}
+
+/// The most triangles a small mesh's shadow is drawn with (the page chooses where): a copy of
+/// the mesh simplified to them. A shadow is an outline on the ground, and where WebGL is drawn in
+/// software every triangle costs twice, once for the solid and once for its shadow (docs/tool.md
+/// has the frame rates).
+const SHADOW_TRIANGLES: usize = 48;
+
 /// A shape as the page reads it: its solid, sizes and placement; a mesh's scaled vertices and
-/// its triangles, flat.
+/// its triangles, flat, and (where it has more than [`SHADOW_TRIANGLES`]) its shadow's, as
+/// `shadow`.
 fn shape_json(s: &generator::pose::ShapeValues) -> serde_json::Value {
     let mut json = serde_json::json!({ "solid": s.solid, "sizes": s.sizes, "o": s.origin, "r": s.rotation });
     if let Some(m) = &s.mesh {
-        json["points"] = scaled_vertices(s).flatten().map(compact).collect::<Vec<_>>().into();
-        json["triangles"] = m.triangles.iter().flatten().copied().collect::<Vec<u32>>().into();
+        let flat = |m: &generator::model::TriangleMesh| {
+            let points: Vec<serde_json::Value> = scaled(m, &s.sizes).flatten().map(compact).collect();
+            (points, m.triangles.iter().flatten().copied().collect::<Vec<u32>>())
+        };
+        let (points, triangles) = flat(m);
+        json["points"] = points.into();
+        json["triangles"] = triangles.into();
+        if m.triangles.len() > SHADOW_TRIANGLES {
+            let (points, triangles) = flat(&m.simplified(SHADOW_TRIANGLES));
+            json["shadow"] = serde_json::json!({ "points": points, "triangles": triangles });
+        }
     }
     json
 }
@@ -448,6 +469,22 @@ mod tests {
         assert!(kept[..8].iter().all(|n| *n >= 12 && *n == kept[0]) && kept[8] > 2 * kept[0], "{kept:?}");
         assert_eq!(data["bodies"][9]["shapes"][0]["sizes"], serde_json::json!([0.05, 1.0]));
         assert_eq!(data["bodies"][10]["shapes"][0]["sizes"], serde_json::json!([0.1]));
+        // Each mesh's shadow is a coarser copy: at most SHADOW_TRIANGLES triangles, some, on
+        // vertices inside the mesh's own bounds (scaled as the mesh is); a solid has none.
+        for k in 0..9 {
+            let shape = &data["bodies"][k]["shapes"][0];
+            let numbers = |v: &serde_json::Value| v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect::<Vec<f64>>();
+            let (points, shadow) = (numbers(&shape["points"]), numbers(&shape["shadow"]["points"]));
+            let triangles = shape["shadow"]["triangles"].as_array().unwrap();
+            assert!(triangles.len() / 3 <= SHADOW_TRIANGLES && triangles.len() / 3 >= 8, "{k}: {}", triangles.len() / 3);
+            assert!(triangles.iter().all(|v| (v.as_u64().unwrap() as usize) < shadow.len() / 3));
+            for d in 0..3 {
+                let axis = |p: &[f64]| p.iter().skip(d).step_by(3).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
+                let ((lo, hi), (slo, shi)) = (axis(&points), axis(&shadow));
+                assert!(slo >= lo - 1e-9 && shi <= hi + 1e-9 && shi - slo > 0.5 * (hi - lo), "{k}, axis {d}: [{slo}, {shi}] in [{lo}, {hi}]");
+            }
+        }
+        assert!(data["bodies"][9]["shapes"][0].get("shadow").is_none() && data["bodies"][10]["shapes"][0].get("shadow").is_none());
     }
 
     /// The wrong shape, no samples or a NaN is refused, naming why.

@@ -173,6 +173,7 @@ def measure(page, extra=""):
         "bodies": len(state["bodies"]),
         "shaped_bodies": state["shaped"],
         "triangles_drawn": state["triangles"],
+        "shadow_triangles_drawn": state["shadowTriangles"],
         "antialias": state["antialias"],
         "frames_per_second": round(frames["per_second"], 1),
         "slowest_gap_ms": round(frames["slowest_gap"], 1),

@@ -393,6 +393,58 @@ def test_a_mesh_is_drawn_from_every_side(tmp_path):
     assert not (tmp_path / "gone.html").exists()
 
 
+def test_a_fine_mesh_casts_its_shadow_from_a_coarser_copy(tmp_path):
+    from PIL import Image, ImageChops
+
+    # A sphere of 1,520 triangles (1,600 less the poles' collapsed ones): its shadow (its only
+    # one: the rod to a body drawn as its shapes is left out), drawn from a copy of 48 triangles
+    # at most where the ball is small on the page, still falls under it, where its centre drops
+    # onto the ground, and only darkens.
+    bands, sides = 20, 40
+    at = lambda j, k: (math.sin(math.pi * j / bands) * math.cos(2 * math.pi * k / sides), math.sin(math.pi * j / bands) * math.sin(2 * math.pi * k / sides), math.cos(math.pi * j / bands))
+    facets = "".join(
+        "facet normal 0 0 0\nouter loop\n" + "".join("vertex %.6f %.6f %.6f\n" % v for v in tri) + "endloop\nendfacet\n"
+        for j in range(bands)
+        for k in range(sides)
+        for tri in [(at(j, k), at(j + 1, k), at(j + 1, k + 1)), (at(j, k), at(j + 1, k + 1), at(j, k + 1))]
+    )
+    (tmp_path / "ball.stl").write_text("solid ball\n" + facets + "endsolid ball\n")
+    (tmp_path / "ball.ron").write_text(
+        """Model(
+        name: "ball",
+        parameters: { "m": 1.0, "g": 9.81 },
+        coordinates: ["th"],
+        frames: [Frame(name: "arm", parent: "world", rotation: [Y("th")])],
+        bodies: [Body(name: "ball", frame: "arm", mass: "m", com: ["0", "0", "-1"], inertia: PointMass, shape: Mesh(file: "ball.stl", scale: ["0.2", "0.2", "0.2"], origin: ["0", "0", "-1"]))],
+        forces: [Gravity(vector: ["0", "0", "-g"])],
+        quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]),
+        initial: Initial(q: {"th": "0.8"}, qdot: {"th": "0"}),
+    )"""
+    )
+    m = multibody.load(str(tmp_path / "ball.ron"))
+    path, _ = animated(m, tmp_path / "ball.html", "kane", t_end=1.0, dt_out=0.05)
+    # Large on the page (its radius about 60 pixels), the shadow is the mesh's own; small (about
+    # 36), the coarser copy's.
+    large = page_state(tmp_path, path.as_uri() + "#t=0&size=800x520&axes=0")
+    url = path.as_uri() + "#t=0&size=480x312&axes=0"
+    state = page_state(tmp_path, url)
+    for s in (large, state):
+        assert s["shaped"] == 1 and s["triangles"] == 2 * bands * sides - 2 * sides and s["shadows"] == 1, s
+    assert large["shadowTriangles"] == large["triangles"] and 8 <= state["shadowTriangles"] <= 48, (large["shadowTriangles"], state["shadowTriangles"])
+    shots = {}
+    for name, extra in [("shadow", ""), ("none", "&shadow=0")]:
+        shot = tmp_path / f"{name}.png"
+        chromium(tmp_path, f"--screenshot={shot}", url + extra)
+        shots[name] = Image.open(shot).convert("RGB")
+    diff = ImageChops.difference(shots["shadow"], shots["none"]).convert("L")
+    changed = [(i, j) for j in range(diff.height) for i in range(diff.width) if diff.getpixel((i, j)) > 8]
+    assert len(changed) > 100 and all(sum(shots["shadow"].getpixel(p)) < sum(shots["none"].getpixel(p)) for p in changed), len(changed)
+    # The shadow's middle is near where the ball's centre drops onto the ground.
+    x, y = state["ground"][0][0] + state["offset"][0], state["ground"][0][1] + state["offset"][1]
+    mx, my = sum(p[0] for p in changed) / len(changed), sum(p[1] for p in changed) / len(changed)
+    assert math.hypot(mx - x, my - y) < 6, ((mx, my), (x, y))
+
+
 SHELL = """
         Body(name: "shell", frame: "arm", mass: "m", com: ["1", "0", "0"], inertia: PointMass, shape: Sphere(radius: "0.5", origin: ["1", "0", "0"])),"""
 NESTED = """Model(
