@@ -96,7 +96,11 @@ fn the_page_figures_are_the_benchmark_file() {
     // The goal is met by the page as it draws by default: every model at 95 % of the display's
     // rate (57 of 60), measured in the same run.
     let met = cases.iter().all(|name| fps(name) >= 0.95 * display);
-    assert_quoted(&docs, &format!("60 frames per second for 40 bodies (95 % of the display's rate, each model): {}", if met { "met" } else { "missed" }), "docs/benchmarks/page.json");
+    assert_quoted(
+        &docs,
+        &format!("60 frames per second for 40 bodies (95 % of the display's rate, each model): {}", if met { "met" } else { "missed" }),
+        "docs/benchmarks/page.json",
+    );
 }
 
 #[test]
