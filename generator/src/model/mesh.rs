@@ -65,14 +65,23 @@ impl MeshFormat {
     }
 }
 
+/// A mesh file's size and modification time: read again when either changes.
+type Stamp = (u64, Option<std::time::SystemTime>);
+
+/// The meshes read, oldest first: at most [`KEPT_MESHES`].
+static READ: std::sync::Mutex<Vec<(std::path::PathBuf, Stamp, std::sync::Arc<TriangleMesh>)>> = std::sync::Mutex::new(Vec::new());
+
+/// The most meshes kept read: a few robots' worth (a robot has tens), each at most
+/// [`MAX_DRAWN_TRIANGLES`] (about 100 KB), so that a process that loads robot after robot (a
+/// notebook, `watch`) keeps some megabytes, not every mesh it ever read.
+const KEPT_MESHES: usize = 256;
+
 /// The mesh of the file at `path` (its format by its extension, [`MeshFormat::of`]),
 /// simplified for drawing ([`MAX_DRAWN_TRIANGLES`]).
-/// A file is read once per process while its size and modification time stay the same: a URDF
-/// is checked, then built, and `watch` rebuilds a model on every save, and a robot's meshes can
-/// be tens of megabytes.
+/// A file is read once per process while its size and modification time stay the same (and
+/// while it is among the [`KEPT_MESHES`] last read): a URDF is checked, then built, and `watch`
+/// rebuilds a model on every save, and a robot's meshes can be tens of megabytes.
 pub fn drawn_mesh(path: &std::path::Path) -> Result<std::sync::Arc<TriangleMesh>, MeshError> {
-    type Stamp = (u64, Option<std::time::SystemTime>);
-    static READ: std::sync::Mutex<Vec<(std::path::PathBuf, Stamp, std::sync::Arc<TriangleMesh>)>> = std::sync::Mutex::new(Vec::new());
     // Keyed by the canonical path: a URDF names a file through `..` one way, the model another.
     let path = &std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     let stamp: Option<Stamp> = std::fs::metadata(path).ok().map(|m| (m.len(), m.modified().ok()));
@@ -88,6 +97,10 @@ pub fn drawn_mesh(path: &std::path::Path) -> Result<std::sync::Arc<TriangleMesh>
     if let Some(stamp) = stamp {
         read = READ.lock().unwrap_or_else(|e| e.into_inner());
         read.retain(|(p, _, _)| p != path);
+        if read.len() >= KEPT_MESHES {
+            let excess = read.len() + 1 - KEPT_MESHES;
+            read.drain(..excess);
+        }
         read.push((path.to_path_buf(), stamp, mesh.clone()));
     }
     Ok(mesh)
@@ -419,6 +432,25 @@ fn place_node<'a, 'input>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Meshes read are kept, the last KEPT_MESHES of them: the same file unchanged comes back
+    /// without being read again (the same mesh), and reading more files than that keeps no more.
+    #[test]
+    fn the_meshes_read_are_kept_and_bounded() {
+        let dir = tempfile::tempdir().unwrap();
+        let triangle = |k: usize| format!("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex {} 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n", k + 1);
+        let paths: Vec<_> = (0..KEPT_MESHES + 20).map(|k| dir.path().join(format!("m{k}.stl"))).collect();
+        for (k, path) in paths.iter().enumerate() {
+            std::fs::write(path, triangle(k)).unwrap();
+            let first = drawn_mesh(path).unwrap();
+            assert_eq!(first.vertices[1][0], (k + 1) as f64);
+            assert!(std::sync::Arc::ptr_eq(&first, &drawn_mesh(path).unwrap()), "{k}: read again");
+            assert!(READ.lock().unwrap().len() <= KEPT_MESHES);
+        }
+        // The first files read have made way for the last.
+        let kept = |path: &std::path::PathBuf| READ.lock().unwrap().iter().any(|(p, _, _)| *p == std::fs::canonicalize(path).unwrap());
+        assert!(!kept(&paths[0]) && kept(&paths[paths.len() - 1]));
+    }
 
     /// A closed box of 12 triangles as binary STL, its 80-byte header `header`.
     fn binary_cube(header: &[u8]) -> Vec<u8> {
