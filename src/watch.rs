@@ -1,7 +1,8 @@
 //! `watch`: the live modelling loop. The model file, and every file a run read (a URDF it
-//! includes, an input's series), are read ten times a second; when their bytes change (and then
-//! hold still for 60 ms: an editor's save can take several writes), the model is derived and
-//! run again exactly as `simulate` runs it, writing the same
+//! includes, an input's series, a mesh), are read ten times a second; when their bytes change
+//! (a file over 1 MB, such as a robot's mesh, by its size and modification time) and then hold
+//! still for 60 ms (an editor's save can take several writes), the model is derived and run
+//! again exactly as `simulate` runs it, writing the same
 //! files, and the page of the motion, served on 127.0.0.1 behind a random token, reloads with
 //! its camera and time kept. A model's error is told in the terminal, located, and over the
 //! page; the loop goes on, the last good run still shown.
@@ -34,6 +35,27 @@ struct Shown {
 const POLL: Duration = Duration::from_millis(100);
 const SETTLE: Duration = Duration::from_millis(60);
 
+/// A watched file larger than this is followed by its size and modification time, not its
+/// bytes: a robot's meshes, tens of megabytes, read twice a poll would keep a core busy.
+const READ_UP_TO: u64 = 1 << 20;
+
+/// What a poll sees of a watched file: its bytes or, larger than [`READ_UP_TO`], its size and
+/// modification time.
+#[derive(Debug, PartialEq)]
+enum Seen {
+    Bytes(Vec<u8>),
+    Stamp(u64, Option<std::time::SystemTime>),
+}
+
+/// What a poll sees of `path` (its bytes read bounded, as the loader reads a model or an
+/// input's series, whatever the path is).
+fn seen(path: &Path) -> Result<Seen, files::FileError> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() > READ_UP_TO => Ok(Seen::Stamp(m.len(), m.modified().ok())),
+        _ => files::read_bounded(path, 64 << 20).map(Seen::Bytes),
+    }
+}
+
 pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
     let model = &args.simulate.model;
     if !model.is_file() {
@@ -62,10 +84,10 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
         files::printable_path(&page_path)
     ))?;
     // The files watched: the model's, then every other file a run read (a URDF it includes,
-    // an input's series). The bytes the last run read of them; `None` after a failed read (run
+    // an input's series, a mesh). What the last run saw of them; `None` after a failed read (run
     // again when they are back, even unchanged: an editor's save may remove a file a moment).
     let mut watched = vec![model.clone()];
-    let mut last: Option<Vec<Vec<u8>>> = None;
+    let mut last: Option<Vec<Seen>> = None;
     let mut told_unreadable = false;
     loop {
         match settled(&watched) {
@@ -83,7 +105,7 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
                     }
                 }
                 if let Some(bytes) = last.as_mut() {
-                    bytes.extend(watched[before..].iter().map(|p| std::fs::read(p).unwrap_or_default()));
+                    bytes.extend(watched[before..].iter().map(|p| seen(p).unwrap_or(Seen::Bytes(Vec::new()))));
                 }
                 match outcome {
                     Ok((page, stopped)) => {
@@ -113,10 +135,9 @@ pub fn watch(args: &WatchArgs) -> Result<(), CliError> {
     }
 }
 
-/// The bytes of the files `paths` once they have held still for [`SETTLE`] (each read bounded,
-/// as the loader reads a model or an input's series, whatever the path is).
-fn settled(paths: &[std::path::PathBuf]) -> Result<Vec<Vec<u8>>, files::FileError> {
-    let read = || paths.iter().map(|p| files::read_bounded(p, 64 << 20)).collect::<Result<Vec<_>, _>>();
+/// What a poll sees of the files `paths` once it has held still for [`SETTLE`].
+fn settled(paths: &[std::path::PathBuf]) -> Result<Vec<Seen>, files::FileError> {
+    let read = || paths.iter().map(|p| seen(p)).collect::<Result<Vec<_>, _>>();
     let mut bytes = read()?;
     loop {
         std::thread::sleep(SETTLE);
@@ -193,4 +214,33 @@ fn answer(request: tiny_http::Request, shown: &Mutex<Shown>, token: &str) {
     };
     // A browser that went away mid-answer is no concern of the loop's.
     let _ = request.respond(response);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small file is seen by its bytes, a large one by its size and modification time: either
+    /// changes when the file is written anew, and stays when it is not.
+    #[test]
+    fn a_large_file_is_seen_by_its_size_and_time() {
+        let dir = tempfile::tempdir().unwrap();
+        let (small, large) = (dir.path().join("model.ron"), dir.path().join("mesh.stl"));
+        std::fs::write(&small, "Model()").unwrap();
+        std::fs::write(&large, vec![b'x'; READ_UP_TO as usize + 1]).unwrap();
+        assert_eq!(seen(&small).unwrap(), Seen::Bytes(b"Model()".to_vec()));
+        let before = seen(&large).unwrap();
+        assert!(matches!(before, Seen::Stamp(n, Some(_)) if n == READ_UP_TO + 1), "{before:?}");
+        assert_eq!(seen(&large).unwrap(), before);
+        // Written again, the same size: its modification time moves on.
+        let time = std::fs::metadata(&large).unwrap().modified().unwrap();
+        std::fs::write(&large, vec![b'y'; READ_UP_TO as usize + 1]).unwrap();
+        std::fs::File::options().write(true).open(&large).unwrap().set_modified(time + Duration::from_millis(1)).unwrap();
+        assert_ne!(seen(&large).unwrap(), before);
+        std::fs::write(&small, "Model(x)").unwrap();
+        assert_eq!(seen(&small).unwrap(), Seen::Bytes(b"Model(x)".to_vec()));
+        // A file that is gone is the loader's error.
+        std::fs::remove_file(&small).unwrap();
+        assert!(seen(&small).is_err());
+    }
 }
