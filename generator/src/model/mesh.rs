@@ -438,7 +438,8 @@ mod tests {
     #[test]
     fn the_meshes_read_are_kept_and_bounded() {
         let dir = tempfile::tempdir().unwrap();
-        let triangle = |k: usize| format!("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex {} 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n", k + 1);
+        let triangle =
+            |k: usize| format!("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex {} 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n", k + 1);
         let paths: Vec<_> = (0..KEPT_MESHES + 20).map(|k| dir.path().join(format!("m{k}.stl"))).collect();
         for (k, path) in paths.iter().enumerate() {
             std::fs::write(path, triangle(k)).unwrap();

@@ -5,7 +5,7 @@
 //! interpolates inside the last accepted one ([`Stepper`]).
 
 use super::events::Watch;
-use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, finish_step, grown_step, initial_step, next_step_size};
+use super::{Project, REFUSALS, Reason, Rhs, RunError, Settings, Solution, States, Stats, finish_step, grown_step, initial_step, next_step_size, of_the_state};
 
 /// A method's step-size controller, Hairer's: after a step with error norm `e`, the next step
 /// is `h / fac` with `fac = e^expo / facold^beta / safe`, clamped to `[fac_min, fac_max]` on
@@ -97,9 +97,29 @@ pub(super) fn drive<S: Stepper>(
     let mut h = initial_step(f, t, &y, &f0, S::ORDER, s, &mut stats).map_err(|r| stop(t, &y, r))?;
     let mut facold: f64 = 1e-4;
     let mut rejected_last = false;
+    // The model's refusals of the first step's trial stages, and the last of them. The first
+    // step's size is a guess, and its stages can reach states the motion does not (a floating
+    // robot hand's first step, 0.009 s where its light fingers needed 0.002 s, put a finger
+    // where the mass matrix is singular): the step is rejected and shrunk, as one whose error
+    // is not finite, and the run stops with the refusal when it persists (REFUSALS times, or
+    // until the step underflows). Once under way, steps are sized by the error they make, and a
+    // refusal stops the run: shrinking there could step across a singular set (a ZYX body's
+    // gimbal lock, at loose tolerances) and go on past it.
+    let (mut refusals, mut refused) = (0, None);
     while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end, &y, &f0).map_err(|r| stop(t, &y, r))?;
-        let Some(e) = stepper.attempt(f, t, &y, &f0, h, &mut y_new, s, &mut stats).map_err(|r| stop(t, &y, r))? else {
+        h = next_step_size(&stats, s, t, h, t_end, &y, &f0).map_err(|r| stop(t, &y, if refusals > 0 { refused.clone().map_or(r, Reason::Rhs) } else { r }))?;
+        let attempted = match stepper.attempt(f, t, &y, &f0, h, &mut y_new, s, &mut stats) {
+            Err(Reason::Rhs(failure)) if stats.steps == 0 && of_the_state(&failure) && refusals < REFUSALS => {
+                refusals += 1;
+                refused = Some(failure);
+                stats.rejected += 1;
+                rejected_last = true;
+                h *= c.non_finite;
+                continue;
+            }
+            other => other.map_err(|r| stop(t, &y, r))?,
+        };
+        let Some(e) = attempted else {
             stats.rejected += 1;
             rejected_last = true;
             h *= c.unformed;
@@ -122,6 +142,7 @@ pub(super) fn drive<S: Stepper>(
         let h_new = h / fac;
         facold = e.max(1e-4);
         stats.steps += 1;
+        refusals = 0;
         let t_new = if h == t_end - t { t_end } else { t + h };
         stepper.accepted(f, t, t_new, h, &y_new, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
         let mut prepared = false;

@@ -523,13 +523,36 @@ fn initial_step(f: &mut Rhs, t: f64, y: &[f64], f0: &[f64], order: i32, s: &Sett
     let dny: f64 = y.iter().zip(&sk).map(|(a, b)| (a / b) * (a / b)).sum::<f64>() / n as f64;
     let mut h = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { (dny / dnf).sqrt() * 0.01 };
     h = h.min(s.h_max);
-    let y1: Vec<f64> = y.iter().zip(f0).map(|(a, b)| a + h * b).collect();
+    // The trial Euler step, ten times shorter where the model refuses the state it reaches.
     let mut f1 = vec![0.0; n];
-    f(t + h, &y1, &mut f1, stats)?;
+    let mut refusals = 0;
+    loop {
+        let y1: Vec<f64> = y.iter().zip(f0).map(|(a, b)| a + h * b).collect();
+        match f(t + h, &y1, &mut f1, stats) {
+            Ok(()) => break,
+            Err(Reason::Rhs(failure)) if of_the_state(&failure) && refusals < REFUSALS => {
+                refusals += 1;
+                h *= 0.1;
+            }
+            Err(r) => return Err(r),
+        }
+    }
     let der2: f64 = (f1.iter().zip(f0).zip(&sk).map(|((a, b), c)| ((a - b) / c).powi(2)).sum::<f64>() / n as f64).sqrt() / h;
     let der12 = der2.max(dnf.sqrt());
     let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / order as f64) };
     Ok((100.0 * h).min(h1).min(s.h_max))
+}
+
+/// How many times in a row the model may refuse the states the first step only tries (the
+/// initial step's trial Euler step, the first step's stages), each time with the step
+/// shortened, before the run stops with the refusal.
+const REFUSALS: usize = 6;
+
+/// Whether the model's refusal is of the state it was given (a singular configuration, a value
+/// that is not finite), which a shorter step may not reach; a wrong length or a missing
+/// function is not.
+fn of_the_state(failure: &Failure) -> bool {
+    matches!(failure, Failure::Singular { .. } | Failure::SingularMatrix { .. } | Failure::NonFinite { .. })
 }
 
 /// `out = y + h * sum_j a_j k_j` (zero weights skipped).
@@ -634,6 +657,33 @@ mod tests {
         assert_eq!(err.t, 0.0);
         let said = err.to_string();
         assert!(said.starts_with("integration stopped after t = 0, its last accepted step: singular configuration at t = 0."), "{said}");
+    }
+
+    /// A model that refuses the states only a too large first step reaches (the first step's
+    /// size is a guess, made for the slow part of a stiff system: an explicit method's stages
+    /// then grow without bound, as a floating robot hand's light fingers did) is integrated from
+    /// a shorter first step, to the closed form; its refusals were met. Here `x' = -x` beside
+    /// `z' = -1e6 z` from `z = 1e-8`, refusing `|z| > 1`, which the motion never reaches. A run
+    /// refused once under way still stops there (the test above).
+    #[test]
+    fn a_first_step_refused_by_the_model_is_shortened() {
+        for method in [Method::Dopri5, Method::Dop853] {
+            let refusals = std::cell::Cell::new(0);
+            let mut stiff = |t: f64, y: &[f64], dy: &mut [f64]| {
+                if y[1].abs() > 1.0 {
+                    refusals.set(refusals.get() + 1);
+                    return Err(Failure::Singular { t, condition: "|z| > 1".into(), value: y[1] });
+                }
+                dy[0] = -y[0];
+                dy[1] = -1e6 * y[1];
+                Ok(())
+            };
+            let s = Settings { method, rtol: 1e-9, atol: 1e-9, h_max: 1.0, ..Settings::default() };
+            let sol = integrate(&mut stiff, &[1.0, 1e-8], &[0.0, 0.01], &s).unwrap_or_else(|e| panic!("{method:?}: {e}"));
+            assert!(refusals.get() > 0 && sol.stats.rejected > 0, "{method:?}: {} refusals, {:?}", refusals.get(), sol.stats);
+            let y = &sol.states[1];
+            assert!((y[0] - (-0.01f64).exp()).abs() < 1e-8 && y[1].abs() < 1e-8, "{method:?}: {y:?}");
+        }
     }
 
     /// Hairer's reference problem for the explicit pairs (Hairer, Norsett & Wanner, "Solving
