@@ -15,8 +15,9 @@ page draws 300 frames one after another through the run, each when the browser a
 second it delivered (drawing, compositing and showing included) and its own script's time per
 frame (the part of a frame that does not depend on how WebGL is drawn). The benchmark waits for
 the measure through Chromium's DevTools protocol on a pipe (`--remote-debugging-pipe`; the
-standard library only), while the page plays. An empty page is played the same way first: the
-display's rate here. Three rounds, pages alternated, the round with the most frames per second
+standard library only), while the page plays. An empty page is played the same way first (the
+display's rate here), and one with the page's three layers cleared at every frame, nothing else
+drawn (the least a frame of the page costs here). Three rounds, pages alternated, the round with the most frames per second
 kept (as the other benchmarks keep the least disturbed round: this machine's speed varies from
 minute to minute), every round's figure recorded. Headless Chromium draws WebGL in software
 (`--disable-gpu`: SwiftShader) and, compositing in software too, reads each frame of WebGL back
