@@ -283,9 +283,24 @@ def test_runs_overlaid_are_drawn_where_their_coordinates_put_them(tmp_path):
     assert sum(1 for r, g, b in dark if max(r, g, b) < 90) >= 10, dark
 
 
-def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
+def shadowed(tmp_path, url):
+    """The page at `url` shot with its shadows and without (`shots`: "shadow", "none"), their
+    difference in grey, and the pixels that differ, asserting that the shadows only darken:
+    every pixel that differs is darker with them."""
     from PIL import Image, ImageChops
 
+    shots = {}
+    for name, extra in [("shadow", ""), ("none", "&shadow=0")]:
+        shot = tmp_path / f"{name}.png"
+        chromium(tmp_path, f"--screenshot={shot}", url + extra)
+        shots[name] = Image.open(shot).convert("RGB")
+    diff = ImageChops.difference(shots["shadow"], shots["none"]).convert("L")
+    changed = [(i, j) for j in range(diff.height) for i in range(diff.width) if diff.getpixel((i, j)) > 8]
+    assert all(sum(shots["shadow"].getpixel(p)) < sum(shots["none"].getpixel(p)) for p in changed)
+    return shots, diff, changed
+
+
+def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
     # cart_pendulum gives its bodies shapes: the cart a box, the bars cylinders.
     m = multibody.load("cart_pendulum")
     path, run = animated(m, tmp_path / "shapes.html", "kane", t_end=1.0, dt_out=0.05)
@@ -294,16 +309,8 @@ def test_shapes_are_drawn_lit_and_cast_shadows(tmp_path):
     assert state["shaped"] == 3 and state["shadows"] > 0, state
     # Asked for the inertia boxes, no shape is drawn.
     assert page_state(tmp_path, url + "&inertia=1")["shaped"] == 0
-    shots = {}
-    for name, extra in [("shadow", ""), ("none", "&shadow=0")]:
-        shot = tmp_path / f"{name}.png"
-        chromium(tmp_path, f"--screenshot={shot}", url + extra)
-        shots[name] = Image.open(shot).convert("RGB")
-    # The shadows only darken, and there is some: every pixel that differs is darker with them.
-    diff = ImageChops.difference(shots["shadow"], shots["none"]).convert("L")
-    changed = [(i, j) for j in range(diff.height) for i in range(diff.width) if diff.getpixel((i, j)) > 8]
+    shots, diff, changed = shadowed(tmp_path, url)
     assert len(changed) > 300, len(changed)
-    assert all(sum(shots["shadow"].getpixel(p)) < sum(shots["none"].getpixel(p)) for p in changed)
     # Each body's shadow lies where its centre drops onto the ground (unless a body hides it).
     near = 0
     for x, y in state["ground"]:
@@ -358,28 +365,38 @@ def test_the_view_moves_and_plays_faster_when_asked(tmp_path):
     assert due - 0.05 - 1e-9 < state["t"] <= due + 1e-9, (state["t"], due, played)
 
 
+def mesh_on_an_arm(tmp_path, name, triangles, axis, arm, gravity, th0, placed):
+    """`name.stl` (a text STL of `triangles`, each three points) and `name.ron`, a model whose
+    arm turns about `axis` (of the world) carrying, at `arm` (three numbers) from the pivot, a
+    point mass drawn as that mesh (`placed`: the Mesh's other fields) under `gravity` (three
+    numbers); the model's path. Its mesh's file is named on line 6."""
+    facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join("vertex %.6f %.6f %.6f\n" % v for v in tri) + "endloop\nendfacet\n" for tri in triangles)
+    (tmp_path / f"{name}.stl").write_text(f"solid {name}\n" + facets + f"endsolid {name}\n")
+    numbers = lambda xs: ", ".join(f'"{x}"' for x in xs)
+    path = tmp_path / f"{name}.ron"
+    path.write_text(
+        f"""Model(
+        name: "{name}",
+        parameters: {{ "m": 1.0, "g": 9.81 }},
+        coordinates: ["th"],
+        frames: [Frame(name: "arm", parent: "world", rotation: [{axis}("th")])],
+        bodies: [Body(name: "{name}", frame: "arm", mass: "m", com: [{numbers(arm)}], inertia: PointMass, shape: Mesh(file: "{name}.stl", origin: [{numbers(arm)}], {placed}))],
+        forces: [Gravity(vector: [{numbers(gravity)}])],
+        quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]),
+        initial: Initial(q: {{"th": "{th0}"}}, qdot: {{"th": "0"}}),
+    )"""
+    )
+    return path
+
+
 def test_a_mesh_is_drawn_from_every_side(tmp_path):
     # A tetrahedron as a text STL, one face wound the wrong way round (files do not all keep
     # STL's rule): drawn from both sides, all four faces reach the page, none culled.
     corners = [(0, 0, 0), (0.3, 0, 0), (0, 0.3, 0), (0, 0, 0.3)]
     faces = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 3, 2)]
-    facets = "".join(
-        "facet normal 0 0 0\nouter loop\n" + "".join("vertex %g %g %g\n" % corners[k] for k in f) + "endloop\nendfacet\n" for f in faces
-    )
-    (tmp_path / "tetra.stl").write_text("solid tetra\n" + facets + "endsolid tetra\n")
-    (tmp_path / "tetra.ron").write_text(
-        """Model(
-        name: "tetra",
-        parameters: { "m": 1.0, "g": 9.81 },
-        coordinates: ["th"],
-        frames: [Frame(name: "arm", parent: "world", rotation: [Z("th")]), Frame(name: "tip", parent: "arm", translation: ["1", "0", "0"])],
-        bodies: [Body(name: "tip", frame: "tip", mass: "m", inertia: PointMass, shape: Mesh(file: "tetra.stl", rpy: ["0.3", "0.2", "0.1"]))],
-        forces: [Gravity(vector: ["0", "-g", "0"])],
-        quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]),
-        initial: Initial(q: {"th": "-0.5"}, qdot: {"th": "0"}),
-    )"""
-    )
-    m = multibody.load(str(tmp_path / "tetra.ron"))
+    triangles = [[corners[k] for k in f] for f in faces]
+    path = mesh_on_an_arm(tmp_path, "tetra", triangles, "Z", [1, 0, 0], [0, "-g", 0], -0.5, 'rpy: ["0.3", "0.2", "0.1"]')
+    m = multibody.load(str(path))
     path, run = animated(m, tmp_path / "tetra.html", "kane", t_end=1.0, dt_out=0.05)
     state = page_state(tmp_path, path.as_uri() + "#t=0.5&size=800x520")
     assert state["shaped"] == 1 and state["triangles"] == 4 and state["shadows"] > 0, state
@@ -394,34 +411,15 @@ def test_a_mesh_is_drawn_from_every_side(tmp_path):
 
 
 def test_a_fine_mesh_casts_its_shadow_from_a_coarser_copy(tmp_path):
-    from PIL import Image, ImageChops
-
     # A sphere of 1,520 triangles (1,600 less the poles' collapsed ones): its shadow (its only
     # one: the rod to a body drawn as its shapes is left out), drawn from a copy of 48 triangles
     # at most where the ball is small on the page, still falls under it, where its centre drops
     # onto the ground, and only darkens.
     bands, sides = 20, 40
     at = lambda j, k: (math.sin(math.pi * j / bands) * math.cos(2 * math.pi * k / sides), math.sin(math.pi * j / bands) * math.sin(2 * math.pi * k / sides), math.cos(math.pi * j / bands))
-    facets = "".join(
-        "facet normal 0 0 0\nouter loop\n" + "".join("vertex %.6f %.6f %.6f\n" % v for v in tri) + "endloop\nendfacet\n"
-        for j in range(bands)
-        for k in range(sides)
-        for tri in [(at(j, k), at(j + 1, k), at(j + 1, k + 1)), (at(j, k), at(j + 1, k + 1), at(j, k + 1))]
-    )
-    (tmp_path / "ball.stl").write_text("solid ball\n" + facets + "endsolid ball\n")
-    (tmp_path / "ball.ron").write_text(
-        """Model(
-        name: "ball",
-        parameters: { "m": 1.0, "g": 9.81 },
-        coordinates: ["th"],
-        frames: [Frame(name: "arm", parent: "world", rotation: [Y("th")])],
-        bodies: [Body(name: "ball", frame: "arm", mass: "m", com: ["0", "0", "-1"], inertia: PointMass, shape: Mesh(file: "ball.stl", scale: ["0.2", "0.2", "0.2"], origin: ["0", "0", "-1"]))],
-        forces: [Gravity(vector: ["0", "0", "-g"])],
-        quasi_velocities: QuasiVelocities(full: ["th'"], reduced: ["th'"]),
-        initial: Initial(q: {"th": "0.8"}, qdot: {"th": "0"}),
-    )"""
-    )
-    m = multibody.load(str(tmp_path / "ball.ron"))
+    triangles = [tri for j in range(bands) for k in range(sides) for tri in [(at(j, k), at(j + 1, k), at(j + 1, k + 1)), (at(j, k), at(j + 1, k + 1), at(j, k + 1))]]
+    path = mesh_on_an_arm(tmp_path, "ball", triangles, "Y", [0, 0, -1], [0, 0, "-g"], 0.8, 'scale: ["0.2", "0.2", "0.2"]')
+    m = multibody.load(str(path))
     path, _ = animated(m, tmp_path / "ball.html", "kane", t_end=1.0, dt_out=0.05)
     # Large on the page (its radius about 60 pixels), the shadow is the mesh's own; small (about
     # 36), the coarser copy's.
@@ -431,14 +429,8 @@ def test_a_fine_mesh_casts_its_shadow_from_a_coarser_copy(tmp_path):
     for s in (large, state):
         assert s["shaped"] == 1 and s["triangles"] == 2 * bands * sides - 2 * sides and s["shadows"] == 1, s
     assert large["shadowTriangles"] == large["triangles"] and 8 <= state["shadowTriangles"] <= 48, (large["shadowTriangles"], state["shadowTriangles"])
-    shots = {}
-    for name, extra in [("shadow", ""), ("none", "&shadow=0")]:
-        shot = tmp_path / f"{name}.png"
-        chromium(tmp_path, f"--screenshot={shot}", url + extra)
-        shots[name] = Image.open(shot).convert("RGB")
-    diff = ImageChops.difference(shots["shadow"], shots["none"]).convert("L")
-    changed = [(i, j) for j in range(diff.height) for i in range(diff.width) if diff.getpixel((i, j)) > 8]
-    assert len(changed) > 100 and all(sum(shots["shadow"].getpixel(p)) < sum(shots["none"].getpixel(p)) for p in changed), len(changed)
+    _, _, changed = shadowed(tmp_path, url)
+    assert len(changed) > 100, len(changed)
     # The shadow's middle is near where the ball's centre drops onto the ground.
     x, y = state["ground"][0][0] + state["offset"][0], state["ground"][0][1] + state["offset"][1]
     mx, my = sum(p[0] for p in changed) / len(changed), sum(p[1] for p in changed) / len(changed)
