@@ -151,8 +151,9 @@ fn shape_reach(s: &generator::pose::ShapeValues, center: &[f64; 3]) -> f64 {
         "box" => 0.5 * s.sizes.iter().map(|x| x * x).sum::<f64>().sqrt(),
         "sphere" => s.sizes[0],
         "mesh" => scaled_vertices(s).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
-        // A cylinder's or capsule's radius, then its length along its axis.
-        _ => s.sizes[0] * if s.solid == "capsule" { 1.0 } else { std::f64::consts::SQRT_2 } + 0.5 * s.sizes[1],
+        // A capsule's radius beyond its length along its axis; a cylinder's rim's corner.
+        "capsule" => s.sizes[0] + 0.5 * s.sizes[1],
+        _ => s.sizes[0].hypot(0.5 * s.sizes[1]),
     };
     let d = (0..3).map(|i| (s.origin[i] - center[i]).powi(2)).sum::<f64>().sqrt();
     d + bound

@@ -344,6 +344,23 @@ def test_round_shapes_take_as_many_sides_as_their_size_on_the_page(tmp_path):
     assert all(small < large for small, large in zip(*sides)), sides
 
 
+def test_the_ground_is_where_the_lowest_solid_reaches(tmp_path):
+    # The bicycle rolls on the plane z = 0, its wheels drawn as discs of radius rR and rF: the
+    # ground is drawn there (under the discs' bounding spheres, which a disc 4 cm thick exceeds
+    # by less than a millimetre), not a rear frame's half-diagonal below the lowest centre.
+    m = multibody.load("bicycle")
+    path, _ = animated(m, tmp_path / "bicycle.html", "kane", t_end=2.0, dt_out=0.02)
+    state = page_state(tmp_path, path.as_uri() + "#t=1&size=800x520")
+    assert state["shaped"] == 2 and -0.005 < state["groundHeight"] <= 0.0, state["groundHeight"]
+    # A point mass alone (its height y, gravity along -y): its cube rests on the ground at the
+    # lowest point of its run.
+    m = multibody.load("bouncing_ball")
+    path, run = animated(m, tmp_path / "ball.html", "kane", t_end=2.0, dt_out=0.01)
+    state = page_state(tmp_path, path.as_uri() + "#t=0&size=800x520")
+    lowest = float(np.min(run["y"]))
+    assert abs(state["groundHeight"] - (lowest - state["pointSize"])) < 1e-9, (state["groundHeight"], lowest, state["pointSize"])
+
+
 def test_the_view_moves_and_plays_faster_when_asked(tmp_path):
     m = multibody.load("cart_pendulum")
     path, run = animated(m, tmp_path / "view.html", "kane", t_end=10.0, dt_out=0.01)
