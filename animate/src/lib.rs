@@ -107,11 +107,6 @@ fn share_mesh_triangles(poser: &mut generator::pose::Poser, total: usize) {
     }
 }
 
-/// A mesh shape's vertices in its own axes, scaled; none for a solid.
-fn scaled_vertices(s: &generator::pose::ShapeValues) -> impl Iterator<Item = [f64; 3]> + '_ {
-    s.mesh.iter().flat_map(|m| scaled(m, &s.sizes))
-}
-
 /// A mesh's vertices scaled by `sizes` along its axes.
 fn scaled<'a>(mesh: &'a generator::model::TriangleMesh, sizes: &'a [f64]) -> impl Iterator<Item = [f64; 3]> + 'a {
     mesh.vertices.iter().map(|v| std::array::from_fn(|i| v[i] * sizes[i]))
@@ -150,7 +145,7 @@ fn shape_reach(s: &generator::pose::ShapeValues, center: &[f64; 3]) -> f64 {
     let bound = match s.solid {
         "box" => 0.5 * s.sizes.iter().map(|x| x * x).sum::<f64>().sqrt(),
         "sphere" => s.sizes[0],
-        "mesh" => scaled_vertices(s).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
+        "mesh" => s.mesh.iter().flat_map(|m| scaled(m, &s.sizes)).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
         // A capsule's radius beyond its length along its axis; a cylinder's rim's corner.
         "capsule" => s.sizes[0] + 0.5 * s.sizes[1],
         _ => s.sizes[0].hypot(0.5 * s.sizes[1]),

@@ -5,6 +5,9 @@
 
 use super::*;
 
+/// The fix for an initial value or rate that is not a finite number.
+const NOT_FINITE_FIX: &str = "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)";
+
 /// What an expression may refer to.
 #[derive(Clone, Copy, PartialEq)]
 enum Scope {
@@ -1170,7 +1173,7 @@ impl<'a> Builder<'a> {
                     &format!("initial.q.{c}"),
                     &format!("\"{src}\""),
                     format!("the initial value of `{c}`, `{src}`, is not a finite number ({v})"),
-                    "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)",
+                    NOT_FINITE_FIX,
                 ));
             }
             env.set(Symbol::new(c), v);
@@ -1211,7 +1214,7 @@ impl<'a> Builder<'a> {
                             &format!("initial.qdot.{c}"),
                             &format!("\"{src}\""),
                             format!("the initial rate of `{c}`, `{src}`, is not a finite number ({v})"),
-                            "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)",
+                            NOT_FINITE_FIX,
                         ));
                     }
                     qd[i] = v;
