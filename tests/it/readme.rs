@@ -107,3 +107,34 @@ fn links_are_read_from_markdown() {
     let links = relative_links("see [a](docs/a.md#x), [b](https://x.y), ![c](plots/c.svg) and [d](#here)");
     assert_eq!(links, ["docs/a.md", "plots/c.svg"]);
 }
+
+/// The README's first command builds the generator and its dependencies with the features the
+/// test command's build turns on, so that the tests reuse its build (the feature pins of
+/// `generator/Cargo.toml`): every package and feature set `cargo tree` shows for the generator
+/// alone is one the workspace's build has. (Cargo unifies features over what a command builds:
+/// without the pins, six packages differed, the generator was compiled again.)
+#[test]
+fn the_test_command_reuses_the_first_command_s_build() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(readme.contains("cargo run --release -p generator -- ") && readme.contains("cargo test --workspace --release"), "the README's two commands");
+    let tree = |args: &[&str]| -> std::collections::BTreeSet<String> {
+        let out = std::process::Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
+            .arg("tree")
+            .args(args)
+            .args(["--format", "{p} [{f}]", "--prefix", "none"])
+            .current_dir(root)
+            .output()
+            .expect("cargo runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).lines().map(|l| l.replace(" (*)", "").replace(" (proc-macro)", "")).filter(|l| !l.is_empty()).collect()
+    };
+    let alone = tree(&["-p", "generator", "--edges", "normal,build"]);
+    let workspace = tree(&["--workspace", "--edges", "normal,build,dev"]);
+    let apart: Vec<&String> = alone.difference(&workspace).collect();
+    assert!(alone.len() > 50, "{alone:?}");
+    assert!(
+        apart.is_empty(),
+        "built by the first command with features the tests' build changes (pin the workspace's features in generator/Cargo.toml): {apart:?}"
+    );
+}
