@@ -62,28 +62,36 @@ impl Backend for Jit {
 /// The most instructions a tape may have to be compiled at once by the best register
 /// allocator. A longer one (a robot's right-hand side) is compiled first by the single-pass
 /// allocator, so that the model runs at once, and again by the best one on a background
-/// thread, which its kernel then runs: the same numbers, faster. Measured on the humanoid
-/// (talos_reduced on a floating base, `multibody simulate`, alternately on this project's
-/// 2-core machine): ready in 2.1 to 2.3 s of CPU with the single-pass allocator against 3.1 to
-/// 3.3 s with the best one, whose calls are then 1.5 to 2 times faster
-/// (`cargo bench --bench robot_calls`).
+/// thread once the run proves long ([`TIER_UP_CALLS`]), which its kernel then runs: the same
+/// numbers, faster. Measured on the humanoid (talos_reduced on a floating base, `multibody
+/// simulate`, alternately on this project's 2-core machine): ready in 2.1 to 2.3 s of CPU with
+/// the single-pass allocator against 3.1 to 3.3 s with the best one, whose calls are then 1.5
+/// to 2 times faster (`cargo bench --bench robot_calls`).
 pub const TIERED_INSTRUCTIONS: usize = FUNCTION_INSTRUCTIONS;
+
+/// How many calls a long tape's kernel runs on its single-pass code before the best allocator
+/// compiles it on the background thread. The best code saves a fraction of a call's time, its
+/// compile costs as much as hundreds of thousands of calls: a run shorter than this (a check,
+/// a short simulation, a trial in a notebook, a Jacobian evaluated a few times) ends before
+/// the compile would pay, and leaves the other cores to the caller; a longer one gets it a few
+/// tenths of a second into its run. Calls, not seconds, so that when it happens is the same on
+/// every machine.
+pub const TIER_UP_CALLS: usize = 10_000;
 
 /// A long tape's kernel: the single-pass code until the best allocator's is ready, then that.
 struct Tiered {
     quick: Compiled,
-    best: std::sync::Arc<std::sync::OnceLock<Compiled>>,
+    slot: std::sync::Arc<upgrades::Slot>,
+    calls: std::sync::atomic::AtomicUsize,
 }
 
 impl Tiered {
     fn new(quick: Compiled, tape: Tape) -> Tiered {
-        let best = std::sync::Arc::new(std::sync::OnceLock::new());
-        upgrades::push(tape, std::sync::Arc::downgrade(&best));
-        Tiered { quick, best }
+        Tiered { quick, slot: upgrades::Slot::new(tape), calls: std::sync::atomic::AtomicUsize::new(0) }
     }
 
     fn current(&self) -> &Compiled {
-        self.best.get().unwrap_or(&self.quick)
+        self.slot.best.get().unwrap_or(&self.quick)
     }
 }
 
@@ -95,13 +103,19 @@ impl Kernel for Tiered {
         self.quick.outputs
     }
     fn run(&self, inputs: &[f64], out: &mut [f64]) {
+        use std::sync::atomic::Ordering::Relaxed;
+        // Counted until the upgrade is asked for, then only read: threads sharing the kernel
+        // (an ensemble) do not contend for the counter for the rest of the run.
+        if self.calls.load(Relaxed) < TIER_UP_CALLS && self.calls.fetch_add(1, Relaxed) + 1 == TIER_UP_CALLS {
+            upgrades::push(&self.slot);
+        }
         self.current().run(inputs, out)
     }
 }
 
-/// Waits until every long tape compiled so far runs its best code (the background compiles are
-/// done): for a benchmark that times the calls, or a caller that wants the fastest code before
-/// it starts.
+/// Compiles every long tape's best code now, even one whose run has not reached
+/// [`TIER_UP_CALLS`], and waits until each runs it: for a benchmark that times the calls, or a
+/// caller that wants the fastest code before it starts.
 ///
 /// ```
 /// jit::settle(); // nothing compiled: returns at once
@@ -110,29 +124,53 @@ pub fn settle() {
     upgrades::settle()
 }
 
-/// The background compiles: one worker thread takes the long tapes in turn.
+/// The background compiles: one worker thread takes the long tapes in turn, each once its
+/// kernel asks (or `settle` does).
 mod upgrades {
     use super::{Allocator, Compiled, Tape, compile_with};
     use std::collections::VecDeque;
-    use std::sync::{Condvar, Mutex, OnceLock, Weak};
+    use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError, Weak};
+
+    /// A long tape's best code, once compiled, and its tape until its compile is queued.
+    pub(super) struct Slot {
+        pub(super) best: OnceLock<Compiled>,
+        pub(super) tape: Mutex<Option<Tape>>,
+    }
+
+    impl Slot {
+        /// A slot for `tape`, known to `settle` until its kernel is dropped.
+        pub(super) fn new(tape: Tape) -> Arc<Slot> {
+            let slot = Arc::new(Slot { best: OnceLock::new(), tape: Mutex::new(Some(tape)) });
+            let mut q = lock();
+            q.waiting.retain(|s| s.strong_count() > 0);
+            q.waiting.push(Arc::downgrade(&slot));
+            slot
+        }
+    }
 
     struct Queue {
-        jobs: VecDeque<(Tape, Weak<OnceLock<Compiled>>)>,
+        /// The slots whose compile no one has asked for yet (or has: `tape` is then gone).
+        waiting: Vec<Weak<Slot>>,
+        jobs: VecDeque<(Tape, Weak<Slot>)>,
         /// Jobs queued or being compiled.
         pending: usize,
         worker: bool,
     }
 
-    static QUEUE: Mutex<Queue> = Mutex::new(Queue { jobs: VecDeque::new(), pending: 0, worker: false });
+    static QUEUE: Mutex<Queue> = Mutex::new(Queue { waiting: Vec::new(), jobs: VecDeque::new(), pending: 0, worker: false });
     static DONE: Condvar = Condvar::new();
 
-    fn lock() -> std::sync::MutexGuard<'static, Queue> {
-        QUEUE.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    fn lock() -> MutexGuard<'static, Queue> {
+        QUEUE.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
-    pub(super) fn push(tape: Tape, slot: Weak<OnceLock<Compiled>>) {
+    /// Queues the compile of `slot`'s best code, unless it is queued already.
+    pub(super) fn push(slot: &Arc<Slot>) {
+        let Some(tape) = slot.tape.lock().unwrap_or_else(PoisonError::into_inner).take() else {
+            return;
+        };
         let mut q = lock();
-        q.jobs.push_back((tape, slot));
+        q.jobs.push_back((tape, Arc::downgrade(slot)));
         q.pending += 1;
         if !q.worker {
             // Without a thread the kernel keeps its single-pass code: slower, same numbers.
@@ -165,7 +203,7 @@ mod upgrades {
                 && let Ok(best) = compile_with(&tape, Allocator::Backtracking)
                 && let Some(slot) = slot.upgrade()
             {
-                let _ = slot.set(best);
+                let _ = slot.best.set(best);
             }
             let mut q = lock();
             q.pending -= 1;
@@ -175,10 +213,20 @@ mod upgrades {
         }
     }
 
+    /// Queues every live slot's compile, then waits for the queue.
     pub(super) fn settle() {
+        let waiting = std::mem::take(&mut lock().waiting);
+        for slot in waiting.iter().filter_map(Weak::upgrade) {
+            push(&slot);
+        }
+        wait();
+    }
+
+    /// Waits until the compiles queued so far are done.
+    pub(super) fn wait() {
         let mut q = lock();
         while q.pending > 0 {
-            q = DONE.wait(q).unwrap_or_else(std::sync::PoisonError::into_inner);
+            q = DONE.wait(q).unwrap_or_else(PoisonError::into_inner);
         }
     }
 }
@@ -651,12 +699,13 @@ mod tests {
         }
     }
 
-    /// A long tape's kernel runs the single-pass code at once and the best allocator's once the
-    /// background compile is done: the interpreter's numbers before and after; a short tape is
-    /// compiled once, by the best allocator.
-    #[test]
-    fn a_long_tape_runs_at_once_and_its_best_code_later_with_the_same_numbers() {
-        let long = Tape::write(|w| {
+    /// The tests that look at the background compiles, one at a time (`settle` asks for every
+    /// live kernel's).
+    static UPGRADES: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    /// A tape longer than [`TIERED_INSTRUCTIONS`]: two inputs, a few outputs.
+    fn long_tape() -> Tape {
+        Tape::write(|w| {
             let (mut a, mut b) = (w.input(0), w.input(1));
             let (c, d) = (w.constant(0.999), w.constant(0.001));
             let mut outs = Vec::new();
@@ -670,7 +719,16 @@ mod tests {
                 }
             }
             outs
-        });
+        })
+    }
+
+    /// A long tape's kernel runs the single-pass code at once and the best allocator's once the
+    /// background compile is done: the interpreter's numbers before and after; a short tape is
+    /// compiled once, by the best allocator.
+    #[test]
+    fn a_long_tape_runs_at_once_and_its_best_code_later_with_the_same_numbers() {
+        let _one = UPGRADES.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let long = long_tape();
         assert!(long.instructions() > TIERED_INSTRUCTIONS);
         let quick = compile_with(&long, Allocator::SinglePass).unwrap();
         let tiered = Tiered::new(quick, long.clone());
@@ -682,7 +740,7 @@ mod tests {
         tiered.run(&state, &mut got);
         assert_eq!(bits(&got), bits(&want), "before the upgrade");
         settle();
-        assert!(tiered.best.get().is_some(), "settled: the best code is in place");
+        assert!(tiered.slot.best.get().is_some(), "settled: the best code is in place");
         got.fill(f64::NAN);
         tiered.run(&state, &mut got);
         assert_eq!(bits(&got), bits(&want), "after the upgrade");
@@ -696,6 +754,30 @@ mod tests {
         let short = Tape::write(|w| vec![w.instr(Instr::Add(w.input(0), w.input(1)))]);
         assert_eq!(jit.kernel(short).outputs(), 1);
         assert_eq!(jit.interpreted(), 0);
+    }
+
+    /// A long tape's best code is compiled once its kernel has run [`TIER_UP_CALLS`] times, not
+    /// before (a short run pays for one compile), and asked for once; `settle` asks for it at
+    /// once.
+    #[test]
+    fn the_best_code_is_compiled_once_the_run_proves_long() {
+        let _one = UPGRADES.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let long = long_tape();
+        let tiered = Tiered::new(compile_with(&long, Allocator::SinglePass).unwrap(), long.clone());
+        let (state, mut out) = ([0.3, -0.7], vec![0.0; long.outputs()]);
+        for _ in 0..TIER_UP_CALLS - 1 {
+            tiered.run(&state, &mut out);
+        }
+        upgrades::wait();
+        assert!(tiered.slot.best.get().is_none(), "not asked for before the call that proves the run long");
+        tiered.run(&state, &mut out);
+        upgrades::wait();
+        assert!(tiered.slot.best.get().is_some(), "asked for at call {TIER_UP_CALLS}");
+        assert!(tiered.slot.tape.lock().unwrap().is_none(), "asked for once: the tape left the slot");
+        // `settle` compiles a live kernel's best code unasked (a benchmark times the best code).
+        let live = Tiered::new(compile_with(&long, Allocator::SinglePass).unwrap(), long);
+        settle();
+        assert!(live.slot.best.get().is_some());
     }
 
     /// A tape of many functions gives the interpreter's numbers to the bit too: a long chain of
