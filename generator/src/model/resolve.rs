@@ -5,9 +5,6 @@
 
 use super::*;
 
-/// The fix for an initial value or rate that is not a finite number.
-const NOT_FINITE_FIX: &str = "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)";
-
 /// What an expression may refer to.
 #[derive(Clone, Copy, PartialEq)]
 enum Scope {
@@ -133,6 +130,18 @@ impl<'a> Builder<'a> {
     fn err(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: &str) -> ModelError {
         let span = error::place_span(self.source, self.spans(), place, needle);
         located(kind, self.file, self.source, span, place, message, help.to_string())
+    }
+
+    /// The error of an initial value (`list` "q") or rate ("qdot") of coordinate `c`, written
+    /// `src`, that evaluates to `v`, not a finite number.
+    fn not_finite(&self, list: &str, what: &str, c: &str, src: &str, v: f64) -> ModelError {
+        self.err(
+            ErrorKind::InitialState,
+            &format!("initial.{list}.{c}"),
+            &format!("\"{src}\""),
+            format!("the initial {what} of `{c}`, `{src}`, is not a finite number ({v})"),
+            "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)",
+        )
     }
 
     /// The byte span of character `col` (1-based) of the expression `src` found at `place`.
@@ -1168,13 +1177,7 @@ impl<'a> Builder<'a> {
             })?;
             let v = self.expr(src, &format!("initial.q.{c}"), Scope::Parameters)?.eval(&env).unwrap_or(f64::NAN);
             if !v.is_finite() {
-                return Err(self.err(
-                    ErrorKind::InitialState,
-                    &format!("initial.q.{c}"),
-                    &format!("\"{src}\""),
-                    format!("the initial value of `{c}`, `{src}`, is not a finite number ({v})"),
-                    NOT_FINITE_FIX,
-                ));
+                return Err(self.not_finite("q", "value", c, src, v));
             }
             env.set(Symbol::new(c), v);
             q.push(v);
@@ -1209,13 +1212,7 @@ impl<'a> Builder<'a> {
                 let e = self.expr(src, &format!("initial.qdot.{c}"), Scope::Velocity)?;
                 if let Ok(v) = e.eval(&env) {
                     if !v.is_finite() {
-                        return Err(self.err(
-                            ErrorKind::InitialState,
-                            &format!("initial.qdot.{c}"),
-                            &format!("\"{src}\""),
-                            format!("the initial rate of `{c}`, `{src}`, is not a finite number ({v})"),
-                            NOT_FINITE_FIX,
-                        ));
+                        return Err(self.not_finite("qdot", "rate", c, src, v));
                     }
                     qd[i] = v;
                     env.set(Symbol::new(&format!("{c}'")), v);
