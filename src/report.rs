@@ -19,9 +19,7 @@ pub fn progress_bar(length: u64) -> ProgressBar {
     bar
 }
 
-/// What a run that DOPRI5 finds stiff tells the user.
+/// What a run that DOPRI5 or DOP853 finds stiff tells the user.
 pub fn stiff_warning(method: &str, t: f64) -> String {
-    format!(
-        "warning: {method} looks stiff from t = {t:.6} (Hairer's test: the step size is held by stability, not accuracy): the stiff method may be much faster, `--method ros23`"
-    )
+    format!("warning: {method} {}: the stiff method may be much faster, `--method ros23`", runtime::integrate::stiffness_note(t))
 }

@@ -251,7 +251,9 @@ class Model:
         ``METHODS``. Ctrl-C stops the run within a few milliseconds (``KeyboardInterrupt``, its
         note saying the time reached). A run that stops early (a singular attitude, a matrix
         that turned singular) raises ``SimulationError`` whose ``trajectory`` holds the outputs
-        up to the stop (``None`` when there were fewer than two)."""
+        up to the stop (``None`` when there were fewer than two). A run that DOPRI5 or DOP853
+        finds stiff (Hairer's test: the step size held by stability, not accuracy) warns,
+        naming the stiff method (``method="ros23"``)."""
         if frame is None:
             frame = _has_pandas()
 
@@ -260,12 +262,15 @@ class Model:
             return result.to_pandas() if frame else result
 
         try:
-            return made(*self._native.simulate_columns(formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start))
+            *columns, stiff = self._native.simulate_columns(formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start)
         except SimulationError as e:
             # A run that stopped early keeps its outputs up to the stop: ``e.trajectory``.
             partial = getattr(e, "partial", None)
             e.trajectory = None if partial is None else made(*partial)
             raise
+        if stiff is not None:
+            _warnings.warn(f"{self.name} {columns[0]}: {stiff}: the stiff method may be much faster, method=\"ros23\"", stacklevel=2)
+        return made(*columns)
 
     def linearize(self, formulation=None, q=None, qdot=None, params=None) -> Linear:
         """The linear model about ``q``, ``qdot``: ``Linear(A, B, eigenvalues)``, B by the

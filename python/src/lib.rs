@@ -450,7 +450,7 @@ impl Model {
         q: Option<&Bound<'py, PyAny>>,
         qdot: Option<&Bound<'py, PyAny>>,
         t_start: Option<f64>,
-    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>)> {
+    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>, Option<String>)> {
         guarded(|| {
             let kind = self.kind(formulation)?;
             let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
@@ -484,7 +484,9 @@ impl Model {
                 run => run.map_err(run_error)?,
             };
             let table = table_of(py, &run);
-            Ok((kind.name(), run.columns, table, events_of(run.events), params))
+            // DOPRI5's or DOP853's stiffness test: the wrapper warns, naming the stiff method.
+            let stiff = run.solution.stats.stiff_at.map(runtime::integrate::stiffness_note);
+            Ok((kind.name(), run.columns, table, events_of(run.events), params, stiff))
         })
     }
 

@@ -6,6 +6,7 @@ import csv
 import math
 import pathlib
 import threading
+import warnings
 
 import numpy as np
 import pytest
@@ -93,6 +94,21 @@ def test_simulate_reports_events():
     # The wall at x = 5 is reached at t = 5 (x' = 1): the run stops there.
     assert abs(run.events[-1][1] - 5.0) < 1e-9
     assert run["t"][-1] <= 5.0
+
+
+def test_a_stiff_run_warns_and_names_the_stiff_method():
+    m = multibody.load("stiff_pendulum")
+    # At k = 1e8 the spring's mode holds DOP853 (the default) and DOPRI5 to steps set by
+    # stability: Hairer's test says so, and the stiff method is named.
+    for method in [None, "dopri5"]:
+        with pytest.warns(UserWarning, match=r'stiff_pendulum kane: looks stiff from t = 0\.0.*method="ros23"'):
+            m.simulate("kane", t_end=0.5, dt_out=0.1, method=method, rtol=1e-4, atol=1e-4, params={"k": 1e8}, frame=False)
+    # At its own stiffness the run is accuracy-bound: no warning (an error if one is raised).
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m.simulate("kane", t_end=0.5, dt_out=0.1, frame=False)
+        stiff = m.simulate("kane", t_end=0.5, dt_out=0.1, method="ros23", rtol=1e-4, atol=1e-4, params={"k": 1e8}, frame=False)
+    assert stiff["t"][-1] == 0.5
 
 
 def members(m, n):

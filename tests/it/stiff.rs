@@ -90,22 +90,30 @@ fn the_rosenbrock_method_skips_df_dt_for_a_model_that_does_not_read_t() {
     assert_eq!(with.stats.rhs_calls - without.stats.rhs_calls, with.stats.jacobians);
 }
 
-/// Hairer's stiffness test in DOPRI5: the stiff pendulum at k = 1e8 is found stiff early, and
-/// the command line names the stiff method; scene 2 at the paper's settings is not.
+/// Hairer's stiffness test in DOPRI5 and DOP853: the stiff pendulum at k = 1e8 is found stiff
+/// early by both, and the command line names the stiff method, with the default method too
+/// (DOP853); scene 2 at the paper's settings and scene 3 at tight ones are not.
 #[test]
-fn dopri5_detects_stiffness_and_the_command_line_names_the_stiff_method() {
-    let stiff = run(&with_stiffness(1e8), "kane", Method::Dopri5, 1e-4);
-    let t = stiff.record.stiff_at.expect("stiff at k = 1e8");
-    assert!(t < 0.1, "detected at t = {t}");
+fn the_explicit_pairs_detect_stiffness_and_the_command_line_names_the_stiff_method() {
+    for method in [Method::Dopri5, Method::Dop853] {
+        let stiff = run(&with_stiffness(1e8), "kane", method, 1e-4);
+        let t = stiff.record.stiff_at.unwrap_or_else(|| panic!("{method}: stiff at k = 1e8"));
+        assert!(t < 0.1, "{method}: detected at t = {t}");
+    }
     let scene2 = generated::find("three_body").unwrap();
     let calm = runtime::compare::run(&scene2, FormulationKind::ReducedVolterra, &Settings::paper(50.0), 1).unwrap();
     assert_eq!(calm.record.stiff_at, None);
+    let scene3 = generated::find("bicycle").unwrap();
+    assert_eq!(runtime::compare::run(&scene3, FormulationKind::Kane, &Settings::tight(5.0), 1).unwrap().record.stiff_at, None);
     let dir = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_multibody"))
-        .args(["simulate", "stiff_pendulum", "--param", "k=1e8", "--method", "dopri5", "--rtol", "1e-4", "--atol", "1e-4", "--t-end", "0.5", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success() && err.contains("looks stiff from t =") && err.contains("--method ros23"), "{err}");
+    for method in [&["--method", "dopri5"][..], &[]] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_multibody"))
+            .args(["simulate", "stiff_pendulum", "--param", "k=1e8", "--rtol", "1e-4", "--atol", "1e-4", "--t-end", "0.5", "--out"])
+            .arg(dir.path())
+            .args(method)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && err.contains("looks stiff from t =") && err.contains("--method ros23"), "{method:?}: {err}");
+    }
 }

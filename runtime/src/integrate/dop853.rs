@@ -7,7 +7,7 @@
 #![allow(clippy::excessive_precision)]
 
 use super::driver::{Control, Stepper};
-use super::{Reason, Rhs, Settings, Stats, axpy_stages, combine};
+use super::{Reason, Rhs, Settings, Stats, StiffnessTest, axpy_stages, combine};
 
 const C: [f64; 12] = [
     0.0,
@@ -269,16 +269,17 @@ const D: [[f64; 16]; 4] = [
 ];
 
 /// DOP853's sixteen stages (twelve for the step, one for the next step's first rate, three more
-/// for the dense output) and its interpolant's coefficients.
+/// for the dense output), its interpolant's coefficients and Hairer's stiffness counters.
 pub(super) struct Dop853 {
     k: Vec<Vec<f64>>,
     tmp: Vec<f64>,
     rcont: Vec<Vec<f64>>,
+    stiffness: StiffnessTest,
 }
 
 impl Dop853 {
     pub(super) fn new(n: usize) -> Dop853 {
-        Dop853 { k: vec![vec![0.0; n]; 16], tmp: vec![0.0; n], rcont: vec![vec![0.0; n]; 8] }
+        Dop853 { k: vec![vec![0.0; n]; 16], tmp: vec![0.0; n], rcont: vec![vec![0.0; n]; 8], stiffness: StiffnessTest::new(6.1) }
     }
 }
 
@@ -330,8 +331,11 @@ impl Stepper for Dop853 {
         Ok(Some(h.abs() * err5 * (1.0 / (n as f64 * deno)).sqrt()))
     }
 
-    fn accepted(&mut self, f: &mut Rhs, _t: f64, t_new: f64, _h: f64, y_new: &[f64], f1: &mut [f64], stats: &mut Stats) -> Result<(), Reason> {
+    fn accepted(&mut self, f: &mut Rhs, t: f64, t_new: f64, h: f64, y_new: &[f64], f1: &mut [f64], stats: &mut Stats) -> Result<(), Reason> {
         f(t_new, y_new, &mut self.k[12], stats)?;
+        // Hairer's stiffness test (`dop853.f`): the twelfth stage is evaluated at t + h too, at
+        // `tmp` (its argument, left by `attempt`): the two rates' difference estimates h lambda.
+        self.stiffness.observe(t, h, (&self.k[12], y_new), (&self.k[11], &self.tmp), stats);
         f1.copy_from_slice(&self.k[12]);
         Ok(())
     }

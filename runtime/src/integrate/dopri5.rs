@@ -2,7 +2,7 @@
 //! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
 
 use super::driver::{Control, Stepper};
-use super::{Reason, Rhs, Settings, Stats, axpy_stages, combine, error_norm};
+use super::{Reason, Rhs, Settings, Stats, StiffnessTest, axpy_stages, combine, error_norm};
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -32,13 +32,12 @@ pub(super) struct Dopri5 {
     k: Vec<Vec<f64>>,
     tmp: Vec<f64>,
     rcont: Vec<Vec<f64>>,
-    stiff_steps: usize,
-    non_stiff_steps: usize,
+    stiffness: StiffnessTest,
 }
 
 impl Dopri5 {
     pub(super) fn new(n: usize) -> Dopri5 {
-        Dopri5 { k: vec![vec![0.0; n]; 7], tmp: vec![0.0; n], rcont: vec![vec![0.0; n]; 5], stiff_steps: 0, non_stiff_steps: 0 }
+        Dopri5 { k: vec![vec![0.0; n]; 7], tmp: vec![0.0; n], rcont: vec![vec![0.0; n]; 5], stiffness: StiffnessTest::new(3.25) }
     }
 }
 
@@ -79,21 +78,7 @@ impl Stepper for Dopri5 {
         let k = &self.k;
         // Hairer's stiffness test: stages 6 and 7 are evaluated at t + h, at `tmp` (stage 6's
         // argument) and at `y_new`: their difference estimates h lambda.
-        if stats.stiff_at.is_none() {
-            let (num, den) = (0..y_new.len()).fold((0.0, 0.0), |(a, b), i| (a + (k[6][i] - k[5][i]).powi(2), b + (y_new[i] - self.tmp[i]).powi(2)));
-            if den > 0.0 && h * (num / den).sqrt() > 3.25 {
-                self.non_stiff_steps = 0;
-                self.stiff_steps += 1;
-                if self.stiff_steps == 15 {
-                    stats.stiff_at = Some(t);
-                }
-            } else {
-                self.non_stiff_steps += 1;
-                if self.non_stiff_steps == 6 {
-                    self.stiff_steps = 0;
-                }
-            }
-        }
+        self.stiffness.observe(t, h, (&k[6], y_new), (&k[5], &self.tmp), stats);
         f1.copy_from_slice(&k[6]);
         Ok(())
     }

@@ -155,9 +155,10 @@ pub struct Stats {
     pub jacobians: usize,
     /// LU factorizations of the iteration matrix (stiff method).
     pub factorizations: usize,
-    /// DOPRI5 only: the time from which the problem looks stiff by Hairer's test (the step
-    /// size held by stability: `h |lambda| > 3.25` at 15 accepted steps out of 15 tests in a
-    /// row, without six non-stiff ones between), where a stiff method (`ros23`) does better.
+    /// DOPRI5 and DOP853: the time from which the problem looks stiff by Hairer's test (the
+    /// step size held by stability: `h |lambda|` beyond the method's stability boundary, 3.25
+    /// or 6.1, on 15 accepted steps in a row, without six in-bounds ones between), where a
+    /// stiff method (`ros23`) does better.
     pub stiff_at: Option<f64>,
     /// Evaluations of the event functions (after each accepted step, and while locating).
     pub event_evaluations: usize,
@@ -631,6 +632,63 @@ fn grown_step(proposal: f64, taken: f64, s: &Settings, rejected_last: bool) -> f
     if rejected_last { h.min(taken) } else { h }
 }
 
+/// What [`Stats::stiff_at`] tells the user, without the way to ask for the stiff method (each
+/// front end names its own: `--method ros23`, `method="ros23"`).
+///
+/// ```
+/// let note = runtime::integrate::stiffness_note(0.25);
+/// assert_eq!(note, "looks stiff from t = 0.250000 (Hairer's test: the step size is held by stability, not accuracy)");
+/// ```
+pub fn stiffness_note(t: f64) -> String {
+    format!("looks stiff from t = {t:.6} (Hairer's test: the step size is held by stability, not accuracy)")
+}
+
+/// Hairer's stiffness test, as DOPRI5 and DOP853 carry it (`dopri5.f`, `dop853.f`): after each
+/// accepted step, `h |lambda|` estimated from two stages evaluated at the same time (the
+/// difference of their rates over the difference of their arguments); beyond the method's
+/// stability boundary on 15 steps in a row (six in-bounds steps between reset the count), the
+/// step size is held by stability, not accuracy, and the time is recorded in
+/// [`Stats::stiff_at`]. Hairer tests every thousandth step until one is beyond; this tests every
+/// step (one pass over the state, against a step's seven or twelve right-hand sides).
+struct StiffnessTest {
+    /// The method's stability boundary on the negative real axis: 3.25 for DOPRI5, 6.1 for
+    /// DOP853 (Hairer's values).
+    boundary: f64,
+    beyond: usize,
+    within: usize,
+}
+
+impl StiffnessTest {
+    fn new(boundary: f64) -> StiffnessTest {
+        StiffnessTest { boundary, beyond: 0, within: 0 }
+    }
+
+    /// One accepted step of size `h` from `t`: the rates `f_a`, `f_b` at the arguments `y_a`,
+    /// `y_b`, both at the same time.
+    fn observe(&mut self, t: f64, h: f64, (f_a, y_a): (&[f64], &[f64]), (f_b, y_b): (&[f64], &[f64]), stats: &mut Stats) {
+        if stats.stiff_at.is_some() {
+            return;
+        }
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..y_a.len() {
+            num += (f_a[i] - f_b[i]).powi(2);
+            den += (y_a[i] - y_b[i]).powi(2);
+        }
+        if den > 0.0 && h.abs() * (num / den).sqrt() > self.boundary {
+            self.within = 0;
+            self.beyond += 1;
+            if self.beyond == 15 {
+                stats.stiff_at = Some(t);
+            }
+        } else {
+            self.within += 1;
+            if self.within == 6 {
+                self.beyond = 0;
+            }
+        }
+    }
+}
+
 fn finite(y: &[f64]) -> bool {
     y.iter().all(|v| v.is_finite())
 }
@@ -710,6 +768,8 @@ mod tests {
         let closing = |method: Method, tol: f64| {
             let s = Settings { method, rtol: tol, atol: tol, ..Settings::default() };
             let sol = integrate(&mut arenstorf, &y0, &[0.0, PERIOD / 2.0, PERIOD], &s).unwrap();
+            // Not stiff: the close approaches shorten the steps for accuracy, not stability.
+            assert_eq!(sol.stats.stiff_at, None, "{method} at {tol:e}");
             let end = &sol.states[2];
             (end.iter().zip(&y0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max), sol.stats.steps)
         };
@@ -724,10 +784,11 @@ mod tests {
     }
 
     /// Van der Pol's oscillator with mu = 1e3, the stiff reference problem: the Rosenbrock
-    /// method crosses the slow manifold in a few hundred steps, where DOPRI5 needs tens of
-    /// thousands and finds the problem stiff; both reach the same state.
+    /// method crosses the slow manifold in a few hundred steps, where DOPRI5 and DOP853 need
+    /// tens of thousands and find the problem stiff (Hairer's test, each at its own stability
+    /// boundary); all reach the same state.
     #[test]
-    fn van_der_pol_at_mu_1e3_is_stiff_for_dopri5_and_not_for_rosenbrock() {
+    fn van_der_pol_at_mu_1e3_is_stiff_for_the_explicit_pairs_and_not_for_rosenbrock() {
         let mut vdp = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
             dy[0] = y[1];
             dy[1] = 1e3 * (1.0 - y[0] * y[0]) * y[1] - y[0];
@@ -737,10 +798,19 @@ mod tests {
         let run = |method: Method, vdp: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>| {
             integrate(vdp, &[2.0, 0.0], &outputs, &Settings { method, rtol: 1e-6, atol: 1e-6, ..Settings::default() }).unwrap()
         };
-        let (ros, dopri) = (run(Method::Rosenbrock23, &mut vdp), run(Method::Dopri5, &mut vdp));
-        assert!(ros.stats.steps < 2_000 && dopri.stats.steps > 20 * ros.stats.steps, "ROS23 {} steps, DOPRI5 {}", ros.stats.steps, dopri.stats.steps);
-        assert!(dopri.stats.stiff_at.is_some_and(|t| t < 10.0), "{:?}", dopri.stats.stiff_at);
-        assert!((ros.states[1][0] - dopri.states[1][0]).abs() < 1e-3, "{} against {}", ros.states[1][0], dopri.states[1][0]);
+        let ros = run(Method::Rosenbrock23, &mut vdp);
+        assert_eq!(ros.stats.stiff_at, None, "the stiff method runs no stiffness test");
+        for method in [Method::Dopri5, Method::Dop853] {
+            let explicit = run(method, &mut vdp);
+            assert!(
+                ros.stats.steps < 2_000 && explicit.stats.steps > 20 * ros.stats.steps,
+                "ROS23 {} steps, {method} {}",
+                ros.stats.steps,
+                explicit.stats.steps
+            );
+            assert!(explicit.stats.stiff_at.is_some_and(|t| t < 10.0), "{method}: {:?}", explicit.stats.stiff_at);
+            assert!((ros.states[1][0] - explicit.states[1][0]).abs() < 1e-3, "{} against {method}'s {}", ros.states[1][0], explicit.states[1][0]);
+        }
     }
 
     /// RK4's order: halving the step divides the error by 2^4.
