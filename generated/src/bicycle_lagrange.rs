@@ -438,123 +438,118 @@ pub fn constraint_residuals(
     let rR = params.rR;
     let rF = params.rF;
     let x0 = f64::cos(phi);
-    let x1 = x0 * x0;
-    let x2 = f64::sqrt(x1);
-    let x3 = x2 - x0;
-    let x4 = f64::sin(psi);
-    let x5 = f64::cos(psi);
-    let x6 = psi_dot * x3;
-    let x7 = f64::sin(phi);
-    let x8 = thR_dot + theta_dot;
-    let x9 = x7 * x4;
-    let x10 = f64::sin(thF);
-    let x11 = f64::cos(theta);
-    let x12 = f64::cos(lam);
-    let x13 = x11 * x12;
-    let x14 = f64::sin(lam);
-    let x15 = f64::sin(theta);
-    let x16 = x14 * x15;
-    let x17 = x13 + x16;
-    let x18 = x17 * x0;
-    let x19 = f64::cos(thF);
-    let x20 = f64::cos(delta);
-    let x21 = x20 * x0;
+    let x1 = f64::sqrt(x0 * x0);
+    let x2 = x1 - x0;
+    let x3 = f64::sin(psi);
+    let x4 = f64::cos(psi);
+    let x5 = psi_dot * x2;
+    let x6 = f64::sin(phi);
+    let x7 = thR_dot + theta_dot;
+    let x8 = x6 * x3;
+    let x9 = f64::sin(thF);
+    let x10 = f64::cos(theta);
+    let x11 = f64::cos(lam);
+    let x12 = x10 * x11;
+    let x13 = f64::sin(lam);
+    let x14 = f64::sin(theta);
+    let x15 = x13 * x14;
+    let x16 = x12 + x15;
+    let x17 = x16 * x0;
+    let x18 = f64::cos(thF);
+    let x19 = f64::cos(delta);
+    let x20 = x19 * x0;
+    let x21 = x13 * x10;
     let x22 = x14 * x11;
-    let x23 = x15 * x12;
-    let x24 = x22 - x23;
-    let x25 = f64::sin(delta);
-    let x26 = x25 * x7;
-    let x27 = x21 * x24 + x26;
-    let x28 = x18 * x19 + x10 * x27;
-    let x29 = x27 * x19 - x10 * x18;
-    let x30 = x20 * x7;
-    let x31 = x25 * x0;
-    let x32 = x30 - x24 * x31;
-    let x33 = (x10 * x28 + x29 * x19) * x25 + x20 * x32;
-    let x34 = x5 * x7;
-    let x35 = x11 * x4 + x15 * x34;
-    let x36 = x12 * x35;
-    let x37 = x15 * x4;
-    let x38 = x34 * x11;
-    let x39 = x37 - x38;
-    let x40 = x36 + x14 * x39;
-    let x41 = x21 * x5 - x40 * x25;
-    let x42 = x32 * x41;
-    let x43 = x32 * x32;
-    let x44 = 1.0 - x43;
-    let x45 = x44 * x0;
-    let x46 = c_ + w_;
-    let x47 = x11 * x9;
-    let x48 = x15 * x5;
-    let x49 = x47 + x48;
-    let x50 = x14 * rF - c_ * x12;
-    let x51 = x50 * x20;
-    let x52 = x5 * x11 - x15 * x9;
-    let x53 = x14 * x52;
-    let x54 = x12 * x49;
-    let x55 = x14 * c_ + rF * x12;
-    let x56 = x14 * x49 + x12 * x52;
+    let x23 = x21 - x22;
+    let x24 = f64::sin(delta);
+    let x25 = x24 * x6;
+    let x26 = x20 * x23 + x25;
+    let x27 = x17 * x18 + x9 * x26;
+    let x28 = x26 * x18 - x9 * x17;
+    let x29 = x19 * x6;
+    let x30 = x24 * x0;
+    let x31 = x29 - x23 * x30;
+    let x32 = (x9 * x27 + x28 * x18) * x24 + x19 * x31;
+    let x33 = x4 * x6;
+    let x34 = x10 * x3 + x14 * x33;
+    let x35 = x11 * x34;
+    let x36 = x14 * x3;
+    let x37 = x33 * x10;
+    let x38 = x36 - x37;
+    let x39 = x35 + x13 * x38;
+    let x40 = x20 * x4 - x39 * x24;
+    let x41 = x31 * x40;
+    let x42 = x31 * x31;
+    let x43 = 1.0 - x42;
+    let x44 = x43 * x0;
+    let x45 = c_ + w_;
+    let x46 = x10 * x8;
+    let x47 = x14 * x4;
+    let x48 = x46 + x47;
+    let x49 = x13 * rF - c_ * x11;
+    let x50 = x49 * x19;
+    let x51 = x4 * x10 - x14 * x8;
+    let x52 = x13 * x51;
+    let x53 = x11 * x48;
+    let x54 = x13 * c_ + rF * x11;
+    let x55 = x13 * x48 + x11 * x51;
+    let x56 = f64::sqrt(x43);
     let x57 = rF * thF_dot;
-    let x58 = x38 - x37;
-    let x59 = x14 * x35;
-    let x60 = x58 * x12 + x59;
-    let x61 = x14 * x58;
-    let x62 = x5 * x31;
-    let x63 = x28 * x28 + x43 + x29 * x29;
-    let x64 = x39 * x12 - x59;
-    let x65 = x62 + x40 * x20;
-    let x66 = x64 * x19 + x10 * x65;
-    let x67 = x65 * x19 - x10 * x64;
-    let x68 = x17 * x55;
-    let x69 = x15 * x46;
-    let x70 = x23 - x22;
-    let x71 = x17 * x20;
-    let x72 = x19 * x71 - x10 * x70;
-    let x73 = x17 * x25;
-    let x74 = x10 * x71 + x70 * x19;
-    let x75 = x72 * x29 - x73 * x32 + x74 * x28;
-    let x76 = x25 * x56 + x21 * x4;
-    let x77 = (x10 * x10 + x19 * x19) * x44;
-    let x78 = x16 * x0 + x13 * x0;
-    let x79 = x20 * x56 - x31 * x4;
-    let x80 = x54 - x53;
-    let x81 = x10 * x79 + x80 * x19;
-    let x82 = x79 * x19 - x80 * x10;
-    let x83 = -(x76 * x32);
-    let x84 = (x11 - 1.0) * rR - x68 + x69;
-    let x85 = rF * x32;
+    let x58 = x37 - x36;
+    let x59 = x13 * x34;
+    let x60 = x58 * x11 + x59;
+    let x61 = x13 * x58;
+    let x62 = x4 * x30;
+    let x63 = x27 * x27 + x42 + x28 * x28;
+    let x64 = x38 * x11 - x59;
+    let x65 = x62 + x39 * x19;
+    let x66 = x64 * x18 + x9 * x65;
+    let x67 = x65 * x18 - x9 * x64;
+    let x68 = x16 * x54;
+    let x69 = x14 * x45;
+    let x70 = x22 - x21;
+    let x71 = x16 * x19;
+    let x72 = x18 * x71 - x9 * x70;
+    let x73 = x16 * x24;
+    let x74 = x9 * x71 + x70 * x18;
+    let x75 = x72 * x28 - x73 * x31 + x74 * x27;
+    let x76 = x24 * x55 + x20 * x3;
+    let x77 = (x9 * x9 + x18 * x18) * x43;
+    let x78 = x15 * x0 + x12 * x0;
+    let x79 = x19 * x55 - x30 * x3;
+    let x80 = x53 - x52;
+    let x81 = x9 * x79 + x80 * x18;
+    let x82 = x79 * x18 - x80 * x9;
+    let x83 = -(x76 * x31);
+    let x84 = (x10 - 1.0) * rR - x68 + x69;
+    let x85 = rF * x31;
     [
-        rR * (phi_dot * x3 * x0 * x4 + x5 * (x6 * x7 - x8 * x0)) + f64::sqrt(x1) * x_dot,
-        rR * (x6 * x9 + ((x0 - x2) * x5 * phi_dot - x8 * x4) * x0)
-            + f64::sqrt(x1) * y_dot,
+        rR * (phi_dot * x2 * x0 * x3 + x4 * (x5 * x6 - x7 * x0)) + x1 * x_dot,
+        rR * (x5 * x8 + ((x0 - x1) * x4 * phi_dot - x7 * x3) * x0) + x1 * y_dot,
         theta_dot
-            * (f64::sqrt(x44) * (x51 * (x53 - x54) - x46 * x49 - rR * x52 + x55 * x56)
-                - rF * (x33 * x42 + x5 * x45)) - x57 * x41
+            * (x56 * (x50 * (x52 - x53) - x45 * x48 - rR * x51 + x54 * x55)
+                - rF * (x32 * x41 + x4 * x44)) - x57 * x40
             + psi_dot
-                * ((x55 * x60 + x50 * (x20 * (x61 - x36) - x62) + rR * (x39 + x34)
-                    - x46 * x35) * f64::sqrt(x44)
-                    - rF * (x63 * x42 + (x42 + x28 * x66 + x67 * x29) * x44))
-            + (((x68 + rR * (1.0 - x11) - x69) * x0 + x50 * x27) * f64::sqrt(x44) * x4
-                - rF * (x75 * x42 + x44 * (x74 * x66 + x72 * x67 - x73 * x41))) * phi_dot
-            + f64::sqrt(x44) * x_dot
-            + delta_dot * (-f64::sqrt(x44) * x50 * x76 - rF * (x64 * x77 + x78 * x42)),
-        ((x44 * (x76 * x73 + x81 * x74 + x72 * x82) + x83 * x75) * rF
-            + f64::sqrt(x44) * x5 * (x84 * x0 + x50 * (x21 * x70 - x26))) * phi_dot
+                * ((x54 * x60 + x49 * (x19 * (x61 - x35) - x62) + rR * (x38 + x33)
+                    - x45 * x34) * x56
+                    - rF * (x63 * x41 + (x41 + x27 * x66 + x67 * x28) * x43))
+            + (((x68 + rR * (1.0 - x10) - x69) * x0 + x49 * x26) * x56 * x3
+                - rF * (x75 * x41 + x43 * (x74 * x66 + x72 * x67 - x73 * x40))) * phi_dot
+            + x56 * x_dot
+            + delta_dot * (-x56 * x49 * x76 - rF * (x64 * x77 + x78 * x41)),
+        ((x43 * (x76 * x73 + x81 * x74 + x72 * x82) + x83 * x75) * rF
+            + x56 * x4 * (x84 * x0 + x49 * (x20 * x70 - x25))) * phi_dot
             + psi_dot
-                * ((rR * (x9 - x47 - x48) + x80 * x55 + x46 * x52 + x50 * x79)
-                    * f64::sqrt(x44)
-                    + rF * (x44 * (x82 * x29 + x83 + x81 * x28) + x83 * x63))
-            + f64::sqrt(x44) * y_dot
-            + delta_dot * (rF * (x78 * x83 + x80 * x77) + f64::sqrt(x44) * x50 * x41)
+                * ((rR * (x8 - x46 - x47) + x80 * x54 + x45 * x51 + x49 * x79) * x56
+                    + rF * (x43 * (x82 * x28 + x83 + x81 * x27) + x83 * x63))
+            + x56 * y_dot + delta_dot * (rF * (x78 * x83 + x80 * x77) + x56 * x49 * x40)
             + theta_dot
-                * (f64::sqrt(x44)
-                    * (x46 * x58 + x55 * (x36 - x61) - rR * x35 + x51 * x60)
-                    - (x45 * x4 - x33 * x83) * rF) - x57 * x76,
-        theta_dot
-            * (x24 * x55 - x17 * (x51 - x25 * x85 / f64::sqrt(x44)) + x15 * rR
-                - x46 * x11) * x0 + delta_dot * (x50 - rF * x27 / f64::sqrt(x44)) * x32
-            + (x84 * x7 + x50 * (x31 + x30 * x70)
-                + (x21 - x70 * x26) * x85 / f64::sqrt(x44)) * phi_dot,
+                * (x56 * (x45 * x58 + x54 * (x35 - x61) - rR * x34 + x50 * x60)
+                    - (x44 * x3 - x32 * x83) * rF) - x57 * x76,
+        theta_dot * (x23 * x54 - x16 * (x50 - x24 * x85 / x56) + x14 * rR - x45 * x10)
+            * x0 + delta_dot * (x49 - rF * x26 / x56) * x31
+            + (x84 * x6 + x49 * (x30 + x29 * x70) + (x20 - x70 * x25) * x85 / x56)
+                * phi_dot,
     ]
 }
 ///Position-level residuals of the holonomic constraints.
@@ -833,366 +828,365 @@ pub mod lagrange {
         let x131 = x85 * mF;
         let x132 = x130 + x131;
         let x133 = -(x25 * x132);
-        let x134 = x17 * x17;
-        let x135 = f64::sqrt(x134);
-        let x136 = x75 * x75;
-        let x137 = 1.0 - x136;
-        let x138 = f64::sqrt(x137);
-        let x139 = x42 * x42;
-        let x140 = x81 * x4 + mB * (x94 * x37 + (x31 * x96 + x35 * x97) * x2)
+        let x134 = f64::sqrt(x17 * x17);
+        let x135 = x75 * x75;
+        let x136 = 1.0 - x135;
+        let x137 = f64::sqrt(x136);
+        let x138 = x42 * x42;
+        let x139 = x81 * x4 + mB * (x94 * x37 + (x31 * x96 + x35 * x97) * x2)
             + mH * (x80 * x41 + x77 * x39 + x72 * x42)
             + mF * (x90 * x45 + x87 * x42 + x44 * x91);
-        let x141 = (x104 * x42 + x16 * (x105 * x45 + x44 * x106)) * mF
+        let x140 = (x104 * x42 + x16 * (x105 * x45 + x44 * x106)) * mF
             + (x16 * (x66 * x41 + x39 * x107) + x108 * x42) * mH + (x110 - x81) * x37;
-        let x142 = (x125 * x42 + x39 * x128 + x41 * x127) * mH
+        let x141 = (x125 * x42 + x39 * x128 + x41 * x127) * mH
             + mF * (x123 * x45 + x44 * x122 + x116 * x42) + mB * (-x35 * xB - x31 * x92);
-        let x143 = x132 * x42;
-        let x144 = x1 * IBxz;
-        let x145 = f64::cos(thR);
-        let x146 = f64::sin(thR);
-        let x147 = x1 * x145 + x146 * x6;
-        let x148 = x145 * x6 - x1 * x146;
-        let x149 = IRxx * (x147 * x147 + x148 * x148);
-        let x150 = x6 * IBxz;
-        let x151 = x10 * x9 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
-        let x152 = x63 * x17;
-        let x153 = IHxz * x9;
-        let x154 = x9 * x9;
-        let x155 = x10 * (2.0 * x153 + x10 * IHxx) + x154 * IHzz;
-        let x156 = x151 * x56 + x152 * x155;
-        let x157 = IHyy + IFyy;
-        let x158 = x2 * x2;
-        let x159 = IRyy + IByy;
-        let x160 = x152 * x23 + x0 * x56;
-        let x161 = x56 * x23 - x0 * x152;
-        let x162 = x160 * x160 + x161 * x161;
-        let x163 = x81 * rR;
-        let x164 = 2.0 * phi;
-        let x165 = x10 * (x10 * IHzz - 2.0 * x153) + x154 * IHxx;
-        let x166 = x56 * x165 + x152 * x151;
-        let x167 = x63 * x15;
-        let x168 = x103 * x151;
-        let x169 = x165 * x167 + x168;
-        let x170 = x23 * x167 - x0 * x103;
-        let x171 = x103 * x23;
-        let x172 = x171 + x0 * x167;
-        let x173 = x170 * x161 + x160 * x172;
-        let x174 = x1 * IBzz - x150;
-        let x175 = x103 * x155 + x151 * x167;
-        let x176 = x6 * IBxx - x144;
-        let x177 = x63 * x16;
-        let x178 = x177 * x75;
-        let x179 = mF * (x87 * x104 + x16 * (x91 * x106 + x105 * x90)) + x169 * x56
-            + x173 * IFxx + (x110 * x93 + x174 * x6 + x63 * x175 - x1 * x176) * x17
-            + (x16 * (x66 * x80 + x77 * x107) + x72 * x108) * mH - x178 * x157;
-        let x180 = x15 * x157;
-        let x181 = x0 * x160 + x161 * x23;
-        let x182 = (x80 * x127 + x77 * x128 + x125 * x72) * mH
-            + ((-xB * x97 - x92 * x96) * mB + x159) * x2 + x180 * x75
-            + x16 * (x181 * IFxx + x166) + mF * (x91 * x122 + x123 * x90 + x116 * x87);
-        let x183 = x2 * IRyy;
-        let x184 = x72 * x130 + x156 + (x160 * x23 - x0 * x161) * IFxx + x87 * x131;
-        let x185 = x75 * IFyy;
-        let x186 = x135 - x17;
-        let x187 = rR * x186;
-        let x188 = x29 * x187;
-        let x189 = x4 * x187;
-        let x190 = x34 - x33;
-        let x191 = x190 * x9 + x40;
-        let x192 = x10 * x190;
-        let x193 = x192 - x32;
-        let x194 = x191 * x84 - x31 * x47 + rR * (x35 + x29) + x85 * (x193 * x15 - x38);
-        let x195 = x75 * x42;
-        let x196 = x160 * x44 + x45 * x161 + x195;
-        let x197 = x136 + x162;
-        let x198 = x194 * f64::sqrt(x137) - rF * (x137 * x196 + x197 * x195);
-        let x199 = x22 * x84 + rR * (x4 - x11 - x12) + x8 * x47 + x85 * x19;
-        let x200 = -(x25 * x75);
-        let x201 = x27 * x161 + x200 + x160 * x24;
-        let x202 = f64::sqrt(x137) * x199 + rF * (x201 * x137 + x197 * x200);
-        let x203 = x16 * x16;
-        let x204 = x16
+        let x142 = x132 * x42;
+        let x143 = x1 * IBxz;
+        let x144 = f64::cos(thR);
+        let x145 = f64::sin(thR);
+        let x146 = x1 * x144 + x145 * x6;
+        let x147 = x144 * x6 - x1 * x145;
+        let x148 = IRxx * (x146 * x146 + x147 * x147);
+        let x149 = x6 * IBxz;
+        let x150 = x10 * x9 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
+        let x151 = x63 * x17;
+        let x152 = IHxz * x9;
+        let x153 = x9 * x9;
+        let x154 = x10 * (2.0 * x152 + x10 * IHxx) + x153 * IHzz;
+        let x155 = x150 * x56 + x151 * x154;
+        let x156 = IHyy + IFyy;
+        let x157 = x2 * x2;
+        let x158 = IRyy + IByy;
+        let x159 = x151 * x23 + x0 * x56;
+        let x160 = x56 * x23 - x0 * x151;
+        let x161 = x159 * x159 + x160 * x160;
+        let x162 = x81 * rR;
+        let x163 = 2.0 * phi;
+        let x164 = x10 * (x10 * IHzz - 2.0 * x152) + x153 * IHxx;
+        let x165 = x56 * x164 + x151 * x150;
+        let x166 = x63 * x15;
+        let x167 = x103 * x150;
+        let x168 = x164 * x166 + x167;
+        let x169 = x23 * x166 - x0 * x103;
+        let x170 = x103 * x23;
+        let x171 = x170 + x0 * x166;
+        let x172 = x169 * x160 + x159 * x171;
+        let x173 = x1 * IBzz - x149;
+        let x174 = x103 * x154 + x150 * x166;
+        let x175 = x6 * IBxx - x143;
+        let x176 = x63 * x16;
+        let x177 = x176 * x75;
+        let x178 = mF * (x87 * x104 + x16 * (x91 * x106 + x105 * x90)) + x168 * x56
+            + x172 * IFxx + (x110 * x93 + x173 * x6 + x63 * x174 - x1 * x175) * x17
+            + (x16 * (x66 * x80 + x77 * x107) + x72 * x108) * mH - x177 * x156;
+        let x179 = x15 * x156;
+        let x180 = x0 * x159 + x160 * x23;
+        let x181 = (x80 * x127 + x77 * x128 + x125 * x72) * mH
+            + ((-xB * x97 - x92 * x96) * mB + x158) * x2 + x179 * x75
+            + x16 * (x180 * IFxx + x165) + mF * (x91 * x122 + x123 * x90 + x116 * x87);
+        let x182 = x2 * IRyy;
+        let x183 = x72 * x130 + x155 + (x159 * x23 - x0 * x160) * IFxx + x87 * x131;
+        let x184 = x75 * IFyy;
+        let x185 = x134 - x17;
+        let x186 = rR * x185;
+        let x187 = x29 * x186;
+        let x188 = x4 * x186;
+        let x189 = x34 - x33;
+        let x190 = x189 * x9 + x40;
+        let x191 = x10 * x189;
+        let x192 = x191 - x32;
+        let x193 = x190 * x84 - x31 * x47 + rR * (x35 + x29) + x85 * (x192 * x15 - x38);
+        let x194 = x75 * x42;
+        let x195 = x159 * x44 + x45 * x160 + x194;
+        let x196 = x135 + x161;
+        let x197 = x193 * x137 - rF * (x136 * x195 + x196 * x194);
+        let x198 = x22 * x84 + rR * (x4 - x11 - x12) + x8 * x47 + x85 * x19;
+        let x199 = -(x25 * x75);
+        let x200 = x27 * x160 + x199 + x159 * x24;
+        let x201 = x137 * x198 + rF * (x200 * x136 + x196 * x199);
+        let x202 = x16 * x16;
+        let x203 = x16
             * (mF * (x106 * x122 + x104 * x115 + x123 * x105)
                 + mH * (x107 * x128 + x66 * x127 + x124 * x108)
-                + IFxx * (x170 * x23 + x0 * x172) + x168 + (x165 - IHyy - IFyy) * x167);
-        let x205 = x175 + x104 * x131 + x130 * x108 + (x172 * x23 - x0 * x170) * IFxx;
-        let x206 = -(x177 * IFyy);
-        let x207 = x18 * x187;
-        let x208 = x17 - x135;
-        let x209 = rR * x37;
-        let x210 = x208 * x209;
-        let x211 = 1.0 - x6;
-        let x212 = (rR * x211 + x99 - x100) * x17 + x85 * x56;
-        let x213 = x212 * x3;
-        let x214 = x44 * x172 - x177 * x42 + x170 * x45;
-        let x215 = x173 - x178;
-        let x216 = x213 * f64::sqrt(x137) - rF * (x137 * x214 + x215 * x195);
-        let x217 = x170 * x27 + x172 * x24 + x25 * x177;
-        let x218 = (x85 * (x51 * x103 - x55) + x102 * x17) * x5;
-        let x219 = rF * (x200 * x215 + x217 * x137) + x218 * f64::sqrt(x137);
-        let x220 = x51 - x103 * x55;
-        let x221 = rF * x75;
-        let x222 = x74 + x73 * x103;
-        let x223 = x102 * x2 + x85 * x222;
-        let x224 = x220 * x221 / f64::sqrt(x137) + x223;
-        let x225 = x0 * x0 + x23 * x23;
-        let x226 = x225 * IFxx;
-        let x227 = (x124 * x130 + x115 * x131 + x151) * x16;
-        let x228 = x15 * IFyy;
-        let x229 = -x209;
-        let x230 = -(rR * x18);
-        let x231 = x20 - x21;
-        let x232 = x231 * x120 - x13 * x47 - rR * x8 + x14 * x84;
-        let x233 = x181 * x16 + x15 * x75;
-        let x234 = f64::sqrt(x137) * x232 - (x233 * x195 + x137 * x37) * rF;
-        let x235 = x190 * x47 - rR * x31 + x120 * x191 + (x32 - x192) * x84;
-        let x236 = x235 * f64::sqrt(x137) - rF * (x137 * x18 - x233 * x200);
-        let x237 = x120 - x16 * x221 / f64::sqrt(x137);
-        let x238 = x58 - x57;
-        let x239 = x238 + x54 * x84;
-        let x240 = x239 - x63 * x237;
-        let x241 = x240 * x17;
-        let x242 = x62 * x17 + x61 * x17;
-        let x243 = x225 * x137;
-        let x244 = -x25 * x85 * f64::sqrt(x137) - rF * (x242 * x195 + x41 * x243);
-        let x245 = x85 * f64::sqrt(x137) * x42 + rF * (x242 * x200 + x22 * x243);
-        let x246 = x85 - rF * x56 / f64::sqrt(x137);
-        let x247 = x246 * x75;
-        let x248 = -(rF * x42);
-        let x249 = -(x25 * rF);
-        let x250 = x6 * psi_dot;
-        let x251 = x1 * phi_dot;
-        let x252 = x250 * x17 + x251;
-        let x253 = x6 * phi_dot;
-        let x254 = x253 - x1 * psi_dot * x17;
-        let x255 = delta_dot + x252 * x9 - x10 * x254;
-        let x256 = x10 * x252 + x9 * x254;
-        let x257 = psi_dot * x2;
-        let x258 = x257 + theta_dot;
-        let x259 = x256 * x15 + x16 * x258;
-        let x260 = x257 * x58;
-        let x261 = x260 - x258 * x47;
-        let x262 = x250 * x2;
-        let x263 = x262 - x257 - theta_dot;
-        let x264 = x10 * x261 + x263 * x69;
-        let x265 = x252 * x47 + rR * (x254 - phi_dot);
-        let x266 = x15 * x265 - x264 * x16;
-        let x267 = x255 * x65 - x259 * x50 + x266;
-        let x268 = theta_dot * x2;
-        let x269 = phi_dot * x17;
-        let x270 = x68 * x269 - x1 * x268;
-        let x271 = x268 * x95;
-        let x272 = x271 + x269 * x67;
-        let x273 = (x69 * x270 + x10 * x272) * psi_dot;
-        let x274 = theta_dot * x17;
-        let x275 = x251 * (x257 - theta_dot) - x250 * x274;
-        let x276 = x1 * x274;
-        let x277 = (theta_dot - x257) * x253 - x276 * psi_dot;
-        let x278 = rR * x275 + x277 * x47;
-        let x279 = x273 * x15 + (x16 * x278 + delta_dot * x266);
-        let x280 = x15 * x258 - x16 * x256;
-        let x281 = x9 * x261 - x263 * x78;
-        let x282 = x281 - x65 * x280;
-        let x283 = x269 * psi_dot;
-        let x284 = x275 * x9 + x10 * x277;
-        let x285 = x283 * x15 - x16 * x284 - delta_dot * x259;
-        let x286 = x279 - x255 * x267 + x282 * x280 + x285 * x50;
-        let x287 = (delta_dot * x280 + x15 * x284) + x283 * x16;
-        let x288 = x287 * x50;
-        let x289 = x10 * x275;
-        let x290 = x9 * x277;
-        let x291 = x290 - x289;
-        let x292 = x65 * x291;
-        let x293 = x259 * x282;
-        let x294 = x16 * x265 + x264 * x15;
-        let x295 = x294 + x280 * x50;
-        let x296 = x255 * x295;
-        let x297 = x273 * x16;
-        let x298 = x15 * x278;
-        let x299 = delta_dot * x294;
-        let x300 = (x298 - x299) - x297;
-        let x301 = x292 - x288 - x293 + x296 + x300;
-        let x302 = (x9 * x272 - x78 * x270) * psi_dot;
-        let x303 = x259 * x267 + x302 - x285 * x65 - x295 * x280;
-        let x304 = x302 - x85 * x285;
-        let x305 = x279 + x285 * x84;
-        let x306 = x255 * x85 - x259 * x84 + x266;
-        let x307 = x0 * x259 + x255 * x23;
-        let x308 = x281 - x85 * x280;
-        let x309 = x280 * x84 + x294;
-        let x310 = x308 * x23 + x0 * x309;
-        let x311 = x305 * x23 - x0 * x304 - x306 * x307 + x280 * x310;
-        let x312 = x309 * x23 - x0 * x308;
-        let x313 = x312 * x307;
-        let x314 = x259 * x23 - x0 * x255;
-        let x315 = x310 * x314;
-        let x316 = x85 * x291;
-        let x317 = x287 * x84;
-        let x318 = x313 - x315 + x316 + x300 - x317;
-        let x319 = x304 * x23 + x0 * x305 - x312 * x280 + x306 * x314;
-        let x320 = rR * x262 - x258 * x92;
-        let x321 = x260 - xB * x258;
-        let x322 = x320 * x252 - x254 * x321 + x275 * x92 + xB * x277;
-        let x323 = x254 * x92 + x252 * xB - rR * phi_dot;
-        let x324 = x323 * x254 + psi_dot * (x271 + x269 * x97) - x320 * x258;
-        let x325 = x258 * x321 - x323 * x252 + psi_dot * (x269 * x96 - x268 * x58);
-        let x326 = psi_dot * psi_dot;
-        let x327 = phi_dot * phi_dot + x326;
-        let x328 = psi_dot * phi_dot;
-        let x329 = psi_dot * x18;
-        let x330 = x255 * x155 + x259 * x151;
-        let x331 = x291 * x151 + (x287 * x165 + x280 * (x330 - x255 * IHyy));
-        let x332 = x255 * x151;
-        let x333 = x259 * x165;
-        let x334 = x332 + x333;
-        let x335 = x255 * x334;
-        let x336 = x285 * IHyy;
-        let x337 = x285 * IFyy;
-        let x338 = x259 * x330;
-        let x339 = x338 - x335 - x336 - x337;
-        let x340 = x287 - x255 * thF_dot;
-        let x341 = x259 * thF_dot;
-        let x342 = thF_dot + x280;
-        let x343 = IFxx * (x23 * x340 + x0 * (x289 - x341 - x290))
-            + x307 * x342 * (IFxx - IFyy);
-        let x344 = thR_dot + x258;
-        let x345 = x145 * x252 + x146 * x254;
-        let x346 = x344 * x345 * (IRxx - IRyy)
-            + (x145 * x275 - x146 * x277 - thR_dot * x345) * IRxx;
-        let x347 = x145 * x254 - x252 * x146;
-        let x348 = x347 * x344 * (IRyy - IRxx)
-            + IRxx * (thR_dot * x347 + x145 * x277 + x146 * x275);
-        let x349 = x2 * phi_dot;
-        let x350 = x254 * IBxx;
-        let x351 = x252 * IBxz;
-        let x352 = (x254 * IByy - x350 + x351) * x258 - x275 * IBxz + IBzz * x277;
-        let x353 = IBzz * x252 - x254 * IBxz;
-        let x354 = x275 * IBxx - x277 * IBxz + (x353 - x252 * IByy) * x258;
-        let x355 = x259 * IHyy;
-        let x356 = x287 * x151;
-        let x357 = x291 * x155;
-        let x358 = x280 * (x355 - x332 - x333) + x356 + x357;
-        let x359 = ((x341 + x291) * x23 + x0 * x340) * IFxx
-            + (IFyy - IFxx) * x314 * x342;
-        let x360 = x353 * x254;
-        let x361 = x252 * (x350 - x351);
-        let x362 = x163 * f64::sin(x164);
-        let x363 = (-x298 - g * x75) + (x297 + x299);
-        let x364 = psi_dot * x4;
-        let x365 = ((x186 - x158 / f64::sqrt(x134)) * x17 + x158) * phi_dot;
-        let x366 = thR_dot + theta_dot;
-        let x367 = psi_dot * x186;
-        let x368 = x349 * x3;
-        let x369 = x17 / f64::sqrt(x134);
-        let x370 = x349 * x17;
-        let x371 = x349 * x5;
-        let x372 = x268 + psi_dot;
-        let x373 = x372 * x7;
-        let x374 = phi_dot * x37;
-        let x375 = x258 * x3;
-        let x376 = x373 + x1 * (x374 - x375);
-        let x377 = x10 * x376;
-        let x378 = x30 * x258;
-        let x379 = x269 * x6;
-        let x380 = x372 * x1;
-        let x381 = x378 + (x380 - x379) * x5;
-        let x382 = x381 * x9;
-        let x383 = x382 - x377;
-        let x384 = x63 * x274;
-        let x385 = x349 * x103 - x384;
-        let x386 = delta_dot * x2 + x385;
-        let x387 = delta_dot * x54;
-        let x388 = phi_dot - x387;
-        let x389 = x51 * x388 - x16 * x386;
-        let x390 = x225 * x389;
-        let x391 = x10 * x2;
-        let x392 = x9 * x17;
-        let x393 = x10 * x17;
-        let x394 = x9 * x2;
-        let x395 = 0.5
-            * ((theta_dot + phi_dot) * (x1 * (x391 + x392) + (x394 - x393) * x6))
-            + 0.5 * ((theta_dot - phi_dot) * (x1 * (x392 - x391) - (x393 + x394) * x6));
-        let x396 = x376 * x9;
-        let x397 = delta_dot * x37;
-        let x398 = x10 * x381 + (x396 + x397);
-        let x399 = x371 + x329;
-        let x400 = x399 + delta_dot * x36;
-        let x401 = -x16 * x398 - x400 * x15;
-        let x402 = x389 * x42;
-        let x403 = x75 * x389;
-        let x404 = x5 * x258;
-        let x405 = phi_dot * x18;
-        let x406 = -x404 - x405;
-        let x407 = x1 * x406 - x372 * x30;
-        let x408 = x9 * x407;
-        let x409 = delta_dot * x18;
-        let x410 = x372 * x33;
-        let x411 = (x404 + x405) * x6;
-        let x412 = x411 - x410;
-        let x413 = x10 * x412;
-        let x414 = x368 - psi_dot * x37;
-        let x415 = x414 - delta_dot * x14;
-        let x416 = x16 * (x409 - x408 - x413) + x15 * x415;
-        let x417 = x15 * x398 - thF_dot * x41 - x16 * x400;
-        let x418 = thF_dot * x39;
-        let x419 = x0 * x417 + (x383 + x418) * x23;
-        let x420 = x0 * (x377 - x418 - x382) + x417 * x23;
-        let x421 = x386 * x15;
-        let x422 = x421 - thF_dot * x152 + x388 * x74;
-        let x423 = x63 * x349;
-        let x424 = thF_dot * x56 + (x54 * x274 - x423);
-        let x425 = x0 * x422 + x424 * x23;
-        let x426 = x422 * x23 - x0 * x424;
-        let x427 = 2.0 * (x160 * x425) + 2.0 * (x426 * x161) + 2.0 * x403;
-        let x428 = x5 * (x379 - x380);
-        let x429 = x428 - x378;
-        let x430 = x9 * x429;
-        let x431 = x1 * (x375 - x374) - x373;
-        let x432 = x10 * x429;
-        let x433 = theta_dot * x6;
-        let x434 = x29 * psi_dot;
-        let x435 = theta_dot * x3;
-        let x436 = x5 * psi_dot;
-        let x437 = delta_dot * x16;
-        let x438 = theta_dot + thF_dot * x15;
-        let x439 = thF_dot + theta_dot * x15;
-        let x440 = x63 * (-x437 * x23 - x0 * x438) - x171 * x439;
-        let x441 = delta_dot * x167;
-        let x442 = x63 * x438 * x23 + x0 * (-x439 * x103 - delta_dot * x177);
-        let x443 = theta_dot * x103;
-        let x444 = delta_dot * x75;
-        let x445 = x170 * x426 + x16 * (x75 * x443 - x63 * x389) + x425 * x172
-            + x161 * x440 + x160 * x442 - x444 * x167;
-        let x446 = x10 * x407;
-        let x447 = x6 * x406 + x410;
-        let x448 = x15 * (x181 * delta_dot + x389)
+                + IFxx * (x169 * x23 + x0 * x171) + x167 + (x164 - IHyy - IFyy) * x166);
+        let x204 = x174 + x104 * x131 + x130 * x108 + (x171 * x23 - x0 * x169) * IFxx;
+        let x205 = -(x176 * IFyy);
+        let x206 = x18 * x186;
+        let x207 = x17 - x134;
+        let x208 = rR * x37;
+        let x209 = x207 * x208;
+        let x210 = 1.0 - x6;
+        let x211 = (rR * x210 + x99 - x100) * x17 + x85 * x56;
+        let x212 = x211 * x3;
+        let x213 = x44 * x171 - x176 * x42 + x169 * x45;
+        let x214 = x172 - x177;
+        let x215 = x212 * x137 - rF * (x136 * x213 + x214 * x194);
+        let x216 = x169 * x27 + x171 * x24 + x25 * x176;
+        let x217 = (x85 * (x51 * x103 - x55) + x102 * x17) * x5;
+        let x218 = rF * (x199 * x214 + x216 * x136) + x217 * x137;
+        let x219 = x51 - x103 * x55;
+        let x220 = rF * x75;
+        let x221 = x74 + x73 * x103;
+        let x222 = x102 * x2 + x85 * x221;
+        let x223 = x219 * x220 / x137 + x222;
+        let x224 = x0 * x0 + x23 * x23;
+        let x225 = x224 * IFxx;
+        let x226 = (x124 * x130 + x115 * x131 + x150) * x16;
+        let x227 = x15 * IFyy;
+        let x228 = -x208;
+        let x229 = -(rR * x18);
+        let x230 = x20 - x21;
+        let x231 = x230 * x120 - x13 * x47 - rR * x8 + x14 * x84;
+        let x232 = x180 * x16 + x15 * x75;
+        let x233 = x137 * x231 - (x232 * x194 + x136 * x37) * rF;
+        let x234 = x189 * x47 - rR * x31 + x120 * x190 + (x32 - x191) * x84;
+        let x235 = x234 * x137 - rF * (x136 * x18 - x232 * x199);
+        let x236 = x120 - x16 * x220 / x137;
+        let x237 = x58 - x57;
+        let x238 = x237 + x54 * x84;
+        let x239 = x238 - x63 * x236;
+        let x240 = x239 * x17;
+        let x241 = x62 * x17 + x61 * x17;
+        let x242 = x224 * x136;
+        let x243 = -x25 * x85 * x137 - rF * (x241 * x194 + x41 * x242);
+        let x244 = x85 * x137 * x42 + rF * (x241 * x199 + x22 * x242);
+        let x245 = x85 - rF * x56 / x137;
+        let x246 = x245 * x75;
+        let x247 = -(rF * x42);
+        let x248 = -(x25 * rF);
+        let x249 = x6 * psi_dot;
+        let x250 = x1 * phi_dot;
+        let x251 = x249 * x17 + x250;
+        let x252 = x6 * phi_dot;
+        let x253 = x252 - x1 * psi_dot * x17;
+        let x254 = delta_dot + x251 * x9 - x10 * x253;
+        let x255 = x10 * x251 + x9 * x253;
+        let x256 = psi_dot * x2;
+        let x257 = x256 + theta_dot;
+        let x258 = x255 * x15 + x16 * x257;
+        let x259 = x256 * x58;
+        let x260 = x259 - x257 * x47;
+        let x261 = x249 * x2;
+        let x262 = x261 - x256 - theta_dot;
+        let x263 = x10 * x260 + x262 * x69;
+        let x264 = x251 * x47 + rR * (x253 - phi_dot);
+        let x265 = x15 * x264 - x263 * x16;
+        let x266 = x254 * x65 - x258 * x50 + x265;
+        let x267 = theta_dot * x2;
+        let x268 = phi_dot * x17;
+        let x269 = x68 * x268 - x1 * x267;
+        let x270 = x267 * x95;
+        let x271 = x270 + x268 * x67;
+        let x272 = (x69 * x269 + x10 * x271) * psi_dot;
+        let x273 = theta_dot * x17;
+        let x274 = x250 * (x256 - theta_dot) - x249 * x273;
+        let x275 = x1 * x273;
+        let x276 = (theta_dot - x256) * x252 - x275 * psi_dot;
+        let x277 = rR * x274 + x276 * x47;
+        let x278 = x272 * x15 + (x16 * x277 + delta_dot * x265);
+        let x279 = x15 * x257 - x16 * x255;
+        let x280 = x9 * x260 - x262 * x78;
+        let x281 = x280 - x65 * x279;
+        let x282 = x268 * psi_dot;
+        let x283 = x274 * x9 + x10 * x276;
+        let x284 = x282 * x15 - x16 * x283 - delta_dot * x258;
+        let x285 = x278 - x254 * x266 + x281 * x279 + x284 * x50;
+        let x286 = (delta_dot * x279 + x15 * x283) + x282 * x16;
+        let x287 = x286 * x50;
+        let x288 = x10 * x274;
+        let x289 = x9 * x276;
+        let x290 = x289 - x288;
+        let x291 = x65 * x290;
+        let x292 = x258 * x281;
+        let x293 = x16 * x264 + x263 * x15;
+        let x294 = x293 + x279 * x50;
+        let x295 = x254 * x294;
+        let x296 = x272 * x16;
+        let x297 = x15 * x277;
+        let x298 = delta_dot * x293;
+        let x299 = (x297 - x298) - x296;
+        let x300 = x291 - x287 - x292 + x295 + x299;
+        let x301 = (x9 * x271 - x78 * x269) * psi_dot;
+        let x302 = x258 * x266 + x301 - x284 * x65 - x294 * x279;
+        let x303 = x301 - x85 * x284;
+        let x304 = x278 + x284 * x84;
+        let x305 = x254 * x85 - x258 * x84 + x265;
+        let x306 = x0 * x258 + x254 * x23;
+        let x307 = x280 - x85 * x279;
+        let x308 = x279 * x84 + x293;
+        let x309 = x307 * x23 + x0 * x308;
+        let x310 = x304 * x23 - x0 * x303 - x305 * x306 + x279 * x309;
+        let x311 = x308 * x23 - x0 * x307;
+        let x312 = x311 * x306;
+        let x313 = x258 * x23 - x0 * x254;
+        let x314 = x309 * x313;
+        let x315 = x85 * x290;
+        let x316 = x286 * x84;
+        let x317 = x312 - x314 + x315 + x299 - x316;
+        let x318 = x303 * x23 + x0 * x304 - x311 * x279 + x305 * x313;
+        let x319 = rR * x261 - x257 * x92;
+        let x320 = x259 - xB * x257;
+        let x321 = x319 * x251 - x253 * x320 + x274 * x92 + xB * x276;
+        let x322 = x253 * x92 + x251 * xB - rR * phi_dot;
+        let x323 = x322 * x253 + psi_dot * (x270 + x268 * x97) - x319 * x257;
+        let x324 = x257 * x320 - x322 * x251 + psi_dot * (x268 * x96 - x267 * x58);
+        let x325 = psi_dot * psi_dot;
+        let x326 = phi_dot * phi_dot + x325;
+        let x327 = psi_dot * phi_dot;
+        let x328 = psi_dot * x18;
+        let x329 = x254 * x154 + x258 * x150;
+        let x330 = x290 * x150 + (x286 * x164 + x279 * (x329 - x254 * IHyy));
+        let x331 = x254 * x150;
+        let x332 = x258 * x164;
+        let x333 = x331 + x332;
+        let x334 = x254 * x333;
+        let x335 = x284 * IHyy;
+        let x336 = x284 * IFyy;
+        let x337 = x258 * x329;
+        let x338 = x337 - x334 - x335 - x336;
+        let x339 = x286 - x254 * thF_dot;
+        let x340 = x258 * thF_dot;
+        let x341 = thF_dot + x279;
+        let x342 = IFxx * (x23 * x339 + x0 * (x288 - x340 - x289))
+            + x306 * x341 * (IFxx - IFyy);
+        let x343 = thR_dot + x257;
+        let x344 = x144 * x251 + x145 * x253;
+        let x345 = x343 * x344 * (IRxx - IRyy)
+            + (x144 * x274 - x145 * x276 - thR_dot * x344) * IRxx;
+        let x346 = x144 * x253 - x251 * x145;
+        let x347 = x346 * x343 * (IRyy - IRxx)
+            + IRxx * (thR_dot * x346 + x144 * x276 + x145 * x274);
+        let x348 = x2 * phi_dot;
+        let x349 = x253 * IBxx;
+        let x350 = x251 * IBxz;
+        let x351 = (x253 * IByy - x349 + x350) * x257 - x274 * IBxz + IBzz * x276;
+        let x352 = IBzz * x251 - x253 * IBxz;
+        let x353 = x274 * IBxx - x276 * IBxz + (x352 - x251 * IByy) * x257;
+        let x354 = x258 * IHyy;
+        let x355 = x286 * x150;
+        let x356 = x290 * x154;
+        let x357 = x279 * (x354 - x331 - x332) + x355 + x356;
+        let x358 = ((x340 + x290) * x23 + x0 * x339) * IFxx
+            + (IFyy - IFxx) * x313 * x341;
+        let x359 = x352 * x253;
+        let x360 = x251 * (x349 - x350);
+        let x361 = x162 * f64::sin(x163);
+        let x362 = (-x297 - g * x75) + (x296 + x298);
+        let x363 = psi_dot * x4;
+        let x364 = ((x185 - x157 / x134) * x17 + x157) * phi_dot;
+        let x365 = thR_dot + theta_dot;
+        let x366 = psi_dot * x185;
+        let x367 = x348 * x3;
+        let x368 = x17 / x134;
+        let x369 = x348 * x17;
+        let x370 = x348 * x5;
+        let x371 = x267 + psi_dot;
+        let x372 = x371 * x7;
+        let x373 = phi_dot * x37;
+        let x374 = x257 * x3;
+        let x375 = x372 + x1 * (x373 - x374);
+        let x376 = x10 * x375;
+        let x377 = x30 * x257;
+        let x378 = x268 * x6;
+        let x379 = x371 * x1;
+        let x380 = x377 + (x379 - x378) * x5;
+        let x381 = x380 * x9;
+        let x382 = x381 - x376;
+        let x383 = x63 * x273;
+        let x384 = x348 * x103 - x383;
+        let x385 = delta_dot * x2 + x384;
+        let x386 = delta_dot * x54;
+        let x387 = phi_dot - x386;
+        let x388 = x51 * x387 - x16 * x385;
+        let x389 = x224 * x388;
+        let x390 = x10 * x2;
+        let x391 = x9 * x17;
+        let x392 = x10 * x17;
+        let x393 = x9 * x2;
+        let x394 = 0.5
+            * ((theta_dot + phi_dot) * (x1 * (x390 + x391) + (x393 - x392) * x6))
+            + 0.5 * ((theta_dot - phi_dot) * (x1 * (x391 - x390) - (x392 + x393) * x6));
+        let x395 = x375 * x9;
+        let x396 = delta_dot * x37;
+        let x397 = x10 * x380 + (x395 + x396);
+        let x398 = x370 + x328;
+        let x399 = x398 + delta_dot * x36;
+        let x400 = -x16 * x397 - x399 * x15;
+        let x401 = x388 * x42;
+        let x402 = x75 * x388;
+        let x403 = x5 * x257;
+        let x404 = phi_dot * x18;
+        let x405 = -x403 - x404;
+        let x406 = x1 * x405 - x371 * x30;
+        let x407 = x9 * x406;
+        let x408 = delta_dot * x18;
+        let x409 = x371 * x33;
+        let x410 = (x403 + x404) * x6;
+        let x411 = x410 - x409;
+        let x412 = x10 * x411;
+        let x413 = x367 - psi_dot * x37;
+        let x414 = x413 - delta_dot * x14;
+        let x415 = x16 * (x408 - x407 - x412) + x15 * x414;
+        let x416 = x15 * x397 - thF_dot * x41 - x16 * x399;
+        let x417 = thF_dot * x39;
+        let x418 = x0 * x416 + (x382 + x417) * x23;
+        let x419 = x0 * (x376 - x417 - x381) + x416 * x23;
+        let x420 = x385 * x15;
+        let x421 = x420 - thF_dot * x151 + x387 * x74;
+        let x422 = x63 * x348;
+        let x423 = thF_dot * x56 + (x54 * x273 - x422);
+        let x424 = x0 * x421 + x423 * x23;
+        let x425 = x421 * x23 - x0 * x423;
+        let x426 = 2.0 * (x159 * x424) + 2.0 * (x425 * x160) + 2.0 * x402;
+        let x427 = x5 * (x378 - x379);
+        let x428 = x427 - x377;
+        let x429 = x9 * x428;
+        let x430 = x1 * (x374 - x373) - x372;
+        let x431 = x10 * x428;
+        let x432 = theta_dot * x6;
+        let x433 = x29 * psi_dot;
+        let x434 = theta_dot * x3;
+        let x435 = x5 * psi_dot;
+        let x436 = delta_dot * x16;
+        let x437 = theta_dot + thF_dot * x15;
+        let x438 = thF_dot + theta_dot * x15;
+        let x439 = x63 * (-x436 * x23 - x0 * x437) - x170 * x438;
+        let x440 = delta_dot * x166;
+        let x441 = x63 * x437 * x23 + x0 * (-x438 * x103 - delta_dot * x176);
+        let x442 = theta_dot * x103;
+        let x443 = delta_dot * x75;
+        let x444 = x169 * x425 + x16 * (x75 * x442 - x63 * x388) + x424 * x171
+            + x160 * x439 + x159 * x441 - x443 * x166;
+        let x445 = x10 * x406;
+        let x446 = x6 * x405 + x409;
+        let x447 = x15 * (x180 * delta_dot + x388)
             + x16
-                * ((x426 + thF_dot * x160) * x23 - x444 + x0 * (x425 - thF_dot * x161));
-        let x449 = x16 * x23;
-        let x450 = x0 * x15;
-        let x451 = x0 * x16;
-        let x452 = x15 * x23;
-        let x453 = (0.5 * ((x449 + x450) * delta_dot)
-            - 0.5 * (delta_dot * (x449 - x450))) * x23
+                * ((x425 + thF_dot * x159) * x23 - x443 + x0 * (x424 - thF_dot * x160));
+        let x448 = x16 * x23;
+        let x449 = x0 * x15;
+        let x450 = x0 * x16;
+        let x451 = x15 * x23;
+        let x452 = (0.5 * ((x448 + x449) * delta_dot)
+            - 0.5 * (delta_dot * (x448 - x449))) * x23
             - x0
-                * (0.5 * (delta_dot * (x451 + x452))
-                    + 0.5 * (delta_dot * (x452 - x451)));
-        let x454 = psi_dot - phi_dot;
-        let x455 = psi_dot + phi_dot;
-        let x456 = rF * thF_dot;
-        let x457 = x9 * x412;
-        let x458 = x457 - x446;
-        let x459 = -(x25 * x389);
-        let x460 = x16 * x415 + x15 * (x408 - x409 + x413);
-        let x461 = x460 - thF_dot * x22;
-        let x462 = thF_dot * x19;
-        let x463 = x0 * x461 + (x458 + x462) * x23;
-        let x464 = x23 * x461 + x0 * (x446 - x457 - x462);
-        let x465 = x423 + x103 * x274;
-        let x466 = delta_dot * x103 + phi_dot;
-        let x467 = 1.0 / f64::sqrt(x137) + x136 / f64::powf(x137, 1.5);
-        let x468 = x389 * x467;
-        let x469 = x63 * x268 + (delta_dot * x17 + x269 * x103);
+                * (0.5 * (delta_dot * (x450 + x451))
+                    + 0.5 * (delta_dot * (x451 - x450)));
+        let x453 = psi_dot - phi_dot;
+        let x454 = psi_dot + phi_dot;
+        let x455 = rF * thF_dot;
+        let x456 = x9 * x411;
+        let x457 = x456 - x445;
+        let x458 = -(x25 * x388);
+        let x459 = x16 * x414 + x15 * (x407 - x408 + x412);
+        let x460 = x459 - thF_dot * x22;
+        let x461 = thF_dot * x19;
+        let x462 = x0 * x460 + (x457 + x461) * x23;
+        let x463 = x23 * x460 + x0 * (x445 - x456 - x461);
+        let x464 = x422 + x103 * x273;
+        let x465 = delta_dot * x103 + phi_dot;
+        let x466 = 1.0 / x137 + x135 / f64::powf(x136, 1.5);
+        let x467 = x388 * x466;
+        let x468 = x63 * x267 + (delta_dot * x17 + x268 * x103);
         Assembly {
             qdot: [
                 x_dot,
@@ -1215,268 +1209,265 @@ pub mod lagrange {
                     0.0,
                     x133,
                     0.0,
-                    x135,
+                    x134,
                     0.0,
-                    x138,
+                    x137,
                     0.0,
                     0.0,
                 ],
                 [
                     x46,
-                    (x41 * x41 + x139 + x39 * x39) * mH + x28
-                        + mF * (x45 * x45 + x139 + x44 * x44),
+                    (x41 * x41 + x138 + x39 * x39) * mH + x28
+                        + mF * (x45 * x45 + x138 + x44 * x44),
+                    x139,
                     x140,
                     x141,
+                    0.0,
                     x142,
                     0.0,
-                    x143,
                     0.0,
+                    x134,
                     0.0,
-                    x135,
-                    0.0,
-                    x138,
+                    x137,
                     0.0,
                 ],
                 [
                     x98,
-                    x140,
+                    x139,
                     mH * (x80 * x80 + x77 * x77 + x72 * x72)
-                        + (((x144 + IBzz * x6) * x6 + x149 + x1 * (x150 + x1 * IBxx))
-                            * x17 + x63 * x156) * x17
-                        + mF * (x90 * x90 + x91 * x91 + x87 * x87) + x136 * x157
-                        + x158 * x159 + ((x97 * x97 + x96 * x96) * x158 + x94 * x94) * mB
-                        + IFxx * x162 + x163 * (0.5 - 0.5 * f64::cos(x164)) + x56 * x166,
-                    x179,
+                        + (((x143 + IBzz * x6) * x6 + x148 + x1 * (x149 + x1 * IBxx))
+                            * x17 + x63 * x155) * x17
+                        + mF * (x90 * x90 + x91 * x91 + x87 * x87) + x135 * x156
+                        + x157 * x158 + ((x97 * x97 + x96 * x96) * x157 + x94 * x94) * mB
+                        + IFxx * x161 + x162 * (0.5 - 0.5 * f64::cos(x163)) + x56 * x165,
+                    x178,
+                    x181,
                     x182,
                     x183,
                     x184,
-                    x185,
+                    x187,
                     x188,
-                    x189,
-                    x198,
-                    x202,
+                    x197,
+                    x201,
                     0.0,
                 ],
                 [
                     x112,
-                    x141,
-                    x179,
-                    x6 * x176 + x110 * x109 + x175 * x103 + x1 * x174 + x163 + x149
-                        + mH * (x108 * x108 + x203 * (x66 * x66 + x107 * x107))
-                        + (x172 * x172 + x170 * x170) * IFxx
-                        + mF * ((x106 * x106 + x105 * x105) * x203 + x104 * x104)
-                        + x63 * (x16 * x177 * x157 + x15 * x169),
-                    x204,
+                    x140,
+                    x178,
+                    x6 * x175 + x110 * x109 + x174 * x103 + x1 * x173 + x162 + x148
+                        + mH * (x108 * x108 + x202 * (x66 * x66 + x107 * x107))
+                        + (x171 * x171 + x169 * x169) * IFxx
+                        + mF * ((x106 * x106 + x105 * x105) * x202 + x104 * x104)
+                        + x63 * (x16 * x176 * x156 + x15 * x168),
+                    x203,
                     0.0,
+                    x204,
                     x205,
                     x206,
-                    x207,
-                    x210,
-                    x216,
-                    x219,
-                    x224,
+                    x209,
+                    x215,
+                    x218,
+                    x223,
                 ],
                 [
                     x129,
-                    x142,
-                    x182,
-                    x204,
+                    x141,
+                    x181,
+                    x203,
                     (x92 * x92 + xB * xB) * mB
                         + (x125 * x125 + x128 * x128 + x127 * x127) * mH
-                        + (x226 + x165) * x203
-                        + mF * (x122 * x122 + x116 * x116 + x123 * x123) + x159
-                        + x180 * x15,
+                        + (x225 + x164) * x202
+                        + mF * (x122 * x122 + x116 * x116 + x123 * x123) + x158
+                        + x179 * x15,
                     IRyy,
+                    x226,
                     x227,
                     x228,
                     x229,
-                    x230,
-                    x234,
-                    x236,
-                    x241,
+                    x233,
+                    x235,
+                    x240,
                 ],
-                [0.0, 0.0, x183, 0.0, IRyy, IRyy, 0.0, 0.0, x229, x230, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x182, 0.0, IRyy, IRyy, 0.0, 0.0, x228, x229, 0.0, 0.0, 0.0],
                 [
                     x133,
-                    x143,
-                    x184,
-                    x205,
-                    x227,
+                    x142,
+                    x183,
+                    x204,
+                    x226,
                     0.0,
-                    x226 + x65 * x130 + x155 + x85 * x131,
+                    x225 + x65 * x130 + x154 + x85 * x131,
                     0.0,
                     0.0,
                     0.0,
+                    x243,
                     x244,
-                    x245,
-                    x247,
+                    x246,
                 ],
-                [0.0, 0.0, x185, x206, x228, 0.0, 0.0, IFyy, 0.0, 0.0, x248, x249, 0.0],
-                [x135, 0.0, x188, x207, x229, x229, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x135, x189, x210, x230, x230, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x138, 0.0, x198, x216, x234, 0.0, x244, x248, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x138, x202, x219, x236, 0.0, x245, x249, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, x224, x241, 0.0, x247, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x184, x205, x227, 0.0, 0.0, IFyy, 0.0, 0.0, x247, x248, 0.0],
+                [x134, 0.0, x187, x206, x228, x228, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x134, x188, x209, x229, x229, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x137, 0.0, x197, x215, x233, 0.0, x243, x247, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x137, x201, x218, x235, 0.0, x244, x248, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, x223, x240, 0.0, x246, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             force: [
-                -((x286 * x19 - x25 * x301 + x303 * x22) * mH
-                    + mF * (x27 * x311 - x25 * x318 + x319 * x24)
-                    + mB * (x13 * x324 - x322 * x18 + x8 * x325)
-                    + x81 * (2.0 * (x328 * x37) - x4 * x327)),
-                -(mF * (x45 * x311 + x319 * x44 + x318 * x42)
-                    + mH * (x301 * x42 + x303 * x41 + x286 * x39)
-                    + x81 * (2.0 * (phi_dot * x329) + x29 * x327)
-                    + (x35 * x324 + x31 * x325 + x322 * x37) * mB),
-                x339 * x75 - x331 * x56 - (x301 * x72 + x286 * x77 + x303 * x80) * mH
-                    - x343 * x161
-                    + (x346 * x147 - x148 * x348 - x349 * psi_dot * IRyy - x6 * x352
-                        + x1 * x354 - x63 * x358) * x17 - x160 * x359
-                    - (x361 - x360 + x283 * IByy) * x2
-                    - (x94 * x322 + x2 * (x324 * x97 + x96 * x325)) * mB
-                    - mF * (x318 * x87 + x90 * x311 + x319 * x91) - x328 * x362,
-                x63 * (x16 * (x335 + x336 + x337 - x338) - x331 * x15) - x170 * x343
-                    - x1 * x352 - x6 * x354 - x172 * x359
-                    + g * (x2 * x111 - x223 * mF - (x107 * x2 + x222 * x65) * mH)
-                    - (x301 * x108 + x16 * (x303 * x66 + x286 * x107)) * mH
-                    + 0.5 * (x362 * x326) - x346 * x148 - x322 * x110 - x358 * x103
-                    - x147 * x348
-                    - (x318 * x104 + x16 * (x105 * x311 + x319 * x106)) * mF,
-                x15 * x339 - x16 * (x0 * x359 + x343 * x23 + x331)
-                    - (-x92 * x325 - xB * x324) * mB + x360 - x361
-                    - mF * (x116 * x318 + x319 * x122 + x123 * x311)
+                -((x285 * x19 - x25 * x300 + x302 * x22) * mH
+                    + mF * (x27 * x310 - x25 * x317 + x318 * x24)
+                    + mB * (x13 * x323 - x321 * x18 + x8 * x324)
+                    + x81 * (2.0 * (x327 * x37) - x4 * x326)),
+                -(mF * (x45 * x310 + x318 * x44 + x317 * x42)
+                    + mH * (x300 * x42 + x302 * x41 + x285 * x39)
+                    + x81 * (2.0 * (phi_dot * x328) + x29 * x326)
+                    + (x35 * x323 + x31 * x324 + x321 * x37) * mB),
+                x338 * x75 - x330 * x56 - (x300 * x72 + x285 * x77 + x302 * x80) * mH
+                    - x342 * x160
+                    + (x345 * x146 - x147 * x347 - x348 * psi_dot * IRyy - x6 * x351
+                        + x1 * x353 - x63 * x357) * x17 - x159 * x358
+                    - (x360 - x359 + x282 * IByy) * x2
+                    - (x94 * x321 + x2 * (x323 * x97 + x96 * x324)) * mB
+                    - mF * (x317 * x87 + x90 * x310 + x318 * x91) - x327 * x361,
+                x63 * (x16 * (x334 + x335 + x336 - x337) - x330 * x15) - x169 * x342
+                    - x1 * x351 - x6 * x353 - x171 * x358
+                    + g * (x2 * x111 - x222 * mF - (x107 * x2 + x221 * x65) * mH)
+                    - (x300 * x108 + x16 * (x302 * x66 + x285 * x107)) * mH
+                    + 0.5 * (x361 * x325) - x345 * x147 - x321 * x110 - x357 * x103
+                    - x146 * x347
+                    - (x317 * x104 + x16 * (x105 * x310 + x318 * x106)) * mF,
+                x15 * x338 - x16 * (x0 * x358 + x342 * x23 + x330)
+                    - (-x92 * x324 - xB * x323) * mB + x359 - x360
+                    - mF * (x116 * x317 + x318 * x122 + x123 * x310)
                     + x17
-                        * (-x328 * x159
+                        * (-x327 * x158
                             - g
-                                * (mF * (x239 - x63 * x120) - mB * x93
-                                    + mH * (x238 + x54 * x50 - x63 * x126)))
-                    - mH * (x286 * x128 + x303 * x127 + x125 * x301),
-                -(x283 * IRyy),
-                (x334 - x355) * x280 - x356 - x357 - x359 * x23
-                    + x131 * (x363 - x313 + x315 - x316 + x317)
-                    + (x363 + x288 - x292 + x293 - x296) * x130 + x0 * x343,
-                -x337,
+                                * (mF * (x238 - x63 * x120) - mB * x93
+                                    + mH * (x237 + x54 * x50 - x63 * x126)))
+                    - mH * (x285 * x128 + x302 * x127 + x125 * x300),
+                -(x282 * IRyy),
+                (x333 - x354) * x279 - x355 - x356 - x358 * x23
+                    + x131 * (x362 - x312 + x314 - x315 + x316)
+                    + (x362 + x287 - x291 + x292 - x295) * x130 + x0 * x342,
+                -x336,
                 rR
-                    * ((-x208 * x364 - x5 * x365 - x366 * x18) * psi_dot
-                        + (x368 * f64::sqrt(x134) - x366 * x29
-                            - (x5 * x367 + x368 * (2.0 - x369)) * x17) * phi_dot)
-                    + x370 * x_dot / f64::sqrt(x134),
-                x370 * y_dot / f64::sqrt(x134)
+                    * ((-x207 * x363 - x5 * x364 - x365 * x18) * psi_dot
+                        + (x367 * x134 - x365 * x29
+                            - (x5 * x366 + x367 * (2.0 - x368)) * x17) * phi_dot)
+                    + x369 * x_dot / x134,
+                x369 * y_dot / x134
                     + rR
-                        * ((-x366 * x4 - f64::sqrt(x134) * x371
-                            - ((x369 - 2.0) * x371 + x367 * x3) * x17) * phi_dot
-                            + (x366 * x37 - x365 * x3 - x29 * x367) * psi_dot),
-                x_dot * x403 / f64::sqrt(x137)
+                        * ((-x365 * x4 - x134 * x370
+                            - ((x368 - 2.0) * x370 + x366 * x3) * x17) * phi_dot
+                            + (x365 * x37 - x364 * x3 - x29 * x366) * psi_dot),
+                x_dot * x402 / x137
                     - delta_dot
-                        * ((x25 * x403 / f64::sqrt(x137) + f64::sqrt(x137) * x416) * x85
+                        * ((x25 * x402 / x137 + x137 * x415) * x85
                             - rF
-                                * (x383 * x243
-                                    + x75 * (x242 * x401 - 2.0 * (x390 * x41) - x395 * x42)
-                                    + x242 * x402))
+                                * (x382 * x242
+                                    + x75 * (x241 * x400 - 2.0 * (x389 * x41) - x394 * x42)
+                                    + x241 * x401))
                     - psi_dot
-                        * (((x430 - x10 * x431) * x84 + rR * (x378 - x428 + x374 - x364)
-                            + x431 * x47
+                        * (((x429 - x10 * x430) * x84 + rR * (x377 - x427 + x373 - x363)
+                            + x430 * x47
                             + x85
-                                * (x16 * (x399 - x193 * delta_dot)
-                                    + x15 * (x432 - x397 + x431 * x9))) * f64::sqrt(x137)
-                            - x194 * x403 / f64::sqrt(x137)
+                                * (x16 * (x398 - x192 * delta_dot)
+                                    + x15 * (x431 - x396 + x430 * x9))) * x137
+                            - x193 * x402 / x137
                             - rF
-                                * (x197 * x402
-                                    + x137
-                                        * (x160 * x419 + x402 + x161 * x420 + x44 * x425
-                                            + x426 * x45 + x75 * x401)
-                                    + (x197 * x401 - 2.0 * (x389 * x196) + x427 * x42) * x75))
-                    - (f64::sqrt(x137)
-                        * ((x414 * x1 - x433 * x18) * x47
+                                * (x196 * x401
+                                    + x136
+                                        * (x159 * x418 + x401 + x160 * x419 + x44 * x424
+                                            + x425 * x45 + x75 * x400)
+                                    + (x196 * x400 - 2.0 * (x388 * x195) + x426 * x42) * x75))
+                    - (x137
+                        * ((x413 * x1 - x432 * x18) * x47
                             + x85
-                                * (x16 * (x388 * x18 + x434)
+                                * (x16 * (x387 * x18 + x433)
                                     + x15
-                                        * (x368 * x103 + (x54 * x436 - x63 * x435) * x17
+                                        * (x367 * x103 + (x54 * x435 - x63 * x434) * x17
                                             + delta_dot * x4))
-                            + ((x435 * x54 + x63 * x436) * x17 - x368 * x63) * x84
-                            + rR * (x368 * x68 + (x436 * x211 + theta_dot * x33) * x17))
-                        - x213 * x403 / f64::sqrt(x137)
+                            + ((x434 * x54 + x63 * x435) * x17 - x367 * x63) * x84
+                            + rR * (x367 * x68 + (x435 * x210 + theta_dot * x33) * x17))
+                        - x212 * x402 / x137
                         - rF
-                            * (x402 * x215
-                                + (x45 * x440 - x441 * x42 + x419 * x172 + x44 * x442
-                                    + x170 * x420 + x16 * (x443 * x42 - x63 * x401)) * x137
-                                + (x215 * x401 + x445 * x42 - 2.0 * (x389 * x214)) * x75))
+                            * (x401 * x214
+                                + (x45 * x439 - x440 * x42 + x418 * x171 + x44 * x441
+                                    + x169 * x419 + x16 * (x442 * x42 - x63 * x400)) * x136
+                                + (x214 * x400 + x444 * x42 - 2.0 * (x388 * x213)) * x75))
                         * phi_dot
                     - theta_dot
-                        * (f64::sqrt(x137)
-                            * (x85 * (x15 * (x446 + x447 * x9) - x437 * x231)
-                                + (x408 - x447 * x10) * x84 + x447 * x47 - rR * x407)
-                            - x232 * x403 / f64::sqrt(x137)
-                            - ((x233 * x401 + x448 * x42 - 2.0 * (x389 * x37)) * x75
-                                + (x453 * x41 - 0.5 * ((x18 - x29) * x454)
-                                    - 0.5 * ((x29 + x18) * x455)) * x137 + x233 * x402) * rF)
-                    + x456 * x401,
-                y_dot * x403 / f64::sqrt(x137)
+                        * (x137
+                            * (x85 * (x15 * (x445 + x446 * x9) - x436 * x230)
+                                + (x407 - x446 * x10) * x84 + x446 * x47 - rR * x406)
+                            - x231 * x402 / x137
+                            - ((x232 * x400 + x447 * x42 - 2.0 * (x388 * x37)) * x75
+                                + (x452 * x41 - 0.5 * ((x18 - x29) * x453)
+                                    - 0.5 * ((x29 + x18) * x454)) * x136 + x232 * x401) * rF)
+                    + x455 * x400,
+                y_dot * x402 / x137
                     - delta_dot
-                        * (x85 * (f64::sqrt(x137) * x401 - x403 * x42 / f64::sqrt(x137))
-                            - ((2.0 * (x390 * x22) - x242 * x416 - x25 * x395) * x75
-                                - x458 * x243 - x242 * x459) * rF)
+                        * (x85 * (x137 * x400 - x402 * x42 / x137)
+                            - ((2.0 * (x389 * x22) - x241 * x415 - x25 * x394) * x75
+                                - x457 * x242 - x241 * x458) * rF)
                     - theta_dot
-                        * ((x85 * (x15 * (x430 + x377) - x437 * x191) - rR * x376
-                            + x429 * x47 + (x396 - x432) * x84) * f64::sqrt(x137)
-                            - x235 * x403 / f64::sqrt(x137)
+                        * ((x85 * (x15 * (x429 + x376) - x436 * x190) - rR * x375
+                            + x428 * x47 + (x395 - x431) * x84) * x137
+                            - x234 * x402 / x137
                             - rF
-                                * (-(x453 * x22 - 0.5 * ((x37 - x4) * x455)
-                                    - 0.5 * ((x4 + x37) * x454)) * x137
-                                    - x75 * (x233 * x416 - x25 * x448 + 2.0 * (x389 * x18))
-                                    - x233 * x459))
+                                * (-(x452 * x22 - 0.5 * ((x37 - x4) * x454)
+                                    - 0.5 * ((x4 + x37) * x453)) * x136
+                                    - x75 * (x232 * x415 - x25 * x447 + 2.0 * (x388 * x18))
+                                    - x232 * x458))
                     - psi_dot
-                        * ((rR * (x410 - x411 + x405 + x434) + x407 * x47 + x85 * x460
-                            + x458 * x84) * f64::sqrt(x137)
+                        * ((rR * (x409 - x410 + x404 + x433) + x406 * x47 + x85 * x459
+                            + x457 * x84) * x137
                             - rF
-                                * ((x25 * x427 - x197 * x416 + 2.0 * (x201 * x389)) * x75
-                                    - x197 * x459
-                                    - x137
-                                        * (x425 * x24 + x463 * x160 + x464 * x161 + x459
-                                            + x426 * x27 + x75 * x416)) - x403 * x199 / f64::sqrt(x137))
-                    - (((x5 * x465 + x63 * x329) * x84 + (x433 * x37 - x1 * x399) * x47
-                        + rR * ((x349 * x211 - x276) * x5 + x211 * x329)
+                                * ((x25 * x426 - x196 * x415 + 2.0 * (x200 * x388)) * x75
+                                    - x196 * x458
+                                    - x136
+                                        * (x424 * x24 + x462 * x159 + x463 * x160 + x458
+                                            + x425 * x27 + x75 * x415)) - x402 * x198 / x137)
+                    - (((x5 * x464 + x63 * x328) * x84 + (x432 * x37 - x1 * x398) * x47
+                        + rR * ((x348 * x210 - x275) * x5 + x210 * x328)
                         + x85
-                            * (x16 * (x364 - x466 * x37)
+                            * (x16 * (x363 - x465 * x37)
                                 + x15
-                                    * (x54 * x329 - delta_dot * x29
-                                        + (x384 + x349 * x54) * x5))) * f64::sqrt(x137)
-                        - x218 * x403 / f64::sqrt(x137)
+                                    * (x54 * x328 - delta_dot * x29
+                                        + (x383 + x348 * x54) * x5))) * x137 - x217 * x402 / x137
                         - rF
-                            * (x75 * (x25 * x445 - x215 * x416 + 2.0 * (x217 * x389))
-                                - x215 * x459
-                                - (x170 * x464 + x27 * x440 + x25 * x441 + x463 * x172
-                                    + x16 * (-x25 * x443 - x63 * x416) + x442 * x24) * x137))
-                        * phi_dot - x456 * x416,
+                            * (x75 * (x25 * x444 - x214 * x415 + 2.0 * (x216 * x388))
+                                - x214 * x458
+                                - (x169 * x463 + x27 * x439 + x25 * x440 + x462 * x171
+                                    + x16 * (-x25 * x442 - x63 * x415) + x441 * x24) * x136))
+                        * phi_dot - x455 * x415,
                 -(delta_dot
-                    * (x85 * x389
+                    * (x85 * x388
                         + rF
-                            * (((x387 - phi_dot) * x74 - x421) * x75 / f64::sqrt(x137)
-                                - x56 * x468))
+                            * (((x386 - phi_dot) * x74 - x420) * x75 / x137
+                                - x56 * x467))
                     + theta_dot
                         * ((theta_dot * (x100 + x95)
                             - x63
-                                * (rF * (-x444 * x15 / f64::sqrt(x137) - x16 * x389 * x467)
-                                    - x437 * x85)) * x17 + x385 * x84 + x237 * x465
-                            + x349 * x59)
-                    + ((x268 * x103 - x63 * x269) * x84 + x268 * x59
-                        + x85 * (x15 * x469 - x466 * x55) + x269 * x101
-                        + (x220 * x468
-                            + (-x16 * x469 - x466 * x73) * x75 / f64::sqrt(x137)) * rF)
+                                * (rF * (-x443 * x15 / x137 - x16 * x388 * x466)
+                                    - x436 * x85)) * x17 + x384 * x84 + x236 * x464
+                            + x348 * x59)
+                    + ((x267 * x103 - x63 * x268) * x84 + x267 * x59
+                        + x85 * (x15 * x468 - x465 * x55) + x268 * x101
+                        + (x219 * x467 + (-x16 * x468 - x465 * x73) * x75 / x137) * rF)
                         * phi_dot),
             ],
             checks: [],
             residuals: [
-                f64::sqrt(x134) * x_dot
-                    + rR * (x186 * x405 + x5 * (x2 * x367 - x366 * x17)),
-                rR * (x4 * x367 + (x208 * x5 * phi_dot - x366 * x3) * x17)
-                    + f64::sqrt(x134) * y_dot,
-                x198 * psi_dot - x456 * x42 + delta_dot * x244 + theta_dot * x234
-                    + x216 * phi_dot + x_dot * f64::sqrt(x137),
-                x219 * phi_dot - x25 * x456 + psi_dot * x202 + theta_dot * x236
-                    + f64::sqrt(x137) * y_dot + delta_dot * x245,
-                x240 * x274 + x444 * x246 + x224 * phi_dot,
+                x134 * x_dot + rR * (x185 * x404 + x5 * (x2 * x366 - x365 * x17)),
+                rR * (x4 * x366 + (x207 * x5 * phi_dot - x365 * x3) * x17)
+                    + x134 * y_dot,
+                x197 * psi_dot - x455 * x42 + delta_dot * x243 + theta_dot * x233
+                    + x215 * phi_dot + x_dot * x137,
+                x218 * phi_dot - x25 * x455 + psi_dot * x201 + theta_dot * x235
+                    + x137 * y_dot + delta_dot * x244,
+                x239 * x273 + x443 * x245 + x223 * phi_dot,
             ],
-            positions: [0.0, 0.0, 0.0, 0.0, x212 - rF * f64::sqrt(x137)],
+            positions: [0.0, 0.0, 0.0, 0.0, x211 - rF * x137],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -1559,9 +1550,9 @@ pub mod lagrange {
         let rF = params.rF;
         let x0 = f64::cos(phi);
         let x1 = x0 * x0;
-        let x2 = f64::cos(psi);
-        let x3 = f64::sqrt(x1);
-        let x4 = x3 - x0;
+        let x2 = f64::sqrt(x1);
+        let x3 = f64::cos(psi);
+        let x4 = x2 - x0;
         let x5 = psi_dot * x4;
         let x6 = f64::sin(phi);
         let x7 = thR_dot + theta_dot;
@@ -1584,7 +1575,7 @@ pub mod lagrange {
         let x24 = 1.0 - x23;
         let x25 = x13 * c_ + rF * x17;
         let x26 = x16 * x8;
-        let x27 = x2 * x6;
+        let x27 = x3 * x6;
         let x28 = x27 * x14;
         let x29 = x28 - x26;
         let x30 = x14 * x8 + x16 * x27;
@@ -1593,83 +1584,83 @@ pub mod lagrange {
         let x33 = x13 * rF - c_ * x17;
         let x34 = x17 * x30;
         let x35 = x13 * x29;
-        let x36 = x2 * x0;
+        let x36 = x3 * x0;
         let x37 = x20 * x36;
         let x38 = x26 - x28;
         let x39 = c_ + w_;
-        let x40 = x38 * x17 - x31;
-        let x41 = f64::cos(thF);
-        let x42 = f64::sin(thF);
-        let x43 = x34 + x13 * x38;
-        let x44 = x43 * x11 + x37;
-        let x45 = x40 * x41 + x42 * x44;
-        let x46 = x14 * x17 + x13 * x16;
-        let x47 = x46 * x0;
-        let x48 = x11 * x0;
-        let x49 = x20 * x6;
-        let x50 = x48 * x19 + x49;
-        let x51 = x47 * x41 + x42 * x50;
-        let x52 = x50 * x41 - x42 * x47;
-        let x53 = x44 * x41 - x42 * x40;
-        let x54 = x11 * x36 - x43 * x20;
-        let x55 = x54 * x22;
-        let x56 = x51 * x51 + x23 + x52 * x52;
-        let x57 = x11 * x22 + x20 * (x52 * x41 + x42 * x51);
-        let x58 = x14 * x10;
-        let x59 = x16 * x2;
-        let x60 = x58 + x59;
-        let x61 = x33 * x11;
-        let x62 = x2 * x14 - x16 * x10;
-        let x63 = x13 * x62;
-        let x64 = x17 * x60;
-        let x65 = x13 * x60 + x17 * x62;
-        let x66 = x16 * x39;
-        let x67 = x46 * x25;
-        let x68 = (rR * (1.0 - x14) - x66 + x67) * x0 + x33 * x50;
-        let x69 = x20 * x46;
-        let x70 = x18 - x15;
-        let x71 = x11 * x41;
-        let x72 = x71 * x46 - x42 * x70;
-        let x73 = x42 * x11;
-        let x74 = x70 * x41 + x73 * x46;
-        let x75 = x52 * x72 - x22 * x69 + x74 * x51;
-        let x76 = rF * thF_dot;
-        let x77 = x20 * x65 + x11 * x9;
-        let x78 = x13 * x0;
-        let x79 = x17 * x0;
-        let x80 = x16 * x78 + x79 * x14;
-        let x81 = (x42 * x42 + x41 * x41) * x24;
-        let x82 = -(x77 * x22);
-        let x83 = x11 * x65 - x20 * x9;
-        let x84 = x64 - x63;
-        let x85 = x42 * x83 + x84 * x41;
-        let x86 = x83 * x41 - x84 * x42;
-        let x87 = (x14 - 1.0) * rR + x66 - x67;
-        let x88 = rF * x22;
-        let x89 = f64::abs(x0);
-        let x90 = f64::abs(x1);
-        let x91 = x89 + f64::sqrt(x90);
-        let x92 = f64::abs(phi_dot);
-        let x93 = x91 * x92;
-        let x94 = f64::abs(x8);
-        let x95 = f64::abs(theta_dot);
-        let x96 = f64::abs(thR_dot) + x95;
-        let x97 = f64::abs(x2);
-        let x98 = f64::abs(psi_dot);
-        let x99 = x91 * x98;
-        let x100 = f64::abs(x6);
-        let x101 = x100 * x97;
-        let x102 = f64::abs(rR);
-        let x103 = f64::abs(x_dot);
-        let x104 = x100 * x94;
-        let x105 = f64::abs(y_dot);
-        let x106 = f64::abs(x23 - 1.0);
+        let x40 = f64::sqrt(x24);
+        let x41 = x38 * x17 - x31;
+        let x42 = f64::cos(thF);
+        let x43 = f64::sin(thF);
+        let x44 = x34 + x13 * x38;
+        let x45 = x44 * x11 + x37;
+        let x46 = x41 * x42 + x43 * x45;
+        let x47 = x14 * x17 + x13 * x16;
+        let x48 = x47 * x0;
+        let x49 = x11 * x0;
+        let x50 = x20 * x6;
+        let x51 = x49 * x19 + x50;
+        let x52 = x48 * x42 + x43 * x51;
+        let x53 = x51 * x42 - x43 * x48;
+        let x54 = x45 * x42 - x43 * x41;
+        let x55 = x11 * x36 - x44 * x20;
+        let x56 = x55 * x22;
+        let x57 = x52 * x52 + x23 + x53 * x53;
+        let x58 = x11 * x22 + x20 * (x53 * x42 + x43 * x52);
+        let x59 = x14 * x10;
+        let x60 = x16 * x3;
+        let x61 = x59 + x60;
+        let x62 = x33 * x11;
+        let x63 = x3 * x14 - x16 * x10;
+        let x64 = x13 * x63;
+        let x65 = x17 * x61;
+        let x66 = x13 * x61 + x17 * x63;
+        let x67 = x16 * x39;
+        let x68 = x47 * x25;
+        let x69 = (rR * (1.0 - x14) - x67 + x68) * x0 + x33 * x51;
+        let x70 = x20 * x47;
+        let x71 = x18 - x15;
+        let x72 = x11 * x42;
+        let x73 = x72 * x47 - x43 * x71;
+        let x74 = x43 * x11;
+        let x75 = x71 * x42 + x74 * x47;
+        let x76 = x53 * x73 - x22 * x70 + x75 * x52;
+        let x77 = rF * thF_dot;
+        let x78 = x20 * x66 + x11 * x9;
+        let x79 = x13 * x0;
+        let x80 = x17 * x0;
+        let x81 = x16 * x79 + x80 * x14;
+        let x82 = (x43 * x43 + x42 * x42) * x24;
+        let x83 = -(x78 * x22);
+        let x84 = x11 * x66 - x20 * x9;
+        let x85 = x65 - x64;
+        let x86 = x43 * x84 + x85 * x42;
+        let x87 = x84 * x42 - x85 * x43;
+        let x88 = (x14 - 1.0) * rR + x67 - x68;
+        let x89 = rF * x22;
+        let x90 = f64::abs(x0);
+        let x91 = f64::sqrt(f64::abs(x1));
+        let x92 = x90 + x91;
+        let x93 = f64::abs(phi_dot);
+        let x94 = x92 * x93;
+        let x95 = f64::abs(x8);
+        let x96 = f64::abs(theta_dot);
+        let x97 = f64::abs(thR_dot) + x96;
+        let x98 = f64::abs(x3);
+        let x99 = f64::abs(psi_dot);
+        let x100 = x92 * x99;
+        let x101 = f64::abs(x6);
+        let x102 = x101 * x98;
+        let x103 = f64::abs(rR);
+        let x104 = f64::abs(x_dot);
+        let x105 = x101 * x95;
+        let x106 = f64::abs(y_dot);
         let x107 = f64::abs(x16);
         let x108 = f64::abs(x14);
-        let x109 = x107 * x97 + x104 * x108;
+        let x109 = x107 * x98 + x105 * x108;
         let x110 = f64::abs(x17);
         let x111 = f64::abs(x13);
-        let x112 = x104 * x107 + x97 * x108;
+        let x112 = x105 * x107 + x98 * x108;
         let x113 = x109 * x110 + x111 * x112;
         let x114 = f64::abs(x11);
         let x115 = f64::abs(rF);
@@ -1679,169 +1670,149 @@ pub mod lagrange {
         let x119 = x111 * x116 + x115 * x110;
         let x120 = x112 * x110 + x111 * x109;
         let x121 = f64::abs(w_) + x116;
-        let x122 = f64::abs(x42);
-        let x123 = x20 * x41;
-        let x124 = f64::abs(x41);
-        let x125 = x42 * x20;
-        let x126 = x122 * (0.5 * f64::abs(x73 - x123) + 0.5 * f64::abs(x73 + x123))
-            + x124 * (0.5 * f64::abs(x125 - x71) + 0.5 * f64::abs(x125 + x71));
-        let x127 = x107 * x101 + x108 * x94;
-        let x128 = x108 * x101 + x107 * x94;
-        let x129 = x111 * x127 + x128 * x110;
-        let x130 = x100 * x114;
-        let x131 = x111 * x108 + x107 * x110;
-        let x132 = f64::abs(x20);
-        let x133 = x132 * x89;
-        let x134 = x130 + x131 * x133;
-        let x135 = x134 * x134;
-        let x136 = x135 + 1.0;
-        let x137 = x107 * x111 + x108 * x110;
-        let x138 = x89 * x137;
-        let x139 = x100 * x132;
-        let x140 = x89 * x114;
-        let x141 = x139 + x131 * x140;
-        let x142 = x122 * x138 + x124 * x141;
-        let x143 = x124 * x138 + x122 * x141;
-        let x144 = x134 * x114 + x132 * (x124 * x142 + x143 * x122);
-        let x145 = x128 * x111 + x127 * x110;
-        let x146 = x132 * x145 + x140 * x97;
-        let x147 = x134 * x146;
-        let x148 = f64::abs(delta_dot);
-        let x149 = x140 * x94 + x132 * x120;
-        let x150 = x13 * x6;
-        let x151 = x17 * x6;
-        let x152 = 0.5 * f64::abs(x14 * (x79 - x150) + x16 * (x151 + x78))
-            + 0.5 * f64::abs(x14 * (x79 + x150) - x16 * (x151 - x78));
-        let x153 = x136 * (x122 * x122 + x124 * x124);
-        let x154 = x145 * x114 + x97 * x133;
-        let x155 = x124 * x129 + x122 * x154;
-        let x156 = x122 * x129 + x124 * x154;
-        let x157 = x142 * x142 + x135 + x143 * x143;
-        let x158 = (2.0 * x135 + 1.0) * (f64::abs(thF_dot) * x115);
-        let x159 = x121 * x107 + x102 * (x108 + 1.0) + x137 * x119;
-        let x160 = x141 * x117 + x159 * x89;
-        let x161 = f64::abs(x46);
-        let x162 = x114 * x161;
-        let x163 = f64::abs(x19);
-        let x164 = x162 * x122 + x124 * x163;
-        let x165 = x132 * x161;
-        let x166 = x124 * x162 + x122 * x163;
-        let x167 = x143 * x164 + x166 * x142 + x134 * x165;
-        let x168 = x114 * x120 + x133 * x94;
-        let x169 = x168 * x122 + x124 * x113;
-        let x170 = x134 * x149;
-        let x171 = x124 * x168 + x113 * x122;
-        let x172 = x134 * x115;
+        let x122 = f64::sqrt(f64::abs(x23 - 1.0));
+        let x123 = f64::abs(x43);
+        let x124 = x20 * x42;
+        let x125 = f64::abs(x42);
+        let x126 = x43 * x20;
+        let x127 = x123 * (0.5 * f64::abs(x74 - x124) + 0.5 * f64::abs(x74 + x124))
+            + x125 * (0.5 * f64::abs(x126 - x72) + 0.5 * f64::abs(x126 + x72));
+        let x128 = x107 * x102 + x108 * x95;
+        let x129 = x108 * x102 + x107 * x95;
+        let x130 = x111 * x128 + x129 * x110;
+        let x131 = x101 * x114;
+        let x132 = x111 * x108 + x107 * x110;
+        let x133 = f64::abs(x20);
+        let x134 = x133 * x90;
+        let x135 = x131 + x132 * x134;
+        let x136 = x135 * x135;
+        let x137 = x136 + 1.0;
+        let x138 = x107 * x111 + x108 * x110;
+        let x139 = x90 * x138;
+        let x140 = x101 * x133;
+        let x141 = x90 * x114;
+        let x142 = x140 + x132 * x141;
+        let x143 = x123 * x139 + x125 * x142;
+        let x144 = x125 * x139 + x123 * x142;
+        let x145 = x135 * x114 + x133 * (x125 * x143 + x144 * x123);
+        let x146 = x129 * x111 + x128 * x110;
+        let x147 = x133 * x146 + x141 * x98;
+        let x148 = x135 * x147;
+        let x149 = f64::abs(delta_dot);
+        let x150 = x141 * x95 + x133 * x120;
+        let x151 = x13 * x6;
+        let x152 = x17 * x6;
+        let x153 = 0.5 * f64::abs(x14 * (x80 - x151) + x16 * (x152 + x79))
+            + 0.5 * f64::abs(x14 * (x80 + x151) - x16 * (x152 - x79));
+        let x154 = x137 * (x123 * x123 + x125 * x125);
+        let x155 = x146 * x114 + x98 * x134;
+        let x156 = x125 * x130 + x123 * x155;
+        let x157 = x123 * x130 + x125 * x155;
+        let x158 = x143 * x143 + x136 + x144 * x144;
+        let x159 = (2.0 * x136 + 1.0) * (f64::abs(thF_dot) * x115);
+        let x160 = x121 * x107 + x103 * (x108 + 1.0) + x138 * x119;
+        let x161 = x142 * x117 + x160 * x90;
+        let x162 = f64::abs(x47);
+        let x163 = x114 * x162;
+        let x164 = f64::abs(x19);
+        let x165 = x163 * x123 + x125 * x164;
+        let x166 = x133 * x162;
+        let x167 = x125 * x163 + x123 * x164;
+        let x168 = x144 * x165 + x167 * x143 + x135 * x166;
+        let x169 = x114 * x120 + x134 * x95;
+        let x170 = x169 * x123 + x125 * x113;
+        let x171 = x135 * x150;
+        let x172 = x125 * x169 + x113 * x123;
+        let x173 = x135 * x115;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "rear_contact_x",
-                f64::sqrt(x1) * x_dot
-                    + rR * (x2 * (x5 * x6 - x7 * x0) + phi_dot * x4 * x9),
-                (x89 * (x93 * x94 + x96 * x97) + x99 * x101) * x102
-                    + f64::sqrt(x90) * x103,
+                x2 * x_dot + rR * (x3 * (x5 * x6 - x7 * x0) + phi_dot * x4 * x9),
+                (x90 * (x94 * x95 + x97 * x98) + x100 * x102) * x103 + x91 * x104,
             ),
             (
                 "rear_contact_y",
-                rR * (x5 * x10 + ((x0 - x3) * x2 * phi_dot - x7 * x8) * x0)
-                    + f64::sqrt(x1) * y_dot,
-                x102 * (x89 * (x96 * x94 + x97 * x93) + x104 * x99)
-                    + f64::sqrt(x90) * x105,
+                rR * (x5 * x10 + ((x0 - x2) * x3 * phi_dot - x7 * x8) * x0) + x2 * y_dot,
+                x103 * (x90 * (x97 * x95 + x98 * x94) + x105 * x100) + x91 * x106,
             ),
             (
                 "front_contact_x",
-                (f64::sqrt(x24)
+                (x40
                     * (x25 * x32 + x33 * (x11 * (x35 - x34) - x37) + rR * (x38 + x27)
                         - x39 * x30)
-                    - rF * (x24 * (x45 * x51 + x52 * x53 + x55) + x55 * x56)) * psi_dot
+                    - rF * (x24 * (x46 * x52 + x53 * x54 + x56) + x56 * x57)) * psi_dot
                     + theta_dot
-                        * (f64::sqrt(x24)
-                            * (x61 * (x63 - x64) - x39 * x60 - rR * x62 + x25 * x65)
-                            - rF * (x57 * x55 + x24 * x36))
+                        * (x40 * (x62 * (x64 - x65) - x39 * x61 - rR * x63 + x25 * x66)
+                            - rF * (x58 * x56 + x24 * x36))
                     + phi_dot
-                        * (f64::sqrt(x24) * x68 * x8
+                        * (x40 * x69 * x8
                             - rF
-                                * (x24 * (x53 * x72 - x54 * x69 + x45 * x74) + x55 * x75))
-                    + f64::sqrt(x24) * x_dot - x76 * x54
-                    + delta_dot
-                        * (-f64::sqrt(x24) * x33 * x77 - (x55 * x80 + x40 * x81) * rF),
-                x95
-                    * (f64::sqrt(x106)
-                        * (x113 * x118 + x119 * x120 + x121 * x109 + x112 * x102)
+                                * (x24 * (x54 * x73 - x55 * x70 + x46 * x75) + x56 * x76))
+                    + x40 * x_dot - x77 * x55
+                    + delta_dot * (-x40 * x33 * x78 - (x56 * x81 + x41 * x82) * rF),
+                x96
+                    * (x122 * (x113 * x118 + x119 * x120 + x121 * x109 + x112 * x103)
                         + ((0.5 * f64::abs(x10 + x36) + 0.5 * f64::abs(x10 - x36)
-                            + x126 * x129) * x136 + x144 * x147) * x115)
-                    + x148
-                        * (f64::sqrt(x106) * x149 * x117
-                            + (x152 * x147 + x153 * x129) * x115)
-                    + x98
-                        * ((x119 * x129 + x154 * x117 + x121 * x127
-                            + (x128 + x101) * x102) * f64::sqrt(x106)
+                            + x127 * x130) * x137 + x145 * x148) * x115)
+                    + x149 * (x122 * x150 * x117 + (x153 * x148 + x154 * x130) * x115)
+                    + x99
+                        * ((x119 * x130 + x155 * x117 + x121 * x128
+                            + (x129 + x102) * x103) * x122
                             + x115
-                                * ((x155 * x143 + x142 * x156 + x147) * x136 + x157 * x147))
-                    + x146 * x158
-                    + x92
-                        * (f64::sqrt(x106) * x160 * x94
+                                * ((x156 * x144 + x143 * x157 + x148) * x137 + x158 * x148))
+                    + x147 * x159
+                    + x93
+                        * (x122 * x161 * x95
                             + x115
-                                * ((x155 * x164 + x146 * x165 + x166 * x156) * x136
-                                    + x167 * x147)) + x103 * f64::sqrt(x106),
+                                * ((x156 * x165 + x147 * x166 + x167 * x157) * x137
+                                    + x168 * x148)) + x104 * x122,
             ),
             (
                 "front_contact_y",
-                f64::sqrt(x24) * y_dot - x76 * x77
-                    + ((x75 * x82 + x24 * (x85 * x74 + x77 * x69 + x86 * x72)) * rF
-                        + f64::sqrt(x24) * x2 * (x87 * x0 + x33 * (x48 * x70 - x49)))
-                        * phi_dot
+                x40 * y_dot - x77 * x78
+                    + ((x76 * x83 + x24 * (x86 * x75 + x78 * x70 + x87 * x73)) * rF
+                        + x40 * x3 * (x88 * x0 + x33 * (x49 * x71 - x50))) * phi_dot
                     + theta_dot
-                        * (f64::sqrt(x24)
-                            * (x39 * x29 + x25 * (x34 - x35) - rR * x30 + x61 * x32)
-                            - rF * (x24 * x9 - x57 * x82))
-                    + delta_dot
-                        * (rF * (x80 * x82 + x84 * x81) + f64::sqrt(x24) * x33 * x54)
-                    + (rF * (x24 * (x85 * x51 + x52 * x86 + x82) + x56 * x82)
-                        + (rR * (x10 - x58 - x59) + x84 * x25 + x39 * x62 + x33 * x83)
-                            * f64::sqrt(x24)) * psi_dot,
-                (x115 * (x136 * (x143 * x169 + x170 + x171 * x142) + x157 * x170)
-                    + f64::sqrt(x106)
-                        * (x168 * x117 + x121 * x112 + x113 * x119
-                            + (x104 + x109) * x102)) * x98
-                    + x148
-                        * (x146 * f64::sqrt(x106) * x117
-                            + x115 * (x152 * x170 + x153 * x113))
-                    + ((x102 * x127 + x145 * x119 + x121 * x128 + x118 * x129)
-                        * f64::sqrt(x106)
+                        * (x40 * (x39 * x29 + x25 * (x34 - x35) - rR * x30 + x62 * x32)
+                            - rF * (x24 * x9 - x58 * x83))
+                    + delta_dot * (rF * (x81 * x83 + x85 * x82) + x40 * x33 * x55)
+                    + (rF * (x24 * (x86 * x52 + x53 * x87 + x83) + x57 * x83)
+                        + (rR * (x10 - x59 - x60) + x85 * x25 + x39 * x63 + x33 * x84)
+                            * x40) * psi_dot,
+                (x115 * (x137 * (x144 * x170 + x171 + x172 * x143) + x158 * x171)
+                    + x122
+                        * (x169 * x117 + x121 * x112 + x113 * x119
+                            + (x105 + x109) * x103)) * x99
+                    + x149 * (x147 * x122 * x117 + x115 * (x153 * x171 + x154 * x113))
+                    + ((x103 * x128 + x146 * x119 + x121 * x129 + x118 * x130) * x122
                         + x115
-                            * (x144 * x170
-                                + (0.5 * f64::abs(x27 - x9) + x126 * x113
-                                    + 0.5 * f64::abs(x27 + x9)) * x136)) * x95 + x158 * x149
-                    + x105 * f64::sqrt(x106)
-                    + x92
-                        * (f64::sqrt(x106) * x160 * x97
-                            + ((x164 * x169 + x149 * x165 + x166 * x171) * x136
-                                + x167 * x170) * x115),
+                            * (x145 * x171
+                                + (0.5 * f64::abs(x27 - x9) + x127 * x113
+                                    + 0.5 * f64::abs(x27 + x9)) * x137)) * x96 + x159 * x150
+                    + x106 * x122
+                    + x93
+                        * (x122 * x161 * x98
+                            + ((x165 * x170 + x150 * x166 + x167 * x172) * x137
+                                + x168 * x171) * x115),
             ),
             (
                 "front_contact_height",
                 theta_dot
-                    * (x19 * x25 + x16 * rR - x46 * (x61 - x20 * x88 / f64::sqrt(x24))
-                        - x39 * x14) * x0
-                    + delta_dot * (x33 - rF * x50 / f64::sqrt(x24)) * x22
-                    + (x33 * (x21 + x12 * x70) + (x48 - x70 * x49) * x88 / f64::sqrt(x24)
-                        + x87 * x6) * phi_dot,
-                x92
-                    * (x159 * x100 + x172 * (x131 * x139 + x140) / f64::sqrt(x106)
-                        + (x131 * x130 + x133) * x117)
-                    + x89
-                        * (x131 * x119 + x121 * x108
-                            + x137 * (x132 * x172 / f64::sqrt(x106) + x118)
-                            + x107 * x102) * x95
-                    + x148 * x134 * (x115 * x141 / f64::sqrt(x106) + x117),
+                    * (x19 * x25 + x16 * rR - x47 * (x62 - x20 * x89 / x40) - x39 * x14)
+                    * x0 + delta_dot * (x33 - rF * x51 / x40) * x22
+                    + (x33 * (x21 + x12 * x71) + (x49 - x71 * x50) * x89 / x40
+                        + x88 * x6) * phi_dot,
+                x93
+                    * (x160 * x101 + x173 * (x132 * x140 + x141) / x122
+                        + (x132 * x131 + x134) * x117)
+                    + x90
+                        * (x132 * x119 + x121 * x108 + x138 * (x133 * x173 / x122 + x118)
+                            + x107 * x103) * x96
+                    + x149 * x135 * (x115 * x142 / x122 + x117),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
-            (
-                "front_contact_height",
-                x68 - rF * f64::sqrt(x24),
-                x115 * f64::sqrt(x106) + x160,
-            ),
+            ("front_contact_height", x69 - rF * x40, x115 * x122 + x161),
         ];
         ::seam::check::satisfied(
             residuals.into_iter().chain(positions),
@@ -2263,7 +2234,7 @@ pub mod lagrange {
         let x272 = x271 - x38;
         let x273 = x272 * x0 - x46;
         let x274 = rR * (x41 + x35) + x270 + x100 * x273;
-        let x275 = f64::sqrt(x173) * x274;
+        let x275 = x174 * x274;
         let x276 = x172 + x191;
         let x277 = x93 * x55;
         let x278 = x189 * x50 + x190 * x52 + x277;
@@ -2274,7 +2245,7 @@ pub mod lagrange {
         let x283 = x31 * x189;
         let x284 = x282 + x281 + x283;
         let x285 = rF * (x276 * x281 + x284 * x173);
-        let x286 = f64::sqrt(x173) * x280 + x285;
+        let x286 = x174 * x280 + x285;
         let x287 = x235 * x0;
         let x288 = x19 * x230;
         let x289 = (x287 + x288 * x219) * x74;
@@ -2307,7 +2278,7 @@ pub mod lagrange {
         let x316 = x100 * x70;
         let x317 = x315 * x1 + x316;
         let x318 = x317 * x2;
-        let x319 = f64::sqrt(x173) * x318;
+        let x319 = x174 * x318;
         let x320 = x319 - (x310 * x277 + x173 * x311) * rF;
         let x321 = x0 * x135;
         let x322 = x321 * x1 - x69;
@@ -2317,12 +2288,12 @@ pub mod lagrange {
         let x326 = x325 * x8;
         let x327 = x31 * x248 + x246 * x30 + x20 * x230;
         let x328 = rF * (x281 * x310 + x327 * x173);
-        let x329 = f64::sqrt(x173) * x326 + x328;
+        let x329 = x174 * x326 + x328;
         let x330 = x5 * x321 + x91;
         let x331 = x139 * x5 + x330 * x100;
         let x332 = x64 - x135 * x69;
         let x333 = x332 * x93;
-        let x334 = x331 + x333 * rF / f64::sqrt(x173);
+        let x334 = x331 + x333 * rF / x174;
         let x335 = x22 * x22;
         let x336 = x29 * x29;
         let x337 = x335 + x336;
@@ -2339,30 +2310,30 @@ pub mod lagrange {
         let x348 = x347 + x253;
         let x349 = x23 - x24;
         let x350 = x349 * x152 - x16 * x60 - rR * x11 + x18 * x105;
-        let x351 = f64::sqrt(x173) * x350;
+        let x351 = x174 * x350;
         let x352 = x351 - (x346 + x348 * x277) * rF;
         let x353 = rR * x37;
         let x354 = x38 - x271;
         let x355 = x268 * x60 - x353 + x152 * x269 + x354 * x105;
         let x356 = x281 * x348;
         let x357 = x173 * x3;
-        let x358 = x355 * f64::sqrt(x173) - rF * (x357 - x356);
+        let x358 = x355 * x174 - rF * (x357 - x356);
         let x359 = x19 * x93;
-        let x360 = rF * x359 / f64::sqrt(x173);
+        let x360 = rF * x359 / x174;
         let x361 = x152 - x360;
         let x362 = x74 * x361;
         let x363 = x77 - x78;
         let x364 = x67 * x105 + x363;
         let x365 = (x364 - x362) * x1;
-        let x366 = x20 * x100 * f64::sqrt(x173);
+        let x366 = x20 * x100 * x174;
         let x367 = x337 * x173;
         let x368 = x13 * x1;
         let x369 = x12 * x1;
         let x370 = x4 * x368 + x369 * x9;
         let x371 = -x366 - (x49 * x367 + x370 * x277) * rF;
         let x372 = rF * (x281 * x370 + x25 * x367);
-        let x373 = x372 + x100 * f64::sqrt(x173) * x55;
-        let x374 = (x100 - rF * x70 / f64::sqrt(x173)) * x93;
+        let x373 = x372 + x100 * x174 * x55;
+        let x374 = (x100 - rF * x70 / x174) * x93;
         let x375 = -(rF * x55);
         let x376 = -(x20 * rF);
         let x377 = psi_dot * x1;
@@ -2599,7 +2570,7 @@ pub mod lagrange {
         let x605 = x592 - x546;
         let x606 = (-g * x93 - x434) + (x432 + x426);
         let x607 = x418 * x5;
-        let x608 = x194 / f64::sqrt(x170);
+        let x608 = x194 / x171;
         let x609 = (x264 - x608) * x1;
         let x610 = x609 + x194;
         let x611 = x8 * phi_dot;
@@ -2607,20 +2578,18 @@ pub mod lagrange {
         let x613 = x536 * x3;
         let x614 = x6 * phi_dot;
         let x615 = x8 * psi_dot;
-        let x616 = x1 / f64::sqrt(x170);
+        let x616 = x1 / x171;
         let x617 = 2.0 - x616;
         let x618 = x536 * x35;
         let x619 = rR
             * (psi_dot * (-x610 * x611 - x308 * x612 - x613)
-                + phi_dot
-                    * (f64::sqrt(x170) * x614 - (x615 * x264 + x617 * x614) * x1
-                        - x618));
+                + phi_dot * (x171 * x614 - (x615 * x264 + x617 * x614) * x1 - x618));
         let x620 = x35 * psi_dot;
         let x621 = x536 * x45;
         let x622 = phi_dot * x2;
         let x623 = x536 * x6;
         let x624 = x35 * phi_dot;
-        let x625 = f64::sqrt(x170) * x624;
+        let x625 = x171 * x624;
         let x626 = x616 - 2.0;
         let x627 = psi_dot * x2;
         let x628 = delta_dot * x5;
@@ -2652,8 +2621,8 @@ pub mod lagrange {
         let x654 = x13 * x645;
         let x655 = x653 - x654;
         let x656 = x645 * x60 + x100 * x652 + x655 * x105 - rR * x647;
-        let x657 = f64::sqrt(x173) * x656;
-        let x658 = x657 - x639 / f64::sqrt(x173);
+        let x657 = x174 * x656;
+        let x658 = x657 - x639 / x174;
         let x659 = psi_dot - phi_dot;
         let x660 = (x3 - x35) * x659;
         let x661 = psi_dot + phi_dot;
@@ -2705,7 +2674,7 @@ pub mod lagrange {
         let x707 = x637 * x55;
         let x708 = x173 * x670 + (x93 * (x686 + x706) + x348 * x707);
         let x709 = x638 * x274;
-        let x710 = x709 / f64::sqrt(x173);
+        let x710 = x709 / x174;
         let x711 = x8 * (x672 - x673);
         let x712 = x711 - x671;
         let x713 = x13 * x712;
@@ -2719,7 +2688,7 @@ pub mod lagrange {
         let x721 = x719 - x720;
         let x722 = x714 * x60 + x721 * x105;
         let x723 = x100 * x718 + (x671 - x711 + x677 - x612) * rR + x722;
-        let x724 = f64::sqrt(x173) * x723;
+        let x724 = x174 * x723;
         let x725 = x724 - x710;
         let x726 = thF_dot * x47;
         let x727 = x674 * x12;
@@ -2759,8 +2728,8 @@ pub mod lagrange {
         let x761 = x407 * x2;
         let x762 = ((x750 * x67 + x751) * x1 - x749) * x105 + x754
             + x100 * (x758 * x0 + x760) + rR * (x81 * x614 + (x615 * x312 + x761) * x1);
-        let x763 = x762 * f64::sqrt(x173);
-        let x764 = x763 - x748 / f64::sqrt(x173);
+        let x763 = x762 * x174;
+        let x764 = x763 - x748 / x174;
         let x765 = delta_dot * x0;
         let x766 = x74 * x765;
         let x767 = theta_dot * x135;
@@ -2811,7 +2780,7 @@ pub mod lagrange {
         let x809 = delta_dot * x3;
         let x810 = x809 - x653 - x808;
         let x811 = x0 * x804 + x19 * x810;
-        let x812 = x100 * (x811 * f64::sqrt(x173) + x20 * x638 / f64::sqrt(x173));
+        let x812 = x100 * (x811 * x174 + x20 * x638 / x174);
         let x813 = x620 + x641;
         let x814 = x19 * x804;
         let x815 = x0 * (x653 + x808 - x809);
@@ -2819,7 +2788,7 @@ pub mod lagrange {
         let x817 = x12 * x807;
         let x818 = x817 - x648;
         let x819 = rR * (x644 - x806 + x813) + x100 * x816 + x647 * x60 + x818 * x105;
-        let x820 = f64::sqrt(x173) * x819;
+        let x820 = x174 * x819;
         let x821 = thF_dot * x25;
         let x822 = x816 - x821;
         let x823 = thF_dot * x28;
@@ -2838,7 +2807,7 @@ pub mod lagrange {
         let x836 = x833 + 2.0 * x834 - x835;
         let x837 = (x836 * x93 - x832) - x831;
         let x838 = x638 * x280;
-        let x839 = x838 / f64::sqrt(x173);
+        let x839 = x838 / x174;
         let x840 = x811 * x788;
         let x841 = (x45 - x6) * x661;
         let x842 = (x6 + x45) * x659;
@@ -2854,7 +2823,7 @@ pub mod lagrange {
         let x852 = x0 * x850 - delta_dot * x851;
         let x853 = x680 - x713;
         let x854 = x100 * x852 - rR * x679 + x853 * x105 + x712 * x60;
-        let x855 = x854 * f64::sqrt(x173);
+        let x855 = x854 * x174;
         let x856 = x697 + x767 * x1;
         let x857 = x528 * x67;
         let x858 = theta_dot * x188;
@@ -2870,7 +2839,7 @@ pub mod lagrange {
         let x868 = x528 * x312 - x867;
         let x869 = (x856 * x8 + x74 * x515) * x105 + x100 * ((x860 - x861) * x0 + x863)
             + x866 * x60 + rR * (x8 * x868 + x312 * x515);
-        let x870 = x869 * f64::sqrt(x173);
+        let x870 = x869 * x174;
         let x871 = x20 * x781;
         let x872 = x811 * x310;
         let x873 = x327 * x637;
@@ -2890,1191 +2859,1190 @@ pub mod lagrange {
         let x886 = x818 * x367;
         let x887 = x884 * x93 + (-x885 - x886);
         let x888 = x119 + x130;
-        let x889 = 1.0 / f64::sqrt(x173) + x172 / f64::powf(x173, 1.5);
-        let x890 = -(x637 * x889);
-        let x891 = x777 * x100;
-        let x892 = x631 * x105;
-        let x893 = x332 * x637;
-        let x894 = x889 * x893;
-        let x895 = x90 * x862;
-        let x896 = x74 * x5;
-        let x897 = theta_dot * x896 + x418 * x135;
-        let x898 = delta_dot * x1;
-        let x899 = x897 + x898;
-        let x900 = -x895 - x899 * x19;
-        let x901 = x900 * x93;
-        let x902 = x901 / f64::sqrt(x173);
-        let x903 = x894 + x902;
-        let x904 = x5 * x767 + x629 * phi_dot;
-        let x905 = x904 * x105;
-        let x906 = x899 * x0;
-        let x907 = x862 * x69;
-        let x908 = x906 - x907;
-        let x909 = x908 * x100;
-        let x910 = theta_dot * x79;
-        let x911 = x634 - phi_dot;
-        let x912 = x911 * x91;
-        let x913 = x912 - x690;
-        let x914 = x913 * x93;
-        let x915 = x914 / f64::sqrt(x173);
-        let x916 = -(x637 * x70);
-        let x917 = x889 * x916;
-        let x918 = x915 + x917;
-        let x919 = x100 * x637;
-        let x920 = x54 + x272 * x19;
-        let x921 = x20 * x920;
-        let x922 = x22 * x273 + x269 * x29;
-        let x923 = x273 * x29 - x22 * x269;
-        let x924 = x920 * x55;
-        let x925 = (x32 + x50 * x922 - x924 + x52 * x923) * mF
-            + (x273 * x47 + x49 * x269 - x924 + x33) * mH;
-        let x926 = ((x268 * x118 - x177) * x5 - x179) * mB - x176
-            + (x98 * x273 - x920 * x86 + x94 * x269) * mH
-            + (x923 * x108 + x112 * x922 - x111 * x920) * mF;
-        let x927 = ((x76 * x269 + x133 * x273) * x19 - x137 * x920) * mH + x128 * x45
-            + mF * (x19 * (x142 * x922 + x923 * x144) - x920 * x140);
-        let x928 = mF * (x159 * x922 - x150 * x920 + x923 * x157)
-            + (x273 * x163 - x161 * x920 + x269 * x164) * mH + mB * (x185 - x268 * xB);
-        let x929 = -(x920 * x168);
-        let x930 = rR * x6;
-        let x931 = x930 * x308;
-        let x932 = x7 - x10;
-        let x933 = x932 * x60 + (-x13 * x932 - x24) * x105;
-        let x934 = x932 * x12 - x17;
-        let x935 = rR * (x16 - x6) + x933 + x100 * (x0 * x934 + x27);
-        let x936 = x935 * f64::sqrt(x173) - x285;
-        let x937 = -(x920 * x93);
-        let x938 = x937 + x189 * x922 + x190 * x923;
-        let x939 = (x276 * x937 + x938 * x173) * rF + x275;
-        let x940 = x265 * x45;
-        let x941 = x8 * x317;
-        let x942 = x941 * f64::sqrt(x173);
-        let x943 = x942 - x328;
-        let x944 = x248 * x922 + x920 * x230 + x923 * x246;
-        let x945 = x319 + rF * (x944 * x173 + x937 * x310);
-        let x946 = x41 * x60 + x353 + (-x38 - x42) * x105 + x152 * x49;
-        let x947 = f64::sqrt(x173) * x946;
-        let x948 = x947 - rF * (x356 - x357);
-        let x949 = x351 - rF * (x346 - x937 * x348);
-        let x950 = x100 * x920 * f64::sqrt(x173);
-        let x951 = -x950 - x372;
-        let x952 = rF * (x937 * x370 + x269 * x367) - x366;
-        let x953 = -x376;
-        let x954 = -(rF * x920);
-        let x955 = f64::sqrt(x173)
+        let x889 = f64::powf(x173, 1.5);
+        let x890 = 1.0 / x174 + x172 / x889;
+        let x891 = -(x637 * x890);
+        let x892 = x777 * x100;
+        let x893 = x631 * x105;
+        let x894 = x332 * x637;
+        let x895 = x890 * x894;
+        let x896 = x90 * x862;
+        let x897 = x74 * x5;
+        let x898 = theta_dot * x897 + x418 * x135;
+        let x899 = delta_dot * x1;
+        let x900 = x898 + x899;
+        let x901 = -x896 - x900 * x19;
+        let x902 = x901 * x93;
+        let x903 = x902 / x174;
+        let x904 = x895 + x903;
+        let x905 = x5 * x767 + x629 * phi_dot;
+        let x906 = x905 * x105;
+        let x907 = x900 * x0;
+        let x908 = x862 * x69;
+        let x909 = x907 - x908;
+        let x910 = x909 * x100;
+        let x911 = theta_dot * x79;
+        let x912 = x634 - phi_dot;
+        let x913 = x912 * x91;
+        let x914 = x913 - x690;
+        let x915 = x914 * x93;
+        let x916 = x915 / x174;
+        let x917 = -(x637 * x70);
+        let x918 = x890 * x917;
+        let x919 = x916 + x918;
+        let x920 = x100 * x637;
+        let x921 = x54 + x272 * x19;
+        let x922 = x20 * x921;
+        let x923 = x22 * x273 + x269 * x29;
+        let x924 = x273 * x29 - x22 * x269;
+        let x925 = x921 * x55;
+        let x926 = (x32 + x50 * x923 - x925 + x52 * x924) * mF
+            + (x273 * x47 + x49 * x269 - x925 + x33) * mH;
+        let x927 = ((x268 * x118 - x177) * x5 - x179) * mB - x176
+            + (x98 * x273 - x921 * x86 + x94 * x269) * mH
+            + (x924 * x108 + x112 * x923 - x111 * x921) * mF;
+        let x928 = ((x76 * x269 + x133 * x273) * x19 - x137 * x921) * mH + x128 * x45
+            + mF * (x19 * (x142 * x923 + x924 * x144) - x921 * x140);
+        let x929 = mF * (x159 * x923 - x150 * x921 + x924 * x157)
+            + (x273 * x163 - x161 * x921 + x269 * x164) * mH + mB * (x185 - x268 * xB);
+        let x930 = -(x921 * x168);
+        let x931 = rR * x6;
+        let x932 = x931 * x308;
+        let x933 = x7 - x10;
+        let x934 = x933 * x60 + (-x13 * x933 - x24) * x105;
+        let x935 = x933 * x12 - x17;
+        let x936 = rR * (x16 - x6) + x934 + x100 * (x0 * x935 + x27);
+        let x937 = x936 * x174 - x285;
+        let x938 = -(x921 * x93);
+        let x939 = x938 + x189 * x923 + x190 * x924;
+        let x940 = (x276 * x938 + x939 * x173) * rF + x275;
+        let x941 = x265 * x45;
+        let x942 = x8 * x317;
+        let x943 = x942 * x174;
+        let x944 = x943 - x328;
+        let x945 = x248 * x923 + x921 * x230 + x924 * x246;
+        let x946 = x319 + rF * (x945 * x173 + x938 * x310);
+        let x947 = x41 * x60 + x353 + (-x38 - x42) * x105 + x152 * x49;
+        let x948 = x174 * x947;
+        let x949 = x948 - rF * (x356 - x357);
+        let x950 = x351 - rF * (x346 - x938 * x348);
+        let x951 = x100 * x921 * x174;
+        let x952 = -x951 - x372;
+        let x953 = rF * (x938 * x370 + x269 * x367) - x366;
+        let x954 = -x376;
+        let x955 = -(rF * x921);
+        let x956 = x174
             * (((x727 + x720) * x0 - x777 * x49) * x100 + x674 * x60
                 + (x715 - x675) * x105 - rR * x714);
-        let x956 = x4 * x805 + x646;
-        let x957 = (x649 - x13 * x956) * x105 + x956 * x60;
-        let x958 = x494 - x614;
-        let x959 = x654 + x956 * x12;
-        let x960 = x835 - x833 - 2.0 * x834;
-        let x961 = (x635 * x45 - x612) * x19;
-        let x962 = x864 - x865;
-        let x963 = x60 * x962;
-        let x964 = x629 * x627 + x698 * x8;
-        let x965 = x872 - x871 - 2.0 * x873;
-        let x966 = x880 + x881 - 2.0 * x883;
-        let x967 = x717 * x0 + (x681 - x713 - x715) * x19;
-        let x968 = -(x637 * x920);
-        let x969 = x718 - thF_dot * x269;
-        let x970 = thF_dot * x273;
-        let x971 = x22 * x969 + (x721 + x970) * x29;
-        let x972 = x22 * (x720 - x719 - x970) + x969 * x29;
-        let x973 = x90 + x135 * x91;
-        let x974 = x20 * x973;
-        let x975 = x629 * x29 + x22 * x322;
-        let x976 = x322 * x29 - x22 * x629;
-        let x977 = mH
+        let x957 = x4 * x805 + x646;
+        let x958 = (x649 - x13 * x957) * x105 + x957 * x60;
+        let x959 = x494 - x614;
+        let x960 = x654 + x957 * x12;
+        let x961 = x835 - x833 - 2.0 * x834;
+        let x962 = (x635 * x45 - x612) * x19;
+        let x963 = x864 - x865;
+        let x964 = x60 * x963;
+        let x965 = x629 * x627 + x698 * x8;
+        let x966 = x872 - x871 - 2.0 * x873;
+        let x967 = x880 + x881 - 2.0 * x883;
+        let x968 = x717 * x0 + (x681 - x713 - x715) * x19;
+        let x969 = -(x637 * x921);
+        let x970 = x718 - thF_dot * x269;
+        let x971 = thF_dot * x273;
+        let x972 = x22 * x970 + (x721 + x971) * x29;
+        let x973 = x22 * (x720 - x719 - x971) + x970 * x29;
+        let x974 = x90 + x135 * x91;
+        let x975 = x20 * x974;
+        let x976 = x629 * x29 + x22 * x322;
+        let x977 = x322 * x29 - x22 * x629;
+        let x978 = mH
             * ((x188 * x49 + x277 + x70 * x47) * x2
-                + x8 * (x322 * x28 + x25 * x629 + x974))
-            + (x278 * x2 + x8 * (x974 + x31 * x975 + x30 * x976)) * mF;
-        let x978 = x0 * x363;
-        let x979 = x84 * x91;
-        let x980 = x5 * (x978 - x110) - x330 * x105 - x979;
-        let x981 = x88 * x1;
-        let x982 = x981 - x332 * x100;
-        let x983 = x64 * x84 + x363 * x69;
-        let x984 = x332 * x105 + x983;
-        let x985 = x982 * x29 + x22 * x984;
-        let x986 = x984 * x29 - x22 * x982;
-        let x987 = x332 * x63 + x983;
-        let x988 = (x978 - x75) * x5 - x330 * x63 - x979;
-        let x989 = x981 - x332 * x73;
-        let x990 = x4 * x120;
-        let x991 = x9 * x118;
-        let x992 = mF
-            * (x31 * x985 - x20 * x980 + x30 * x986
+                + x8 * (x322 * x28 + x25 * x629 + x975))
+            + (x278 * x2 + x8 * (x975 + x31 * x976 + x30 * x977)) * mF;
+        let x979 = x0 * x363;
+        let x980 = x84 * x91;
+        let x981 = x5 * (x979 - x110) - x330 * x105 - x980;
+        let x982 = x88 * x1;
+        let x983 = x982 - x332 * x100;
+        let x984 = x64 * x84 + x363 * x69;
+        let x985 = x332 * x105 + x984;
+        let x986 = x983 * x29 + x22 * x985;
+        let x987 = x985 * x29 - x22 * x983;
+        let x988 = x332 * x63 + x984;
+        let x989 = (x979 - x75) * x5 - x330 * x63 - x980;
+        let x990 = x982 - x332 * x73;
+        let x991 = x4 * x120;
+        let x992 = x9 * x118;
+        let x993 = mF
+            * (x31 * x986 - x20 * x981 + x30 * x987
                 + (x190 * x108 + x111 * x93 + x189 * x112) * x2)
             + mH
-                * (x987 * x28 - x20 * x988 + (x98 * x70 + x188 * x94 + x93 * x86) * x2
-                    + x989 * x25)
-            + (x99 * x8 + mB * (x6 * (2.0 * x113 - x990 + x991 - 2.0 * x115) + x121))
+                * (x988 * x28 - x20 * x989 + (x98 * x70 + x188 * x94 + x93 * x86) * x2
+                    + x990 * x25)
+            + (x99 * x8 + mB * (x6 * (2.0 * x113 - x991 + x992 - 2.0 * x115) + x121))
                 * x1;
-        let x993 = (mF * (x19 * (x189 * x142 + x190 * x144) + x93 * x140)
+        let x994 = (mF * (x19 * (x189 * x142 + x190 * x144) + x93 * x140)
             + ((x76 * x188 + x133 * x70) * x19 + x137 * x93) * mH + x181 * x5) * x2;
-        let x994 = ((x161 * x93 + x163 * x70 + x188 * x164) * mH + x601 * x1
+        let x995 = ((x161 * x93 + x163 * x70 + x188 * x164) * mH + x601 * x1
             + mF * (x189 * x159 + x150 * x93 + x190 * x157)) * x2;
-        let x995 = x93 * x2;
-        let x996 = x168 * x995;
-        let x997 = x5 * x1;
-        let x998 = -(x997 / f64::sqrt(x170));
-        let x999 = -(x333 / f64::sqrt(x173));
-        let x1000 = x973 * x55;
-        let x1001 = (x99 * x2
-            + mB * (x178 + x35 * (x990 - 2.0 * x113 - x991 + 2.0 * x115))) * x1
+        let x996 = x93 * x2;
+        let x997 = x168 * x996;
+        let x998 = x5 * x1;
+        let x999 = -(x998 / x171);
+        let x1000 = -(x333 / x174);
+        let x1001 = x974 * x55;
+        let x1002 = (x99 * x2
+            + mB * (x178 + x35 * (x991 - 2.0 * x113 - x992 + 2.0 * x115))) * x1
             + mH
-                * (x989 * x49 + (x98 * x322 + x94 * x629 - x973 * x86) * x8 + x988 * x55
-                    + x987 * x47)
+                * (x990 * x49 + (x98 * x322 + x94 * x629 - x974 * x86) * x8 + x989 * x55
+                    + x988 * x47)
             + mF
-                * (x52 * x986 + x50 * x985
-                    + x8 * (x108 * x976 - x111 * x973 + x975 * x112) + x980 * x55);
-        let x1002 = x8
-            * ((x19 * (x133 * x322 + x76 * x629) - x137 * x973) * mH + x595
-                + mF * ((x975 * x142 + x144 * x976) * x19 - x973 * x140));
+                * (x52 * x987 + x50 * x986
+                    + x8 * (x108 * x977 - x111 * x974 + x976 * x112) + x981 * x55);
         let x1003 = x8
-            * ((x976 * x157 + x975 * x159 - x973 * x150) * mF + x117 * mB
-                + mH * (x322 * x163 + x629 * x164 - x161 * x973));
-        let x1004 = -(x8 * x973);
-        let x1005 = x168 * x1004;
-        let x1006 = 2.0 * IHyy + 2.0 * IFyy;
-        let x1007 = -(x74 * x5);
-        let x1008 = x330 * x29 - x22 * x1007;
-        let x1009 = x22 * x330 + x1007 * x29;
-        let x1010 = 2.0 * (x1008 * x190) + 2.0 * (x1009 * x189);
-        let x1011 = x1007 * x211;
-        let x1012 = x330 * x227;
-        let x1013 = x1011 + x1012;
-        let x1014 = x330 * x211 + x1007 * x216;
-        let x1015 = x202 - x204;
-        let x1016 = x116 * x116;
-        let x1017 = x1008 * x246 + x1009 * x248;
-        let x1018 = x332 * x230;
-        let x1019 = (x19 * (x142 * x985 + x144 * x986) + x980 * x140) * mF + x1017 * IFxx
+            * ((x19 * (x133 * x322 + x76 * x629) - x137 * x974) * mH + x595
+                + mF * ((x976 * x142 + x144 * x977) * x19 - x974 * x140));
+        let x1004 = x8
+            * ((x977 * x157 + x976 * x159 - x974 * x150) * mF + x117 * mB
+                + mH * (x322 * x163 + x629 * x164 - x161 * x974));
+        let x1005 = -(x8 * x974);
+        let x1006 = x168 * x1005;
+        let x1007 = 2.0 * IHyy + 2.0 * IFyy;
+        let x1008 = -(x74 * x5);
+        let x1009 = x330 * x29 - x22 * x1008;
+        let x1010 = x22 * x330 + x1008 * x29;
+        let x1011 = 2.0 * (x1009 * x190) + 2.0 * (x1010 * x189);
+        let x1012 = x1008 * x211;
+        let x1013 = x330 * x227;
+        let x1014 = x1012 + x1013;
+        let x1015 = x330 * x211 + x1008 * x216;
+        let x1016 = x202 - x204;
+        let x1017 = x116 * x116;
+        let x1018 = x1009 * x246 + x1010 * x248;
+        let x1019 = x332 * x230;
+        let x1020 = (x19 * (x142 * x986 + x144 * x987) + x981 * x140) * mF + x1018 * IFxx
             + (x245 - x239 - x240 - x242) * x5
-            + (x137 * x988 + x19 * (x76 * x989 + x133 * x987)) * mH - x1018 * x219
+            + (x137 * x989 + x19 * (x76 * x990 + x133 * x988)) * mH - x1019 * x219
             + x330 * x235;
-        let x1020 = x332 * x0;
-        let x1021 = x22 * x1009 + x1008 * x29;
-        let x1022 = mF * (x986 * x157 + x980 * x150 + x159 * x985)
-            + (x161 * x988 + x987 * x163 + x989 * x164) * mH + x1020 * x219 + x252 * x1
-            + x19 * (IFxx * x1021 + x1013);
-        let x1023 = IRyy * x1;
-        let x1024 = x1014 + (x1009 * x29 - x1008 * x22) * IFxx + x980 * x167
-            + x988 * x166;
-        let x1025 = x332 * IFyy;
-        let x1026 = rR * x610;
-        let x1027 = x8 * x1026;
-        let x1028 = x1026 * x2;
-        let x1029 = 2.0 * x333 + x1010;
-        let x1030 = x332 * x55;
-        let x1031 = -(x973 * x93);
-        let x1032 = (x190 * x976 + x1031 + x975 * x189) * x8 + x1009 * x50 + x1008 * x52
-            + x1030;
-        let x1033 = x942
-            - (x93 * (x1029 * x55 - 2.0 * (x332 * x278) + x276 * x1004) + x276 * x1030
-                + x173 * x1032) * rF - x333 * x274 / f64::sqrt(x173);
-        let x1034 = -(x20 * x332);
-        let x1035 = x1008 * x30;
-        let x1036 = x1009 * x31;
-        let x1037 = x276 * x2;
-        let x1038 = x319 - x333 * x280 / f64::sqrt(x173)
+        let x1021 = x332 * x0;
+        let x1022 = x22 * x1010 + x1009 * x29;
+        let x1023 = mF * (x987 * x157 + x981 * x150 + x159 * x986)
+            + (x161 * x989 + x988 * x163 + x990 * x164) * mH + x1021 * x219 + x252 * x1
+            + x19 * (IFxx * x1022 + x1014);
+        let x1024 = IRyy * x1;
+        let x1025 = x1015 + (x1010 * x29 - x1009 * x22) * IFxx + x981 * x167
+            + x989 * x166;
+        let x1026 = x332 * IFyy;
+        let x1027 = rR * x610;
+        let x1028 = x8 * x1027;
+        let x1029 = x1027 * x2;
+        let x1030 = 2.0 * x333 + x1011;
+        let x1031 = x332 * x55;
+        let x1032 = -(x974 * x93);
+        let x1033 = (x190 * x977 + x1032 + x976 * x189) * x8 + x1010 * x50 + x1009 * x52
+            + x1031;
+        let x1034 = x943
+            - (x93 * (x1030 * x55 - 2.0 * (x332 * x278) + x276 * x1005) + x276 * x1031
+                + x173 * x1033) * rF - x333 * x274 / x174;
+        let x1035 = -(x20 * x332);
+        let x1036 = x1009 * x30;
+        let x1037 = x1010 * x31;
+        let x1038 = x276 * x2;
+        let x1039 = x319 - x333 * x280 / x174
             - rF
-                * (x93 * (x20 * x1029 - x276 * x995 + 2.0 * (x332 * x284)) - x276 * x1034
-                    - (x1035 + x1036 + x1034 + x1037) * x173);
-        let x1039 = x617 * x1;
-        let x1040 = (x1039 - x171) * x930;
-        let x1041 = rR * x35;
-        let x1042 = x626 * x1;
-        let x1043 = x1041 * (x171 + x1042);
-        let x1044 = x246 * x976 + x248 * x975 + x973 * x230;
-        let x1045 = x1017 - x1018;
-        let x1046 = (x331 * f64::sqrt(x173) - x333 * x317 / f64::sqrt(x173)) * x2
+                * (x93 * (x20 * x1030 - x276 * x996 + 2.0 * (x332 * x284)) - x276 * x1035
+                    - (x1036 + x1037 + x1035 + x1038) * x173);
+        let x1040 = x617 * x1;
+        let x1041 = (x1040 - x171) * x931;
+        let x1042 = rR * x35;
+        let x1043 = x626 * x1;
+        let x1044 = x1042 * (x171 + x1043);
+        let x1045 = x246 * x977 + x248 * x976 + x974 * x230;
+        let x1046 = x1018 - x1019;
+        let x1047 = (x331 * x174 - x333 * x317 / x174) * x2
             - rF
-                * (x1044 * x8 * x173
-                    + (x310 * x1004 - 2.0 * (x332 * x311) + x1045 * x55) * x93
-                    + x310 * x1030);
-        let x1047 = x67 * x5;
-        let x1048 = x0 * x1047;
-        let x1049 = x100 * (x1048 - x91) + x315 * x5;
-        let x1050 = x8 * (x1049 * f64::sqrt(x173) - x325 * x333 / f64::sqrt(x173))
-            - (x93 * (2.0 * (x327 * x332) - x310 * x995 + x20 * x1045)
-                - (x1034 + x173 * x2) * x310) * rF;
-        let x1051 = x332 * x889;
-        let x1052 = (x332 * x1051 + x1031 / f64::sqrt(x173)) * rF;
-        let x1053 = x325 + x1052;
-        let x1054 = x19 * x1021 + x1020;
-        let x1055 = f64::sqrt(x173) * x3 * x603 - x333 * x350 / f64::sqrt(x173)
+                * (x1045 * x8 * x173
+                    + (x310 * x1005 - 2.0 * (x332 * x311) + x1046 * x55) * x93
+                    + x310 * x1031);
+        let x1048 = x67 * x5;
+        let x1049 = x0 * x1048;
+        let x1050 = x100 * (x1049 - x91) + x315 * x5;
+        let x1051 = x8 * (x1050 * x174 - x325 * x333 / x174)
+            - (x93 * (2.0 * (x327 * x332) - x310 * x996 + x20 * x1046)
+                - (x1035 + x173 * x2) * x310) * rF;
+        let x1052 = x332 * x890;
+        let x1053 = (x332 * x1052 + x1032 / x174) * rF;
+        let x1054 = x325 + x1053;
+        let x1055 = x19 * x1022 + x1021;
+        let x1056 = x174 * x3 * x603 - x333 * x350 / x174
             - rF
-                * (x93 * (x348 * x1004 - 2.0 * (x332 * x45) + x1054 * x55) - x35 * x173
-                    + x348 * x1030);
-        let x1056 = x79 + x135 * x105;
-        let x1057 = x1056 + x100 * x232;
-        let x1058 = f64::sqrt(x173) * x1057 * x45 - x333 * x355 / f64::sqrt(x173)
+                * (x93 * (x348 * x1005 - 2.0 * (x332 * x45) + x1055 * x55) - x35 * x173
+                    + x348 * x1031);
+        let x1057 = x79 + x135 * x105;
+        let x1058 = x1057 + x100 * x232;
+        let x1059 = x174 * x1058 * x45 - x333 * x355 / x174
             - rF
-                * (-x173 * x6 - (x348 * x995 - x20 * x1054 + 2.0 * (x332 * x3)) * x93
-                    - x1034 * x348);
-        let x1059 = (x362 + x1056) * x5;
-        let x1060 = x19 * x629;
-        let x1061 = -(x332 * x889);
-        let x1062 = x1060 * rF * x1061;
-        let x1063 = x1059 + x1062;
-        let x1064 = x8 * x629;
-        let x1065 = x4 * x792 + x9 * x794;
-        let x1066 = x101 * (f64::sqrt(x173) * x2 - x1034 / f64::sqrt(x173))
+                * (-x173 * x6 - (x348 * x996 - x20 * x1055 + 2.0 * (x332 * x3)) * x93
+                    - x1035 * x348);
+        let x1060 = (x362 + x1057) * x5;
+        let x1061 = x19 * x629;
+        let x1062 = -(x332 * x890);
+        let x1063 = x1061 * rF * x1062;
+        let x1064 = x1060 + x1063;
+        let x1065 = x8 * x629;
+        let x1066 = x4 * x792 + x9 * x794;
+        let x1067 = x101 * (x174 * x2 - x1035 / x174)
             - rF
-                * (x367 * x1064
-                    + x93 * (x370 * x1004 - x1065 * x55 - 2.0 * (x332 * x789))
-                    + x370 * x1030);
-        let x1067 = x74 * x3;
-        let x1068 = x100 * (f64::sqrt(x173) * x1004 - x332 * x277 / f64::sqrt(x173))
+                * (x367 * x1065
+                    + x93 * (x370 * x1005 - x1066 * x55 - 2.0 * (x332 * x789))
+                    + x370 * x1031);
+        let x1068 = x74 * x3;
+        let x1069 = x100 * (x174 * x1005 - x332 * x277 / x174)
             - rF
-                * ((2.0 * (x332 * x882) - x370 * x995 - x20 * x1065) * x93 - x1034 * x370
-                    - x1067 * x367);
-        let x1069 = -(x889 * x70);
-        let x1070 = x332 * (x100 + rF * x1069) - x330 * rF * x93 / f64::sqrt(x173);
-        let x1071 = -(rF * x1004);
-        let x1072 = rF * x995;
-        let x1073 = x422 - x672;
-        let x1074 = x4 * x418;
-        let x1075 = x413 * x5 + x1074;
-        let x1076 = x1075 * x12;
-        let x1077 = (x13 * x1073 + x898) + x1076;
-        let x1078 = -x895 - x19 * x1077;
-        let x1079 = x419 * x1 + x528 * (x60 - x77);
-        let x1080 = x82 * x868 + x13 * x1079;
-        let x1081 = rR * x1075 + x1073 * x60;
-        let x1082 = x0 * x1080 + (x19 * x1081 + delta_dot * (x90 * x363 - x979));
-        let x1083 = x1078 * x63 - x446 * x988 + x1082 + x400 * x332 + x989 * x390
-            - x1007 * x455;
-        let x1084 = (-delta_dot * x983 - x19 * x1080) + x0 * x1081;
-        let x1085 = x13 * x1075;
-        let x1086 = x1073 * x12;
-        let x1087 = x1086 - x1085;
-        let x1088 = x1077 * x0 - x907;
-        let x1089 = x987 * x446 + x1084 + x73 * x1087 - x400 * x330 - x63 * x1088
-            - x989 * x403 + x447 * x1007;
-        let x1090 = x12 * x1079 - x87 * x868;
-        let x1091 = x1090 + x330 * x455 + x988 * x403 - x987 * x390 - x332 * x447
-            - x1078 * x73;
-        let x1092 = x5 * x510;
-        let x1093 = x507 * x4 + x9 * x503;
-        let x1094 = x120 * x383 - x379 * x118;
-        let x1095 = x1073 * xB - x5 * x1093 + x1094 * x1 + x1075 * x114;
-        let x1096 = x1095 * psi_dot;
-        let x1097 = x9 * x505;
-        let x1098 = x4 * x509;
-        let x1099 = x1097 - x1098;
-        let x1100 = x501 + x419 - x120 * x388 - x502;
-        let x1101 = x497 - 2.0 * x498;
-        let x1102 = xB * phi_dot;
-        let x1103 = x379 * x116;
-        let x1104 = x1100 * x1 + (x4 * x1101 + x1102 - x1103) * x5;
-        let x1105 = x507 - rR * x407 + x118 * x388;
-        let x1106 = phi_dot * x114;
-        let x1107 = x383 * x116;
-        let x1108 = x1105 * x1 + (x1106 + x9 * x1101 + x1107) * x5;
-        let x1109 = x1090 - x1078 * x100;
-        let x1110 = x1078 * x105 + x1082;
-        let x1111 = x1109 * x29 - x390 * x986 + x485 * x980 - x486 * x332 + x22 * x1110
-            + x1008 * x479;
-        let x1112 = x1110 * x29 - x22 * x1109 - x1009 * x479 - x980 * x482 + x390 * x985
+                * ((2.0 * (x332 * x882) - x370 * x996 - x20 * x1066) * x93 - x1035 * x370
+                    - x1068 * x367);
+        let x1070 = -(x890 * x70);
+        let x1071 = x332 * (x100 + rF * x1070) - x330 * rF * x93 / x174;
+        let x1072 = -(rF * x1005);
+        let x1073 = rF * x996;
+        let x1074 = x422 - x672;
+        let x1075 = x4 * x418;
+        let x1076 = x413 * x5 + x1075;
+        let x1077 = x1076 * x12;
+        let x1078 = (x13 * x1074 + x899) + x1077;
+        let x1079 = -x896 - x19 * x1078;
+        let x1080 = x419 * x1 + x528 * (x60 - x77);
+        let x1081 = x82 * x868 + x13 * x1080;
+        let x1082 = rR * x1076 + x1074 * x60;
+        let x1083 = x0 * x1081 + (x19 * x1082 + delta_dot * (x90 * x363 - x980));
+        let x1084 = x1079 * x63 - x446 * x989 + x1083 + x400 * x332 + x990 * x390
+            - x1008 * x455;
+        let x1085 = (-delta_dot * x984 - x19 * x1081) + x0 * x1082;
+        let x1086 = x13 * x1076;
+        let x1087 = x1074 * x12;
+        let x1088 = x1087 - x1086;
+        let x1089 = x1078 * x0 - x908;
+        let x1090 = x988 * x446 + x1085 + x73 * x1088 - x400 * x330 - x63 * x1089
+            - x990 * x403 + x447 * x1008;
+        let x1091 = x12 * x1080 - x87 * x868;
+        let x1092 = x1091 + x330 * x455 + x989 * x403 - x988 * x390 - x332 * x447
+            - x1079 * x73;
+        let x1093 = x5 * x510;
+        let x1094 = x507 * x4 + x9 * x503;
+        let x1095 = x120 * x383 - x379 * x118;
+        let x1096 = x1074 * xB - x5 * x1094 + x1095 * x1 + x1076 * x114;
+        let x1097 = x1096 * psi_dot;
+        let x1098 = x9 * x505;
+        let x1099 = x4 * x509;
+        let x1100 = x1098 - x1099;
+        let x1101 = x501 + x419 - x120 * x388 - x502;
+        let x1102 = x497 - 2.0 * x498;
+        let x1103 = xB * phi_dot;
+        let x1104 = x379 * x116;
+        let x1105 = x1101 * x1 + (x4 * x1102 + x1103 - x1104) * x5;
+        let x1106 = x507 - rR * x407 + x118 * x388;
+        let x1107 = phi_dot * x114;
+        let x1108 = x383 * x116;
+        let x1109 = x1106 * x1 + (x1107 + x9 * x1102 + x1108) * x5;
+        let x1110 = x1091 - x1079 * x100;
+        let x1111 = x1079 * x105 + x1083;
+        let x1112 = x1110 * x29 - x390 * x987 + x485 * x981 - x486 * x332 + x22 * x1111
+            + x1009 * x479;
+        let x1113 = x1111 * x29 - x22 * x1110 - x1010 * x479 - x981 * x482 + x390 * x986
             + x332 * x473;
-        let x1113 = x100 * x1087 + x1084 + x486 * x1009 - x1088 * x105 - x1008 * x473
-            + x482 * x986 - x485 * x985;
-        let x1114 = x330 * thF_dot;
-        let x1115 = thF_dot * x1007;
-        let x1116 = x1088 - x1115;
-        let x1117 = x485 * x332;
-        let x1118 = x1008 * x564;
-        let x1119 = ((x1114 + x1087) * x29 + x22 * x1116 - x1117 - x1118) * IFxx
-            + (x1117 + x1118) * IFyy;
-        let x1120 = x221 * phi_dot;
-        let x1121 = x197 * x383;
-        let x1122 = x200 * x379;
-        let x1123 = x9 * x586;
-        let x1124 = x559 * x4;
-        let x1125 = (-x1121 - x1122) + (x1123 + x1124);
-        let x1126 = IRyy * phi_dot;
-        let x1127 = phi_dot * IByy;
-        let x1128 = x592 * x1007;
-        let x1129 = x1014 * x403;
-        let x1130 = x330 * x582;
-        let x1131 = x1078 * IHyy;
-        let x1132 = x1078 * IFyy;
-        let x1133 = x446 * x1013;
-        let x1134 = x1129 - x1128 + x1130 - x1131 - x1132 - x1133;
-        let x1135 = x418 * IRyy;
-        let x1136 = x5 * x388;
-        let x1137 = x9 * IByy;
-        let x1138 = x1075 * IBxx + x561 * x1 + x1136 * (x1137 - x198 - x199)
-            - x1073 * IBxz;
-        let x1139 = x330 * IHyy;
-        let x1140 = x211 * x1088;
-        let x1141 = x216 * x1087;
-        let x1142 = x332 * x547 + (x1139 - x1011 - x1012) * x390 + x1140 + x1141;
-        let x1143 = x4 * IByy;
-        let x1144 = IBzz * x1073 + x1136 * (x1143 - x195 - x196) + x522 * x1
-            - x1075 * IBxz;
-        let x1145 = x1015 * x5 * x537 + x532 * x1;
-        let x1146 = (x205 * thR_dot * x5 - x201 * x1073 + x1145 + x203 * x1075) * IRxx
-            - IRyy * x1145;
-        let x1147 = x554 * x1;
-        let x1148 = x208 * x5;
-        let x1149 = x1148 * x537;
-        let x1150 = IRyy * (x1147 + x1149)
-            + (thR_dot * x1148 + x203 * x1073 - x1147 - x1149 + x1075 * x201) * IRxx;
-        let x1151 = ((x1014 - x1007 * IHyy) * x390 + x1088 * x227)
-            + (x211 * x1087 + x332 * x583);
-        let x1152 = x332 * x482 + x1009 * x564;
-        let x1153 = IFxx * (x1116 * x29 + x22 * (x1085 - x1114 - x1086) + x1152)
-            - IFyy * x1152;
-        let x1154 = mB * x116;
-        let x1155 = x79 + x135 * x63;
-        let x1156 = (mF * x1057 + x1154 + mH * (x76 * x0 + x1155)) * g * x5;
-        let x1157 = x332 * g * x168;
-        let x1158 = 1.0 / f64::sqrt(x170);
-        let x1159 = x194 / f64::powf(x170, 1.5);
-        let x1160 = (4.0 - (3.0 * x1158 + x1159) * x1) * x1 - x171 + x608;
-        let x1161 = (x1158 + x1159) * x1;
-        let x1162 = f64::sqrt(x170) * phi_dot;
-        let x1163 = x332 * x638;
-        let x1164 = x900 / f64::sqrt(x173);
-        let x1165 = x767 * x2 - x751;
-        let x1166 = x637 * x1004;
-        let x1167 = x904 + x1114;
-        let x1168 = x908 - x1115;
-        let x1169 = x1167 * x29 + x22 * x1168;
-        let x1170 = x1168 * x29 - x22 * x1167;
-        let x1171 = x19 * x767;
-        let x1172 = x1171 - x766;
-        let x1173 = x1008 * x779 + x1169 * x248 + x1009 * x775 + x1170 * x246
-            - x900 * x230 + x332 * x1172;
-        let x1174 = x9 * x515;
-        let x1175 = x528 * x9 + x867;
-        let x1176 = x1175 * x8;
-        let x1177 = x1174 + x1176;
-        let x1178 = x12 * x866;
-        let x1179 = x13 * x1177 + x1178;
-        let x1180 = x64 * x862;
-        let x1181 = x0 * x612 + x8 * (x777 * x5 - x1180);
-        let x1182 = x1181 - x19 * x1179;
-        let x1183 = x637 * x1045 + x900 * x310;
-        let x1184 = x13 * x866;
-        let x1185 = x1177 * x12 - x1184;
-        let x1186 = x863 + x0 * (x1179 - x861);
-        let x1187 = thF_dot * x8;
-        let x1188 = x1185 * x29 + x22 * x1186 + x1187 * x976;
-        let x1189 = x1186 * x29 - x975 * x1187 - x22 * x1185;
-        let x1190 = x12 * x753;
-        let x1191 = x3 * x407;
-        let x1192 = x1191 + x9 * x752;
-        let x1193 = x13 * x753;
-        let x1194 = delta_dot * x1060;
-        let x1195 = x1194 * x2;
-        let x1196 = x0 * (x900 + delta_dot * x1021)
+        let x1114 = x100 * x1088 + x1085 + x486 * x1010 - x1089 * x105 - x1009 * x473
+            + x482 * x987 - x485 * x986;
+        let x1115 = x330 * thF_dot;
+        let x1116 = thF_dot * x1008;
+        let x1117 = x1089 - x1116;
+        let x1118 = x485 * x332;
+        let x1119 = x1009 * x564;
+        let x1120 = ((x1115 + x1088) * x29 + x22 * x1117 - x1118 - x1119) * IFxx
+            + (x1118 + x1119) * IFyy;
+        let x1121 = x221 * phi_dot;
+        let x1122 = x197 * x383;
+        let x1123 = x200 * x379;
+        let x1124 = x9 * x586;
+        let x1125 = x559 * x4;
+        let x1126 = (-x1122 - x1123) + (x1124 + x1125);
+        let x1127 = IRyy * phi_dot;
+        let x1128 = phi_dot * IByy;
+        let x1129 = x592 * x1008;
+        let x1130 = x1015 * x403;
+        let x1131 = x330 * x582;
+        let x1132 = x1079 * IHyy;
+        let x1133 = x1079 * IFyy;
+        let x1134 = x446 * x1014;
+        let x1135 = x1130 - x1129 + x1131 - x1132 - x1133 - x1134;
+        let x1136 = x418 * IRyy;
+        let x1137 = x5 * x388;
+        let x1138 = x9 * IByy;
+        let x1139 = x1076 * IBxx + x561 * x1 + x1137 * (x1138 - x198 - x199)
+            - x1074 * IBxz;
+        let x1140 = x330 * IHyy;
+        let x1141 = x211 * x1089;
+        let x1142 = x216 * x1088;
+        let x1143 = x332 * x547 + (x1140 - x1012 - x1013) * x390 + x1141 + x1142;
+        let x1144 = x4 * IByy;
+        let x1145 = IBzz * x1074 + x1137 * (x1144 - x195 - x196) + x522 * x1
+            - x1076 * IBxz;
+        let x1146 = x1016 * x5 * x537 + x532 * x1;
+        let x1147 = (x205 * thR_dot * x5 - x201 * x1074 + x1146 + x203 * x1076) * IRxx
+            - IRyy * x1146;
+        let x1148 = x554 * x1;
+        let x1149 = x208 * x5;
+        let x1150 = x1149 * x537;
+        let x1151 = IRyy * (x1148 + x1150)
+            + (thR_dot * x1149 + x203 * x1074 - x1148 - x1150 + x1076 * x201) * IRxx;
+        let x1152 = ((x1015 - x1008 * IHyy) * x390 + x1089 * x227)
+            + (x211 * x1088 + x332 * x583);
+        let x1153 = x332 * x482 + x1010 * x564;
+        let x1154 = IFxx * (x1117 * x29 + x22 * (x1086 - x1115 - x1087) + x1153)
+            - IFyy * x1153;
+        let x1155 = mB * x116;
+        let x1156 = x79 + x135 * x63;
+        let x1157 = (mF * x1058 + x1155 + mH * (x76 * x0 + x1156)) * g * x5;
+        let x1158 = x332 * g * x168;
+        let x1159 = 1.0 / x171;
+        let x1160 = x194 / f64::powf(x170, 1.5);
+        let x1161 = (4.0 - (3.0 * x1159 + x1160) * x1) * x1 - x171 + x608;
+        let x1162 = (x1159 + x1160) * x1;
+        let x1163 = x171 * phi_dot;
+        let x1164 = x332 * x638;
+        let x1165 = x901 / x174;
+        let x1166 = x767 * x2 - x751;
+        let x1167 = x637 * x1005;
+        let x1168 = x905 + x1115;
+        let x1169 = x909 - x1116;
+        let x1170 = x1168 * x29 + x22 * x1169;
+        let x1171 = x1169 * x29 - x22 * x1168;
+        let x1172 = x19 * x767;
+        let x1173 = x1172 - x766;
+        let x1174 = x1009 * x779 + x1170 * x248 + x1010 * x775 + x1171 * x246
+            - x901 * x230 + x332 * x1173;
+        let x1175 = x9 * x515;
+        let x1176 = x528 * x9 + x867;
+        let x1177 = x1176 * x8;
+        let x1178 = x1175 + x1177;
+        let x1179 = x12 * x866;
+        let x1180 = x13 * x1178 + x1179;
+        let x1181 = x64 * x862;
+        let x1182 = x0 * x612 + x8 * (x777 * x5 - x1181);
+        let x1183 = x1182 - x19 * x1180;
+        let x1184 = x637 * x1046 + x901 * x310;
+        let x1185 = x13 * x866;
+        let x1186 = x1178 * x12 - x1185;
+        let x1187 = x863 + x0 * (x1180 - x861);
+        let x1188 = thF_dot * x8;
+        let x1189 = x1186 * x29 + x22 * x1187 + x1188 * x977;
+        let x1190 = x1187 * x29 - x976 * x1188 - x22 * x1186;
+        let x1191 = x12 * x753;
+        let x1192 = x3 * x407;
+        let x1193 = x1192 + x9 * x752;
+        let x1194 = x13 * x753;
+        let x1195 = delta_dot * x1061;
+        let x1196 = x1195 * x2;
+        let x1197 = x0 * (x901 + delta_dot * x1022)
             + x19
-                * (x22 * (x1169 - x1008 * thF_dot) - delta_dot * x332
-                    + (x1170 + x1009 * thF_dot) * x29);
-        let x1197 = x900 * x55;
-        let x1198 = x1197 + x332 * x685;
-        let x1199 = x1198 + x1166;
-        let x1200 = x637 * x603;
-        let x1201 = x656 / f64::sqrt(x173) + x639 / f64::powf(x173, 1.5);
-        let x1202 = x958 * x9;
-        let x1203 = x1202 - x1191;
-        let x1204 = x13 * x1203 + (x1190 + x757);
-        let x1205 = x19 * x1204;
-        let x1206 = x759 * x0;
-        let x1207 = x1206 - x1205;
-        let x1208 = -(x20 * x900);
-        let x1209 = x811 * x332;
-        let x1210 = (x798 * x9 - x4 * x797) * x796;
-        let x1211 = (x793 * x9 + x4 * x795) * x791;
-        let x1212 = 0.5 * x1211 - 0.5 * x1210;
-        let x1213 = x1065 * x637;
-        let x1214 = x709 / f64::powf(x173, 1.5) + x723 / f64::sqrt(x173);
-        let x1215 = -x1174 - x1176;
-        let x1216 = x12 * x1215;
-        let x1217 = x13 * x1215;
-        let x1218 = 2.0 * (x1009 * x701) + 2.0 * x901 + 2.0 * (x1169 * x189)
-            + 2.0 * (x1170 * x190) + 2.0 * x893 + 2.0 * (x1008 * x702);
-        let x1219 = x637 * x1029 + x276 * x900;
-        let x1220 = -(x973 * x637);
-        let x1221 = x1203 * x12 - x1193;
-        let x1222 = x0 * x1204 + x760;
-        let x1223 = x838 / f64::powf(x173, 1.5) + x819 / f64::sqrt(x173);
-        let x1224 = x637 * x318 / f64::sqrt(x173);
-        let x1225 = x22 * x1222 + x1221 * x29 + x689 * x2;
-        let x1226 = x1222 * x29 - thF_dot * x189 * x2 - x22 * x1221;
-        let x1227 = x637 * x2;
-        let x1228 = -x894 - x902;
-        let x1229 = theta_dot * x1047 + x74 * x418;
-        let x1230 = x854 / f64::sqrt(x173) + x849 / f64::powf(x173, 1.5);
-        let x1231 = x704 * x93;
-        let x1232 = x774 * x45;
-        let x1233 = x856 * x105;
-        let x1234 = x313 - x130;
-        let x1235 = 3.0 * (1.0 / f64::powf(x173, 1.5))
-            + 3.0 * (x172 / f64::powf(x173, 2.5));
-        let x1236 = x1235 * x893;
-        let x1237 = x901 / f64::powf(x173, 1.5);
-        let x1238 = -(x888 * theta_dot);
-        let x1239 = x79 * x418 + x897 * x105;
-        let x1240 = x332 * x856;
-        let x1241 = x637 * x896;
-        let x1242 = -(x330 * x637);
-        let x1243 = x913 / f64::powf(x173, 1.5);
-        let x1244 = -(x638 * x70);
-        let x1245 = x1244 / f64::powf(x173, 2.5);
-        let x1246 = -(x900 * x70);
-        let x1247 = rF
+                * (x22 * (x1170 - x1009 * thF_dot) - delta_dot * x332
+                    + (x1171 + x1010 * thF_dot) * x29);
+        let x1198 = x901 * x55;
+        let x1199 = x1198 + x332 * x685;
+        let x1200 = x1199 + x1167;
+        let x1201 = x637 * x603;
+        let x1202 = x656 / x174 + x639 / x889;
+        let x1203 = x959 * x9;
+        let x1204 = x1203 - x1192;
+        let x1205 = x13 * x1204 + (x1191 + x757);
+        let x1206 = x19 * x1205;
+        let x1207 = x759 * x0;
+        let x1208 = x1207 - x1206;
+        let x1209 = -(x20 * x901);
+        let x1210 = x811 * x332;
+        let x1211 = (x798 * x9 - x4 * x797) * x796;
+        let x1212 = (x793 * x9 + x4 * x795) * x791;
+        let x1213 = 0.5 * x1212 - 0.5 * x1211;
+        let x1214 = x1066 * x637;
+        let x1215 = x709 / x889 + x723 / x174;
+        let x1216 = -x1175 - x1177;
+        let x1217 = x12 * x1216;
+        let x1218 = x13 * x1216;
+        let x1219 = 2.0 * (x1010 * x701) + 2.0 * x902 + 2.0 * (x1170 * x189)
+            + 2.0 * (x1171 * x190) + 2.0 * x894 + 2.0 * (x1009 * x702);
+        let x1220 = x637 * x1030 + x276 * x901;
+        let x1221 = -(x974 * x637);
+        let x1222 = x1204 * x12 - x1194;
+        let x1223 = x0 * x1205 + x760;
+        let x1224 = x838 / x889 + x819 / x174;
+        let x1225 = x637 * x318 / x174;
+        let x1226 = x22 * x1223 + x1222 * x29 + x689 * x2;
+        let x1227 = x1223 * x29 - thF_dot * x189 * x2 - x22 * x1222;
+        let x1228 = x637 * x2;
+        let x1229 = -x895 - x903;
+        let x1230 = theta_dot * x1048 + x74 * x418;
+        let x1231 = x854 / x174 + x849 / x889;
+        let x1232 = x704 * x93;
+        let x1233 = x774 * x45;
+        let x1234 = x856 * x105;
+        let x1235 = x313 - x130;
+        let x1236 = f64::powf(x173, 2.5);
+        let x1237 = 3.0 * (1.0 / x889) + 3.0 * (x172 / x1236);
+        let x1238 = x1237 * x894;
+        let x1239 = x902 / x889;
+        let x1240 = -(x888 * theta_dot);
+        let x1241 = x79 * x418 + x898 * x105;
+        let x1242 = x332 * x856;
+        let x1243 = x637 * x897;
+        let x1244 = -(x330 * x637);
+        let x1245 = x914 / x889;
+        let x1246 = -(x638 * x70);
+        let x1247 = x1246 / x1236;
+        let x1248 = -(x901 * x70);
+        let x1249 = rF
             * (x93
-                * ((x907 - x906) / f64::sqrt(x173)
-                    + 3.0 * (x332 * x916 / f64::powf(x173, 1.5))
-                    + (x1242 / f64::powf(x173, 1.5) + (x1243 + 3.0 * x1245) * x332
-                        + x1246 / f64::powf(x173, 1.5)) * x93) + x1246 / f64::sqrt(x173)
-                + x1242 / f64::sqrt(x173) + x913 * x332 / f64::sqrt(x173)) + x100 * x900;
-        let x1248 = x20 * x19;
-        let x1249 = x0 * x28;
-        let x1250 = x18 * x29 + x349 * x158;
-        let x1251 = x349 * x154 - x22 * x18;
-        let x1252 = x158 * x269 + x354 * x29;
-        let x1253 = x154 * x269 - x22 * x354;
-        let x1254 = x19 * x55;
-        let x1255 = x0 * x47;
-        let x1256 = mF
-            * (x1250 * x50 + x31 * x1252 - x19 * (x349 * x55 - x20 * x269) + x52 * x1251
-                + x30 * x1253)
-            + (x349 * (x1255 - x1254) + x25 * x354 + (x1248 + x1249) * x269 + x18 * x49)
+                * ((x908 - x907) / x174 + 3.0 * (x332 * x917 / x889)
+                    + (x1244 / x889 + (x1245 + 3.0 * x1247) * x332 + x1248 / x889) * x93)
+                + x1248 / x174 + x1244 / x174 + x914 * x332 / x174) + x100 * x901;
+        let x1250 = x20 * x19;
+        let x1251 = x0 * x28;
+        let x1252 = x18 * x29 + x349 * x158;
+        let x1253 = x349 * x154 - x22 * x18;
+        let x1254 = x158 * x269 + x354 * x29;
+        let x1255 = x154 * x269 - x22 * x354;
+        let x1256 = x19 * x55;
+        let x1257 = x0 * x47;
+        let x1258 = mF
+            * (x1252 * x50 + x31 * x1254 - x19 * (x349 * x55 - x20 * x269) + x52 * x1253
+                + x30 * x1255)
+            + (x349 * (x1257 - x1256) + x25 * x354 + (x1250 + x1251) * x269 + x18 * x49)
                 * mH;
-        let x1257 = -x123 - x124;
-        let x1258 = x1257 * x1;
-        let x1259 = rR * x19 * x1047;
-        let x1260 = x888 - x138;
-        let x1261 = x1 * (x100 * x67 - x1260 * x0) - x1259;
-        let x1262 = rR * x896;
-        let x1263 = x1060 * x100 + x1262;
-        let x1264 = rR * x1048;
-        let x1265 = x1264 - x1260 * x91;
-        let x1266 = x1263 * x29 + x22 * x1265;
-        let x1267 = x1265 * x29 - x22 * x1263;
-        let x1268 = x888 - x129;
-        let x1269 = (x73 * x67 - x0 * x1268) * x1 - x1259;
-        let x1270 = x1060 * x73 + x1262;
-        let x1271 = x98 * x0 - x19 * x86;
-        let x1272 = x1264 - x1268 * x91;
-        let x1273 = ((rR * (x9 * x16 - x4 * x11) - x120 * x16 + x11 * x118) * x5
-            - x1258 * x3) * mB
+        let x1259 = -x123 - x124;
+        let x1260 = x1259 * x1;
+        let x1261 = rR * x19 * x1048;
+        let x1262 = x888 - x138;
+        let x1263 = x1 * (x100 * x67 - x1262 * x0) - x1261;
+        let x1264 = rR * x897;
+        let x1265 = x1061 * x100 + x1264;
+        let x1266 = rR * x1049;
+        let x1267 = x1266 - x1262 * x91;
+        let x1268 = x1265 * x29 + x22 * x1267;
+        let x1269 = x1267 * x29 - x22 * x1265;
+        let x1270 = x888 - x129;
+        let x1271 = (x73 * x67 - x0 * x1270) * x1 - x1261;
+        let x1272 = x1061 * x73 + x1264;
+        let x1273 = x98 * x0 - x19 * x86;
+        let x1274 = x1266 - x1270 * x91;
+        let x1275 = ((rR * (x9 * x16 - x4 * x11) - x120 * x16 + x11 * x118) * x5
+            - x1260 * x3) * mB
             + mF
-                * (x31 * x1266 - x111 * x651 - x1261 * x20 + x108 * x1251 + x30 * x1267
-                    + x1250 * x112)
-            + mH * (x18 * x94 - x20 * x1269 + x1270 * x25 + x349 * x1271 + x1272 * x28);
-        let x1274 = x76 + x0 * x1155;
-        let x1275 = x135 * x143 + x1056 * x29;
-        let x1276 = x22 * x1056 - x141 * x135;
-        let x1277 = x110 + x1056 * x0;
-        let x1278 = (x19 * (x73 * (x18 * x74 - x25 * x135) - x349 * x136 + x28 * x1155)
-            - x20 * x1274) * mH - x3 * x1154
+                * (x31 * x1268 - x111 * x651 - x1263 * x20 + x108 * x1253 + x30 * x1269
+                    + x1252 * x112)
+            + mH * (x18 * x94 - x20 * x1271 + x1272 * x25 + x349 * x1273 + x1274 * x28);
+        let x1276 = x76 + x0 * x1156;
+        let x1277 = x135 * x143 + x1057 * x29;
+        let x1278 = x22 * x1057 - x141 * x135;
+        let x1279 = x110 + x1057 * x0;
+        let x1280 = (x19 * (x73 * (x18 * x74 - x25 * x135) - x349 * x136 + x28 * x1156)
+            - x20 * x1276) * mH - x3 * x1155
             + (x19
-                * (x1275 * x30 + x31 * x1276 + x1250 * x142 - x349 * x140 + x144 * x1251)
-                - x20 * x1277) * mF;
-        let x1279 = x11 * xB;
-        let x1280 = x16 * x114;
-        let x1281 = x0 * x163 - x161 * x19;
-        let x1282 = mB * (x1280 - x1279)
-            + mF * (x157 * x1251 + x1250 * x159 - x150 * x651)
-            + (x18 * x164 + x349 * x1281) * mH;
-        let x1283 = -(x651 * x168);
-        let x1284 = x1060 * x93;
-        let x1285 = x1284 / f64::sqrt(x173);
-        let x1286 = mB
-            * (x1258 * x45
+                * (x1277 * x30 + x31 * x1278 + x1252 * x142 - x349 * x140 + x144 * x1253)
+                - x20 * x1279) * mF;
+        let x1281 = x11 * xB;
+        let x1282 = x16 * x114;
+        let x1283 = x0 * x163 - x161 * x19;
+        let x1284 = mB * (x1282 - x1281)
+            + mF * (x157 * x1253 + x1252 * x159 - x150 * x651)
+            + (x18 * x164 + x349 * x1283) * mH;
+        let x1285 = -(x651 * x168);
+        let x1286 = x1061 * x93;
+        let x1287 = x1286 / x174;
+        let x1288 = mB
+            * (x1260 * x45
                 + x5 * (x120 * x268 + rR * (x41 * x9 - x4 * x37) + x118 * x37))
-            + (x1269 * x55 + x1271 * x269 + x1270 * x49 + x1272 * x47 + x94 * x354) * mH
+            + (x1271 * x55 + x1273 * x269 + x1272 * x49 + x1274 * x47 + x94 * x354) * mH
             + mF
-                * (x112 * x1252 + x1261 * x55 + x50 * x1266 + x52 * x1267 - x111 * x851
-                    + x108 * x1253);
-        let x1287 = (x19
-            * (x142 * x1252 + x144 * x1253 - x269 * x140 + x50 * x1276 + x52 * x1275)
-            + x1277 * x55) * mF
-            + (x1274 * x55
-                + x19 * (x73 * (x74 * x354 - x49 * x135) - x136 * x269 + x1155 * x47))
-                * mH + x1154 * x45;
-        let x1288 = xB * x37;
-        let x1289 = (-x1288 - x268 * x114) * mB + (x1281 * x269 + x354 * x164) * mH
-            + mF * (x1253 * x157 - x150 * x851 + x159 * x1252);
-        let x1290 = -(x168 * x851);
-        let x1291 = x67 * x216 + x602 * x211;
-        let x1292 = 2.0 * x195 + x196 - x237;
-        let x1293 = x67 * x211;
-        let x1294 = x22 * x602 + x67 * x29;
-        let x1295 = x602 * x29 - x22 * x67;
-        let x1296 = 2.0 * (x1294 * x189) + 2.0 * (x190 * x1295);
-        let x1297 = x74 * x216 - x211 * x321;
-        let x1298 = 2.0 * x198 - x243 + x199;
-        let x1299 = x246 * x1295 + x1294 * x248;
-        let x1300 = x359 * x135;
-        let x1301 = x74 * x211;
-        let x1302 = x1301 - x227 * x321;
-        let x1303 = x22 * x74 + x321 * x29;
-        let x1304 = x770 - x22 * x321;
-        let x1305 = x189 * x1304 - x190 * x1303;
-        let x1306 = (x1297 * x74 + x9 * x1298 + x1299 * IFxx - x289 + x4 * x1292
-            + x67 * x241 + mB * (x126 * x1257 + x1016)) * x1 + x1300 * x219 + x70 * x1302
-            + IFxx * x1305
+                * (x112 * x1254 + x1263 * x55 + x50 * x1268 + x52 * x1269 - x111 * x851
+                    + x108 * x1255);
+        let x1289 = (x19
+            * (x142 * x1254 + x144 * x1255 - x269 * x140 + x50 * x1278 + x52 * x1277)
+            + x1279 * x55) * mF
+            + (x1276 * x55
+                + x19 * (x73 * (x74 * x354 - x49 * x135) - x136 * x269 + x1156 * x47))
+                * mH + x1155 * x45;
+        let x1290 = xB * x37;
+        let x1291 = (-x1290 - x268 * x114) * mB + (x1283 * x269 + x354 * x164) * mH
+            + mF * (x1255 * x157 - x150 * x851 + x159 * x1254);
+        let x1292 = -(x168 * x851);
+        let x1293 = x67 * x216 + x602 * x211;
+        let x1294 = 2.0 * x195 + x196 - x237;
+        let x1295 = x67 * x211;
+        let x1296 = x22 * x602 + x67 * x29;
+        let x1297 = x602 * x29 - x22 * x67;
+        let x1298 = 2.0 * (x1296 * x189) + 2.0 * (x190 * x1297);
+        let x1299 = x74 * x216 - x211 * x321;
+        let x1300 = 2.0 * x198 - x243 + x199;
+        let x1301 = x246 * x1297 + x1296 * x248;
+        let x1302 = x359 * x135;
+        let x1303 = x74 * x211;
+        let x1304 = x1303 - x227 * x321;
+        let x1305 = x22 * x74 + x321 * x29;
+        let x1306 = x770 - x22 * x321;
+        let x1307 = x189 * x1306 - x190 * x1305;
+        let x1308 = (x1299 * x74 + x9 * x1300 + x1301 * IFxx - x289 + x4 * x1294
+            + x67 * x241 + mB * (x126 * x1259 + x1017)) * x1 + x1302 * x219 + x70 * x1304
+            + IFxx * x1307
             + mF
-                * (x19 * (x142 * x1266 + x112 * x1276 + x144 * x1267 + x108 * x1275)
-                    + x1261 * x140 + x111 * x1277)
-            + (x137 * x1269 + x86 * x1274
-                + (x73 * (x1270 * x74 - x94 * x135) + x98 * x1155 + x133 * x1272) * x19)
+                * (x19 * (x142 * x1268 + x112 * x1278 + x144 * x1269 + x108 * x1277)
+                    + x1263 * x140 + x111 * x1279)
+            + (x137 * x1271 + x86 * x1276
+                + (x73 * (x1272 * x74 - x94 * x135) + x98 * x1156 + x133 * x1274) * x19)
                 * mH;
-        let x1307 = x1295 * x29 + x22 * x1294;
-        let x1308 = x601 * rR * x5 + (IFxx * x1307 + x1293 + x602 * x301) * x91
-            + (x163 * x1272 + x161 * x1269 + x1270 * x164) * mH
-            + (x1261 * x150 + x1267 * x157 + x159 * x1266) * mF;
-        let x1309 = x1294 * x29 - x22 * x1295;
-        let x1310 = (x1309 * IFxx + x1291) * x1 + x1261 * x167 + x1269 * x166;
-        let x1311 = -(x1060 * IFyy);
-        let x1312 = x93 * x269;
-        let x1313 = -(x19 * x74);
-        let x1314 = x1313 * x93;
-        let x1315 = (x1296 - 2.0 * x1314) * x1;
-        let x1316 = x189 * x1252 - x93 * x851
-            + (x52 * x1295 - x1313 * x55 + x1294 * x50) * x1 + x190 * x1253;
-        let x1317 = x1284 * x274 / f64::sqrt(x173)
+        let x1309 = x1297 * x29 + x22 * x1296;
+        let x1310 = x601 * rR * x5 + (IFxx * x1309 + x1295 + x602 * x301) * x91
+            + (x163 * x1274 + x161 * x1271 + x1272 * x164) * mH
+            + (x1263 * x150 + x1269 * x157 + x159 * x1268) * mF;
+        let x1311 = x1296 * x29 - x22 * x1297;
+        let x1312 = (x1311 * IFxx + x1293) * x1 + x1263 * x167 + x1271 * x166;
+        let x1313 = -(x1061 * IFyy);
+        let x1314 = x93 * x269;
+        let x1315 = -(x19 * x74);
+        let x1316 = x1315 * x93;
+        let x1317 = (x1298 - 2.0 * x1316) * x1;
+        let x1318 = x189 * x1254 - x93 * x851
+            + (x52 * x1297 - x1315 * x55 + x1296 * x50) * x1 + x190 * x1255;
+        let x1319 = x1286 * x274 / x174
             - rF
-                * (((2.0 * (x278 * x93) - x276 * x55) * x629 - x276 * x1312) * x19
-                    + x1315 * x277 + x1316 * x173) + x947;
-        let x1318 = x349 * x93;
-        let x1319 = (x30 * x1295 + x31 * x1294 + x20 * x1313) * x1 - x651 * x93
-            + x1250 * x189 + x190 * x1251;
-        let x1320 = x280 * x1284 / f64::sqrt(x173)
+                * (((2.0 * (x278 * x93) - x276 * x55) * x629 - x276 * x1314) * x19
+                    + x1317 * x277 + x1318 * x173) + x948;
+        let x1320 = x349 * x93;
+        let x1321 = (x30 * x1297 + x31 * x1296 + x20 * x1315) * x1 - x651 * x93
+            + x1252 * x189 + x190 * x1253;
+        let x1322 = x280 * x1286 / x174
             - rF
-                * (x19 * ((-x276 * x20 - 2.0 * (x284 * x93)) * x629 + x276 * x1318)
-                    - x1319 * x173 - x281 * x1315) + x351;
-        let x1321 = -x225 - x226;
-        let x1322 = x1321 + x219;
-        let x1323 = x19
-            * ((x160 * x1274 + x163 * x1155 - x136 * x164) * mH
-                + IFxx * (x22 * x1304 - x1303 * x29) + x1301 + x1322 * x321
-                + mF * (x1275 * x157 + x1277 * x149 + x159 * x1276));
-        let x1324 = (x22 * x1303 + x1304 * x29) * IFxx + x1274 * x166 + x1297
-            + x1277 * x167;
-        let x1325 = x19 * IFyy;
-        let x1326 = x1325 * x135;
-        let x1327 = x50 * x1304 + x248 * x1252 + x246 * x1253
-            + (x269 * x230 + x135 * x55) * x19 - x52 * x1303;
-        let x1328 = (x1313 * x230 + x1299) * x1 + x1300 + x1305;
-        let x1329 = (f64::sqrt(x173) * x603 + x1314 * x317 / f64::sqrt(x173)) * x3
+                * (x19 * ((-x276 * x20 - 2.0 * (x284 * x93)) * x629 + x276 * x1320)
+                    - x1321 * x173 - x281 * x1317) + x351;
+        let x1323 = -x225 - x226;
+        let x1324 = x1323 + x219;
+        let x1325 = x19
+            * ((x160 * x1276 + x163 * x1156 - x136 * x164) * mH
+                + IFxx * (x22 * x1306 - x1305 * x29) + x1303 + x1324 * x321
+                + mF * (x1277 * x157 + x1279 * x149 + x159 * x1278));
+        let x1326 = (x22 * x1305 + x1306 * x29) * IFxx + x1276 * x166 + x1299
+            + x1279 * x167;
+        let x1327 = x19 * IFyy;
+        let x1328 = x1327 * x135;
+        let x1329 = x50 * x1306 + x248 * x1254 + x246 * x1255
+            + (x269 * x230 + x135 * x55) * x19 - x52 * x1305;
+        let x1330 = (x1315 * x230 + x1301) * x1 + x1302 + x1307;
+        let x1331 = (x174 * x603 + x1316 * x317 / x174) * x3
             - rF
-                * (x19 * ((2.0 * (x93 * x311) - x310 * x55) * x629 - x1312 * x310)
-                    + x1327 * x173 + x1328 * x277);
-        let x1330 = x1250 * x248 - x30 * x1303 + x31 * x1304
-            + (x349 * x230 - x20 * x135) * x19 + x246 * x1251;
-        let x1331 = (f64::sqrt(x173) * x1057 + x325 * x1314 / f64::sqrt(x173)) * x45
+                * (x19 * ((2.0 * (x93 * x311) - x310 * x55) * x629 - x1314 * x310)
+                    + x1329 * x173 + x1330 * x277);
+        let x1332 = x1252 * x248 - x30 * x1305 + x31 * x1306
+            + (x349 * x230 - x20 * x135) * x19 + x246 * x1253;
+        let x1333 = (x174 * x1058 + x325 * x1316 / x174) * x45
             - rF
-                * ((x310 * x1318 + (-2.0 * (x327 * x93) - x20 * x310) * x629) * x19
-                    - x1330 * x173 - x1328 * x281);
-        let x1332 = x348 * x629;
-        let x1333 = x1307 - x602;
-        let x1334 = rF * x19;
-        let x1335 = x933 + rR * x16 + x152 * x934;
-        let x1336 = x350 * x1284 / f64::sqrt(x173)
-            - (((x1333 * x55 + 2.0 * x1064) * x1 - x348 * x269) * x93 - x1332 * x55)
-                * x1334 + f64::sqrt(x173) * x1335;
-        let x1337 = x272 * x152 - rR * x268 + x270;
-        let x1338 = x355 * x1284 / f64::sqrt(x173)
-            - ((x349 * x348 + (x20 * x1333 + 2.0 * (x629 * x2)) * x1) * x93
-                - x1332 * x20) * x1334 + x1337 * f64::sqrt(x173);
-        let x1339 = x100 * x321 - x138;
-        let x1340 = x888 + x1339;
-        let x1341 = (-x135 * x93 / f64::sqrt(x173) - x1060 * x74 * x889) * x1334;
-        let x1342 = (x1340 + x1341) * x1;
-        let x1343 = x100 * x19;
-        let x1344 = x9 * x368 - x4 * x369;
-        let x1345 = x1343 * (x281 * x629 / f64::sqrt(x173) - x349 * f64::sqrt(x173))
+                * ((x310 * x1320 + (-2.0 * (x327 * x93) - x20 * x310) * x629) * x19
+                    - x1332 * x173 - x1330 * x281);
+        let x1334 = x348 * x629;
+        let x1335 = x1309 - x602;
+        let x1336 = rF * x19;
+        let x1337 = x934 + rR * x16 + x152 * x935;
+        let x1338 = x350 * x1286 / x174
+            - (((x1335 * x55 + 2.0 * x1065) * x1 - x348 * x269) * x93 - x1334 * x55)
+                * x1336 + x174 * x1337;
+        let x1339 = x272 * x152 - rR * x268 + x270;
+        let x1340 = x355 * x1286 / x174
+            - ((x349 * x348 + (x20 * x1335 + 2.0 * (x629 * x2)) * x1) * x93
+                - x1334 * x20) * x1336 + x1339 * x174;
+        let x1341 = x100 * x321 - x138;
+        let x1342 = x888 + x1341;
+        let x1343 = (-x135 * x93 / x174 - x1061 * x74 * x890) * x1336;
+        let x1344 = (x1342 + x1343) * x1;
+        let x1345 = x100 * x19;
+        let x1346 = x9 * x368 - x4 * x369;
+        let x1347 = x1345 * (x281 * x629 / x174 - x349 * x174)
             - rF
-                * (x19 * ((2.0 * (x789 * x93) - x370 * x55) * x629 - x1312 * x370)
-                    + x354 * x367 + x1344 * x277);
-        let x1346 = x1343 * (x629 * x277 / f64::sqrt(x173) - f64::sqrt(x173) * x269)
+                * (x19 * ((2.0 * (x789 * x93) - x370 * x55) * x629 - x1314 * x370)
+                    + x354 * x367 + x1346 * x277);
+        let x1348 = x1345 * (x629 * x277 / x174 - x174 * x269)
             - rF
-                * (x19 * (x629 * (-2.0 * (x882 * x93) - x20 * x370) + x370 * x1318)
-                    - x18 * x367 - x281 * x1344);
-        let x1347 = x19 * x889 * x70 - x253 / f64::sqrt(x173);
-        let x1348 = rF * x1347;
-        let x1349 = x1348 - x1343;
-        let x1350 = x629 * x1349;
-        let x1351 = rF * x851;
-        let x1352 = -(rF * x651);
-        let x1353 = x411 * x378 + x408;
-        let x1354 = x114 * x1353 - x393 * (x9 * x379 + x4 * x383) + x507 * x383
+                * (x19 * (x629 * (-2.0 * (x882 * x93) - x20 * x370) + x370 * x1320)
+                    - x18 * x367 - x281 * x1346);
+        let x1349 = x19 * x890 * x70 - x253 / x174;
+        let x1350 = rF * x1349;
+        let x1351 = x1350 - x1345;
+        let x1352 = x629 * x1351;
+        let x1353 = rF * x851;
+        let x1354 = -(rF * x651);
+        let x1355 = x411 * x378 + x408;
+        let x1356 = x114 * x1355 - x393 * (x9 * x379 + x4 * x383) + x507 * x383
             + xB * x414 + x379 * x503;
-        let x1355 = x379 * xB;
-        let x1356 = x1355 - x383 * x114;
-        let x1357 = psi_dot * x194;
-        let x1358 = (x9 * x1357 - x1074) * x392 - x1356 * x383;
-        let x1359 = x1358 + x504;
-        let x1360 = (x672 + x4 * x1357) * x392 - x508 + x1356 * x379;
-        let x1361 = x379 * x60 - rR * x383;
-        let x1362 = x445 - x444;
-        let x1363 = x1361 - x1362 * x63;
-        let x1364 = x392 * x1047;
-        let x1365 = x0 * x1364;
-        let x1366 = x19 * x1363 + x1365;
-        let x1367 = x896 * x392;
-        let x1368 = x1362 * x19;
-        let x1369 = x1367 + x1368 * x73;
-        let x1370 = x415 + x12 * x1353;
-        let x1371 = x0 * x1370 - x777 * x1362;
-        let x1372 = x13 * x1353;
-        let x1373 = x436 - x1372;
-        let x1374 = x385;
-        let x1375 = x414 * x60 + rR * x1353;
-        let x1376 = x1375 - delta_dot * x1364 - x400 * x1362;
-        let x1377 = x672 - x422;
-        let x1378 = x13 * x1377 - x1076;
-        let x1379 = x1378 * x392 + delta_dot * x1361;
-        let x1380 = x446 * x1366 - x403 * x1369 - x1371 * x63 + x73 * x1373
-            + x1374 * x447 + x0 * x1376 - x19 * x1379;
-        let x1381 = x19 * x1364;
-        let x1382 = x1374 * x73;
-        let x1383 = x1382 - x1381 + x0 * x1363;
-        let x1384 = (x1085 + x12 * x1377) * x392;
-        let x1385 = x19 * x1370 + x1362 * x765;
-        let x1386 = x1383 * x403 - x1366 * x390 + x1384 + x73 * x1385
-            + x1362 * (x0 * x455 + x19 * x447);
-        let x1387 = x466 * x0 - x449 * x19;
-        let x1388 = x19 * x1376 - x1385 * x63 - x1374 * x455 - x1383 * x446 + x1379 * x0
-            + x390 * x1369;
-        let x1389 = x1374 * x100;
-        let x1390 = x1361 - x1362 * x105;
-        let x1391 = x1389 + x0 * x1390 - x1381;
-        let x1392 = x1362 * x0;
-        let x1393 = x22 * x1392 + x1374 * x29;
-        let x1394 = x1367 + x1368 * x100;
-        let x1395 = x19 * x1390 + x1365;
-        let x1396 = x1394 * x29 + x22 * x1395;
-        let x1397 = x1384 + x100 * x1385;
-        let x1398 = x19 * x1375 + x1361 * x765 + (x1378 * x0 - x777 * x1047) * x392
-            - x1385 * x105;
-        let x1399 = x1396 * x390 - x1391 * x482 - x1393 * x479 - x1368 * x473
-            - x22 * x1397 + x1398 * x29;
-        let x1400 = x1395 * x29 - x22 * x1394;
-        let x1401 = x1392 * x29 - x1374 * x22;
-        let x1402 = x1400 * x482 - x1396 * x485 - x777 * x1361
-            - x392 * (x1047 * x765 + x1378 * x19) - x1371 * x105 + x1375 * x0
-            + x100 * x1373 - x473 * x1401 + x486 * x1393;
-        let x1403 = x29 * x1397 + x479 * x1401 + x22 * x1398 + x486 * x1368
-            + x485 * x1391 - x1400 * x390;
-        let x1404 = x1374 * x216;
-        let x1405 = x1392 * x211 + x1404;
-        let x1406 = x1405 * x403;
-        let x1407 = -(x1385 * IFyy);
-        let x1408 = x1392 * x582;
-        let x1409 = x1385 * IHyy;
-        let x1410 = x1374 * x592;
-        let x1411 = x1392 * x227 + x1374 * x211;
-        let x1412 = x446 * x1411;
-        let x1413 = x1406 - x1407 + x1408 + x1409 - x1410 - x1412;
-        let x1414 = x1358 - x500;
-        let x1415 = x0 * IHyy * x390;
-        let x1416 = x1415 + x19 * x605;
-        let x1417 = x1373 * x216;
-        let x1418 = x1371 * x211;
-        let x1419 = x1362 * x1416 + x1417 + x1418 - x1411 * x390;
-        let x1420 = -x530 - x531;
-        let x1421 = IRxx * (thR_dot * x1420 + x533 + x201 * x1353);
-        let x1422 = x1420 * x556;
-        let x1423 = x383 * IBxx;
-        let x1424 = IBxz * x1353 + x562 - IBzz * x414 - x388 * (x1423 - x560 + x558);
-        let x1425 = IBxx * x1353;
-        let x1426 = IBzz * x379;
-        let x1427 = x1426 + x520;
-        let x1428 = x388 * (x1427 - x518);
-        let x1429 = x540 * x1015;
-        let x1430 = x554;
-        let x1431 = x557 + (x203 * x1353 - x550 - x1430 * thR_dot) * IRxx + x1430 * x538;
-        let x1432 = x579 - x580 - x581;
-        let x1433 = (x211 * x1373 + x1368 * x1432)
-            + ((x1405 - x1374 * IHyy) * x390 + x1371 * x227);
-        let x1434 = x1368 * x485;
-        let x1435 = x1401 * x564;
-        let x1436 = thF_dot * x1392;
-        let x1437 = x1371 - x1374 * thF_dot;
-        let x1438 = IFyy * (x1435 - x1434)
-            + ((x1436 + x1373) * x29 + x22 * x1437 + x1434 - x1435) * IFxx;
-        let x1439 = x559 * x383;
-        let x1440 = (-x1423 - x558) * x383;
-        let x1441 = x1368 * x482;
-        let x1442 = x1393 * x564;
-        let x1443 = (x1441 - x1442) * IFyy
-            + IFxx * (x1437 * x29 - x1441 + x1442 + x22 * (x1372 - x436 - x1436));
-        let x1444 = g * x629 * x168;
-        let x1445 = x629 * x765;
-        let x1446 = x856 * x19;
-        let x1447 = x1445 + x1446;
-        let x1448 = -(x93 * x1447);
-        let x1449 = x1060 * x637;
-        let x1450 = x1448 / f64::sqrt(x173) - x889 * x1449;
-        let x1451 = -(x348 * x1447);
-        let x1452 = thF_dot * x1;
-        let x1453 = x856 * x0;
-        let x1454 = x1453 - x1194;
-        let x1455 = x631 * x29 + x1452 * x1295 + x22 * x1454;
-        let x1456 = x1454 * x29 - x1294 * x1452 - x22 * x631;
-        let x1457 = x0 * (x1307 * x898 - x1445 - x1446)
+        let x1357 = x379 * xB;
+        let x1358 = x1357 - x383 * x114;
+        let x1359 = psi_dot * x194;
+        let x1360 = (x9 * x1359 - x1075) * x392 - x1358 * x383;
+        let x1361 = x1360 + x504;
+        let x1362 = (x672 + x4 * x1359) * x392 - x508 + x1358 * x379;
+        let x1363 = x379 * x60 - rR * x383;
+        let x1364 = x445 - x444;
+        let x1365 = x1363 - x1364 * x63;
+        let x1366 = x392 * x1048;
+        let x1367 = x0 * x1366;
+        let x1368 = x19 * x1365 + x1367;
+        let x1369 = x897 * x392;
+        let x1370 = x1364 * x19;
+        let x1371 = x1369 + x1370 * x73;
+        let x1372 = x415 + x12 * x1355;
+        let x1373 = x0 * x1372 - x777 * x1364;
+        let x1374 = x13 * x1355;
+        let x1375 = x436 - x1374;
+        let x1376 = x385;
+        let x1377 = x414 * x60 + rR * x1355;
+        let x1378 = x1377 - delta_dot * x1366 - x400 * x1364;
+        let x1379 = x672 - x422;
+        let x1380 = x13 * x1379 - x1077;
+        let x1381 = x1380 * x392 + delta_dot * x1363;
+        let x1382 = x446 * x1368 - x403 * x1371 - x1373 * x63 + x73 * x1375
+            + x1376 * x447 + x0 * x1378 - x19 * x1381;
+        let x1383 = x19 * x1366;
+        let x1384 = x1376 * x73;
+        let x1385 = x1384 - x1383 + x0 * x1365;
+        let x1386 = (x1086 + x12 * x1379) * x392;
+        let x1387 = x19 * x1372 + x1364 * x765;
+        let x1388 = x1385 * x403 - x1368 * x390 + x1386 + x73 * x1387
+            + x1364 * (x0 * x455 + x19 * x447);
+        let x1389 = x466 * x0 - x449 * x19;
+        let x1390 = x19 * x1378 - x1387 * x63 - x1376 * x455 - x1385 * x446 + x1381 * x0
+            + x390 * x1371;
+        let x1391 = x1376 * x100;
+        let x1392 = x1363 - x1364 * x105;
+        let x1393 = x1391 + x0 * x1392 - x1383;
+        let x1394 = x1364 * x0;
+        let x1395 = x22 * x1394 + x1376 * x29;
+        let x1396 = x1369 + x1370 * x100;
+        let x1397 = x19 * x1392 + x1367;
+        let x1398 = x1396 * x29 + x22 * x1397;
+        let x1399 = x1386 + x100 * x1387;
+        let x1400 = x19 * x1377 + x1363 * x765 + (x1380 * x0 - x777 * x1048) * x392
+            - x1387 * x105;
+        let x1401 = x1398 * x390 - x1393 * x482 - x1395 * x479 - x1370 * x473
+            - x22 * x1399 + x1400 * x29;
+        let x1402 = x1397 * x29 - x22 * x1396;
+        let x1403 = x1394 * x29 - x1376 * x22;
+        let x1404 = x1402 * x482 - x1398 * x485 - x777 * x1363
+            - x392 * (x1048 * x765 + x1380 * x19) - x1373 * x105 + x1377 * x0
+            + x100 * x1375 - x473 * x1403 + x486 * x1395;
+        let x1405 = x29 * x1399 + x479 * x1403 + x22 * x1400 + x486 * x1370
+            + x485 * x1393 - x1402 * x390;
+        let x1406 = x1376 * x216;
+        let x1407 = x1394 * x211 + x1406;
+        let x1408 = x1407 * x403;
+        let x1409 = -(x1387 * IFyy);
+        let x1410 = x1394 * x582;
+        let x1411 = x1387 * IHyy;
+        let x1412 = x1376 * x592;
+        let x1413 = x1394 * x227 + x1376 * x211;
+        let x1414 = x446 * x1413;
+        let x1415 = x1408 - x1409 + x1410 + x1411 - x1412 - x1414;
+        let x1416 = x1360 - x500;
+        let x1417 = x0 * IHyy * x390;
+        let x1418 = x1417 + x19 * x605;
+        let x1419 = x1375 * x216;
+        let x1420 = x1373 * x211;
+        let x1421 = x1364 * x1418 + x1419 + x1420 - x1413 * x390;
+        let x1422 = -x530 - x531;
+        let x1423 = IRxx * (thR_dot * x1422 + x533 + x201 * x1355);
+        let x1424 = x1422 * x556;
+        let x1425 = x383 * IBxx;
+        let x1426 = IBxz * x1355 + x562 - IBzz * x414 - x388 * (x1425 - x560 + x558);
+        let x1427 = IBxx * x1355;
+        let x1428 = IBzz * x379;
+        let x1429 = x1428 + x520;
+        let x1430 = x388 * (x1429 - x518);
+        let x1431 = x540 * x1016;
+        let x1432 = x554;
+        let x1433 = x557 + (x203 * x1355 - x550 - x1432 * thR_dot) * IRxx + x1432 * x538;
+        let x1434 = x579 - x580 - x581;
+        let x1435 = (x211 * x1375 + x1370 * x1434)
+            + ((x1407 - x1376 * IHyy) * x390 + x1373 * x227);
+        let x1436 = x1370 * x485;
+        let x1437 = x1403 * x564;
+        let x1438 = thF_dot * x1394;
+        let x1439 = x1373 - x1376 * thF_dot;
+        let x1440 = IFyy * (x1437 - x1436)
+            + ((x1438 + x1375) * x29 + x22 * x1439 + x1436 - x1437) * IFxx;
+        let x1441 = x559 * x383;
+        let x1442 = (-x1425 - x558) * x383;
+        let x1443 = x1370 * x482;
+        let x1444 = x1395 * x564;
+        let x1445 = (x1443 - x1444) * IFyy
+            + IFxx * (x1439 * x29 - x1443 + x1444 + x22 * (x1374 - x436 - x1438));
+        let x1446 = g * x629 * x168;
+        let x1447 = x629 * x765;
+        let x1448 = x856 * x19;
+        let x1449 = x1447 + x1448;
+        let x1450 = -(x93 * x1449);
+        let x1451 = x1061 * x637;
+        let x1452 = x1450 / x174 - x890 * x1451;
+        let x1453 = -(x348 * x1449);
+        let x1454 = thF_dot * x1;
+        let x1455 = x856 * x0;
+        let x1456 = x1455 - x1195;
+        let x1457 = x631 * x29 + x1454 * x1297 + x22 * x1456;
+        let x1458 = x1456 * x29 - x1296 * x1454 - x22 * x631;
+        let x1459 = x0 * (x1309 * x899 - x1447 - x1448)
             + x19
-                * (x22 * x1455 + x1 * (delta_dot * x1313 + thF_dot * x1309)
-                    + x1456 * x29);
-        let x1458 = x19 * x850;
-        let x1459 = x269 * x765;
-        let x1460 = x1458 + x1459;
-        let x1461 = x173 * x669;
-        let x1462 = x1231 + x637 * x348;
-        let x1463 = x768 * x269;
-        let x1464 = x852 - thF_dot * x354;
-        let x1465 = (x853 + x1463) * x29 + x22 * x1464;
-        let x1466 = x1464 * x29 + x22 * (x713 - x680 - x1463);
-        let x1467 = x637 * x1315 - x276 * x1447;
-        let x1468 = 2.0 * x1448
-            + (2.0 * (x702 * x1295) - 2.0 * (x1313 * x637) + 2.0 * (x1294 * x701)) * x1
-            + 2.0 * (x1455 * x189) + 2.0 * (x190 * x1456);
-        let x1469 = x637 * x269;
-        let x1470 = x650 * x19;
-        let x1471 = x349 * x765;
-        let x1472 = x1470 + x1471;
-        let x1473 = x637 * x1344 - x370 * x1447;
-        let x1474 = 0.5 * x1210 + 0.5 * x1211;
-        let x1475 = x22 * (x777 * x135 - x74 * x772) - x247 * x769;
-        let x1476 = x135 * x765;
-        let x1477 = (x776 + x778) * x135 - x772 * x770;
-        let x1478 = x1328 * x637 - x1447 * x310;
-        let x1479 = x93 * x1476;
-        let x1480 = x1456 * x246 + x1455 * x248 + (x1294 * x775 + x779 * x1295) * x1
+                * (x22 * x1457 + x1 * (delta_dot * x1315 + thF_dot * x1311)
+                    + x1458 * x29);
+        let x1460 = x19 * x850;
+        let x1461 = x269 * x765;
+        let x1462 = x1460 + x1461;
+        let x1463 = x173 * x669;
+        let x1464 = x1232 + x637 * x348;
+        let x1465 = x768 * x269;
+        let x1466 = x852 - thF_dot * x354;
+        let x1467 = (x853 + x1465) * x29 + x22 * x1466;
+        let x1468 = x1466 * x29 + x22 * (x713 - x680 - x1465);
+        let x1469 = x637 * x1317 - x276 * x1449;
+        let x1470 = 2.0 * x1450
+            + (2.0 * (x702 * x1297) - 2.0 * (x1315 * x637) + 2.0 * (x1296 * x701)) * x1
+            + 2.0 * (x1457 * x189) + 2.0 * (x190 * x1458);
+        let x1471 = x637 * x269;
+        let x1472 = x650 * x19;
+        let x1473 = x349 * x765;
+        let x1474 = x1472 + x1473;
+        let x1475 = x637 * x1346 - x370 * x1449;
+        let x1476 = 0.5 * x1211 + 0.5 * x1212;
+        let x1477 = x22 * (x777 * x135 - x74 * x772) - x247 * x769;
+        let x1478 = x135 * x765;
+        let x1479 = (x776 + x778) * x135 - x772 * x770;
+        let x1480 = x1330 * x637 - x1449 * x310;
+        let x1481 = x93 * x1478;
+        let x1482 = x1458 * x246 + x1457 * x248 + (x1296 * x775 + x779 * x1297) * x1
             + x19
-                * ((2.0 * x1445 + x1446 + theta_dot * x93) * x74
-                    + (x637 - x1060 * theta_dot) * x135) + x701 * x1304 + x190 * x1477
-            + x189 * x1475 - x702 * x1303 + x1479;
-        let x1481 = x637 * x350 / f64::sqrt(x173);
-        let x1482 = x349 * x637;
-        let x1483 = x652 - x18 * thF_dot;
-        let x1484 = x349 * x768;
-        let x1485 = x1483 * x29 + x22 * (x654 - x1484 - x653);
-        let x1486 = (x1484 + x655) * x29 + x22 * x1483;
-        let x1487 = x100 * x1447;
-        let x1488 = x913 / f64::sqrt(x173);
-        let x1489 = -x1235 * x916 - x914 / f64::powf(x173, 1.5);
-        let x1490 = x532 * x556;
-        let x1491 = IRxx * (thR_dot * (x552 - x553) - x550 - x551) + x557 + x538 * x554;
-        let x1492 = x30 * x29;
-        let x1493 = x22 * x31;
-        let x1494 = x22 * x50;
-        let x1495 = x52 * x29;
-        let x1496 = x1494 - x44 + x1495 - x46;
-        let x1497 = x27 - x26;
-        let x1498 = x1492 + x1493 + x1497;
-        let x1499 = (x1498 * x55 - x20 * x1496) * mF;
-        let x1500 = x22 * x112 - x106 - x95 + x108 * x29 - x96;
-        let x1501 = x64 * x79 - x85;
-        let x1502 = x1501 - x109;
-        let x1503 = x1502 * x29 - x70 * x143;
-        let x1504 = x141 * x70 + x22 * x1502;
-        let x1505 = x1501 - x71;
-        let x1506 = -(x73 * x70);
-        let x1507 = mF * (x30 * x1503 - x20 * x1500 + x31 * x1504 + x111 * x1497)
-            + (x28 * x1505 + x86 * x1497 - x25 * x1506) * mH;
-        let x1508 = x314 - x131;
-        let x1509 = x19 * (x144 * x29 + x22 * x142 + x1508);
-        let x1510 = mF * (x140 * x1497 - x20 * x1509 + x0 * x145)
-            + mH * (x137 * x1497 + x134 * x0);
-        let x1511 = x149 * x29 - x143;
-        let x1512 = x141 + x22 * x149;
-        let x1513 = x0 * x149;
-        let x1514 = x157 * x29 + x22 * x159 + x1513;
-        let x1515 = x19 * x166;
-        let x1516 = mF * (x19 * (x30 * x1511 + x1512 * x31 + x149 * x1497) - x20 * x1514)
-            + x25 * x1515;
-        let x1517 = x168 * x1497;
-        let x1518 = -(x93 * x70);
-        let x1519 = -(x1518 / f64::sqrt(x173));
-        let x1520 = (x47 * x1505 - x86 * x47 - x49 * x1506) * mH
-            + (x1500 * x55 - x111 * x47 + x50 * x1504 + x52 * x1503) * mF;
-        let x1521 = mF * (x1509 * x55 - x47 * x140 + x0 * x182)
+                * ((2.0 * x1447 + x1448 + theta_dot * x93) * x74
+                    + (x637 - x1061 * theta_dot) * x135) + x701 * x1306 + x190 * x1479
+            + x189 * x1477 - x702 * x1305 + x1481;
+        let x1483 = x637 * x350 / x174;
+        let x1484 = x349 * x637;
+        let x1485 = x652 - x18 * thF_dot;
+        let x1486 = x349 * x768;
+        let x1487 = x1485 * x29 + x22 * (x654 - x1486 - x653);
+        let x1488 = (x1486 + x655) * x29 + x22 * x1485;
+        let x1489 = x100 * x1449;
+        let x1490 = x914 / x174;
+        let x1491 = -x1237 * x917 - x915 / x889;
+        let x1492 = x532 * x556;
+        let x1493 = IRxx * (thR_dot * (x552 - x553) - x550 - x551) + x557 + x538 * x554;
+        let x1494 = x30 * x29;
+        let x1495 = x22 * x31;
+        let x1496 = x22 * x50;
+        let x1497 = x52 * x29;
+        let x1498 = x1496 - x44 + x1497 - x46;
+        let x1499 = x27 - x26;
+        let x1500 = x1494 + x1495 + x1499;
+        let x1501 = (x1500 * x55 - x20 * x1498) * mF;
+        let x1502 = x22 * x112 - x106 - x95 + x108 * x29 - x96;
+        let x1503 = x64 * x79 - x85;
+        let x1504 = x1503 - x109;
+        let x1505 = x1504 * x29 - x70 * x143;
+        let x1506 = x141 * x70 + x22 * x1504;
+        let x1507 = x1503 - x71;
+        let x1508 = -(x73 * x70);
+        let x1509 = mF * (x30 * x1505 - x20 * x1502 + x31 * x1506 + x111 * x1499)
+            + (x28 * x1507 + x86 * x1499 - x25 * x1508) * mH;
+        let x1510 = x314 - x131;
+        let x1511 = x19 * (x144 * x29 + x22 * x142 + x1510);
+        let x1512 = mF * (x140 * x1499 - x20 * x1511 + x0 * x145)
+            + mH * (x137 * x1499 + x134 * x0);
+        let x1513 = x149 * x29 - x143;
+        let x1514 = x141 + x22 * x149;
+        let x1515 = x0 * x149;
+        let x1516 = x157 * x29 + x22 * x159 + x1515;
+        let x1517 = x19 * x166;
+        let x1518 = mF * (x19 * (x30 * x1513 + x1514 * x31 + x149 * x1499) - x20 * x1516)
+            + x25 * x1517;
+        let x1519 = x168 * x1499;
+        let x1520 = -(x93 * x70);
+        let x1521 = -(x1520 / x174);
+        let x1522 = (x47 * x1507 - x86 * x47 - x49 * x1508) * mH
+            + (x1502 * x55 - x111 * x47 + x50 * x1506 + x52 * x1505) * mF;
+        let x1523 = mF * (x1511 * x55 - x47 * x140 + x0 * x182)
             + (x183 * x0 - x137 * x47) * mH;
-        let x1522 = x49 * x1515
-            + mF * (x19 * (x1512 * x50 - x149 * x47 + x52 * x1511) + x1514 * x55);
-        let x1523 = -(x168 * x47);
-        let x1524 = 2.0 * x255 + 2.0 * x256;
-        let x1525 = -x224 - x228;
-        let x1526 = x70 * x219;
-        let x1527 = x129 - x130 - x131;
-        let x1528 = x74 * ((x1525 - x258 + x1526) * x19 - x254)
+        let x1524 = x49 * x1517
+            + mF * (x19 * (x1514 * x50 - x149 * x47 + x52 * x1513) + x1516 * x55);
+        let x1525 = -(x168 * x47);
+        let x1526 = 2.0 * x255 + 2.0 * x256;
+        let x1527 = -x224 - x228;
+        let x1528 = x70 * x219;
+        let x1529 = x129 - x130 - x131;
+        let x1530 = x74 * ((x1527 - x258 + x1528) * x19 - x254)
             + mF
                 * (x250 * x0 - x107 * x140
-                    + x19 * (x142 * x1504 + x111 * x1508 + x144 * x1503))
+                    + x19 * (x142 * x1506 + x111 * x1510 + x144 * x1505))
             + x93 * (x233 + x299)
             + mH
-                * ((x1527 * x86 + x133 * x1505 - x76 * x1506) * x19 - x137 * x98
+                * ((x1529 * x86 + x133 * x1507 - x76 * x1508) * x19 - x137 * x98
                     + x0 * x236);
-        let x1529 = ((x160 * x86 + x162 * x1505) * x0 - x1506 * x164 + x19 * x73 * x94)
+        let x1531 = ((x160 * x86 + x162 * x1507) * x0 - x1508 * x164 + x19 * x73 * x94)
             * mH + (x301 + x338) * x359
-            + (x19 * (x1512 * x112 + x108 * x1511 - x149 * x107) + x157 * x1503
-                + x159 * x1504 + x111 * x1513) * mF + (x259 - x1526) * x0;
-        let x1530 = x93 * x211 - x98 * x166 - x167 * x107;
-        let x1531 = -(x70 * IFyy);
-        let x1532 = -(x70 * x55);
-        let x1533 = x1524 - 2.0 * x68 - 2.0 * x69;
-        let x1534 = x257 - x68 - x69;
-        let x1535 = x1534 * x55 + x93 * x1496;
-        let x1536 = -x950 - x1518 * x274 / f64::sqrt(x173)
+            + (x19 * (x1514 * x112 + x108 * x1513 - x149 * x107) + x157 * x1505
+                + x159 * x1506 + x111 * x1515) * mF + (x259 - x1528) * x0;
+        let x1532 = x93 * x211 - x98 * x166 - x167 * x107;
+        let x1533 = -(x70 * IFyy);
+        let x1534 = -(x70 * x55);
+        let x1535 = x1526 - 2.0 * x68 - 2.0 * x69;
+        let x1536 = x257 - x68 - x69;
+        let x1537 = x1536 * x55 + x93 * x1498;
+        let x1538 = -x951 - x1520 * x274 / x174
             - rF
-                * (x276 * x1532 + (2.0 * (x278 * x70) - x276 * x47 + x1533 * x277) * x93
-                    + x1535 * x173);
-        let x1537 = x1498 * x93 - x1534 * x20;
-        let x1538 = x20 * x70;
-        let x1539 = -x366
+                * (x276 * x1534 + (2.0 * (x278 * x70) - x276 * x47 + x1535 * x277) * x93
+                    + x1537 * x173);
+        let x1539 = x1500 * x93 - x1536 * x20;
+        let x1540 = x20 * x70;
+        let x1541 = -x366
             - rF
-                * (x93 * (-2.0 * (x284 * x70) - x276 * x1497 - x1533 * x281)
-                    - x1537 * x173 - x276 * x1538) - x1518 * x280 / f64::sqrt(x173);
-        let x1540 = mF
-            * ((x1512 * x142 + x1511 * x144 + x149 * x1508) * x290 + x0 * x302)
-            + x74 * ((x1322 - x338) * x290 + x339 * x301) + x0 * x299
+                * (x93 * (-2.0 * (x284 * x70) - x276 * x1499 - x1535 * x281)
+                    - x1539 * x173 - x276 * x1540) - x1520 * x280 / x174;
+        let x1542 = mF
+            * ((x1514 * x142 + x1513 * x144 + x149 * x1510) * x290 + x0 * x302)
+            + x74 * ((x1324 - x338) * x290 + x339 * x301) + x0 * x299
             + mH * (x288 * x73 * x73 + x295 * x0);
-        let x1541 = (x167 * x1508 - x1301 + x1527 * x166) * x19;
-        let x1542 = -(x232 * IFyy);
-        let x1543 = -(x70 * x317);
-        let x1544 = (x19 * (x47 - x1494 - x1495) - x0 * x55) * x74 + x298 * x55;
-        let x1545 = x70 - x255 - x256;
-        let x1546 = (x19 * x1545 - x253) * x74 + x93 * x298;
-        let x1547 = (x100 * f64::sqrt(x173) - x1543 / f64::sqrt(x173)) * x995
+        let x1543 = (x167 * x1510 - x1303 + x1529 * x166) * x19;
+        let x1544 = -(x232 * IFyy);
+        let x1545 = -(x70 * x317);
+        let x1546 = (x19 * (x47 - x1496 - x1497) - x0 * x55) * x74 + x298 * x55;
+        let x1547 = x70 - x255 - x256;
+        let x1548 = (x19 * x1547 - x253) * x74 + x93 * x298;
+        let x1549 = (x100 * x174 - x1545 / x174) * x996
             - rF
-                * (x1544 * x173 + (2.0 * (x70 * x311) + x1546 * x55 - x310 * x47) * x93
-                    + x1532 * x310);
-        let x1548 = x74 * ((x28 - x1492 - x1493) * x19 + x20 * x0) - x20 * x298;
-        let x1549 = -(x100 * x973);
-        let x1550 = x8 * (f64::sqrt(x173) * x1549 - x325 * x1518 / f64::sqrt(x173))
+                * (x1546 * x173 + (2.0 * (x70 * x311) + x1548 * x55 - x310 * x47) * x93
+                    + x1534 * x310);
+        let x1550 = x74 * ((x28 - x1494 - x1495) * x19 + x20 * x0) - x20 * x298;
+        let x1551 = -(x100 * x974);
+        let x1552 = x8 * (x174 * x1551 - x325 * x1520 / x174)
             - rF
-                * (x93 * (x1546 * x20 - x310 * x1497 - 2.0 * (x327 * x70)) - x1548 * x173
-                    - x310 * x1538);
-        let x1551 = x340 * x0;
-        let x1552 = -x1325;
-        let x1553 = x337 - 1.0;
-        let x1554 = x1553 * x359 + x1534 * x0;
-        let x1555 = x100 * x651 * f64::sqrt(x173) + x1518 * x350 / f64::sqrt(x173)
-            + rF * ((2.0 * (x70 * x45) - x348 * x47 + x1554 * x55) * x93 + x1532 * x348);
-        let x1556 = -x1555;
-        let x1557 = x100 * f64::sqrt(x173) * x851
-            + rF
-                * (-(x348 * x1497 - 2.0 * (x70 * x3) - x20 * x1554) * x93 - x348 * x1538)
-            + x355 * x1518 / f64::sqrt(x173);
+                * (x93 * (x1548 * x20 - x310 * x1499 - 2.0 * (x327 * x70)) - x1550 * x173
+                    - x310 * x1540);
+        let x1553 = x340 * x0;
+        let x1554 = -x1327;
+        let x1555 = x337 - 1.0;
+        let x1556 = x1555 * x359 + x1536 * x0;
+        let x1557 = x100 * x651 * x174 + x1520 * x350 / x174
+            + rF * ((2.0 * (x70 * x45) - x348 * x47 + x1556 * x55) * x93 + x1534 * x348);
         let x1558 = -x1557;
-        let x1559 = x1532 - x93 * x47;
-        let x1560 = x100 * (x281 * x70 / f64::sqrt(x173) + f64::sqrt(x173) * x1497)
-            - rF * (x370 * x1559 - 2.0 * (x789 * x1518));
-        let x1561 = x93 * x1497 + x1538;
-        let x1562 = x100 * (x70 * x277 / f64::sqrt(x173) - f64::sqrt(x173) * x47)
-            - rF * (2.0 * (x882 * x1518) - x1561 * x370);
-        let x1563 = x92 - x90;
-        let x1564 = rF * (x93 * x1563 / f64::sqrt(x173) - x70 * x1069) - x316;
-        let x1565 = rF * x47;
-        let x1566 = rF * x1497;
-        let x1567 = (x452 - x453) * x446;
-        let x1568 = x73 * x403 * x403;
-        let x1569 = x1567 - x1568;
-        let x1570 = delta_dot * (x450 - x451);
-        let x1571 = x457 + x1569 + x1570;
-        let x1572 = -x438 - x441;
-        let x1573 = delta_dot * (x386 - x389) + x1572;
-        let x1574 = x390 * (x454 + x453) - x73 * x1573;
-        let x1575 = x63 * x1573 - x403 * (x399 - 2.0 * x391) + x435 + x448;
-        let x1576 = x452 - x478;
-        let x1577 = x141 * x403 + x22 * x1576;
-        let x1578 = x485 * x1577;
-        let x1579 = (x1570 - x458) - x460;
-        let x1580 = x29 * x1576;
-        let x1581 = x403 * x143;
-        let x1582 = (x1580 - x1581) * x482;
-        let x1583 = x486 * x22 - x473 * x29;
-        let x1584 = x390 * x1583;
-        let x1585 = ((-x1578 - x474) + x1579) + (x1582 + x1584);
-        let x1586 = x483 * x29 + x1585 + x22 * x487;
-        let x1587 = x435 + x1573 * x105;
-        let x1588 = x22 * (x100 * x1573 - x479 * x390) + x471 * x482 - x473 * x403
-            + x1587 * x29 + x1577 * x390;
-        let x1589 = x479 * x29;
-        let x1590 = x22 * x1587 + (x1581 - x1580 + x1589) * x390 - x471 * x485
-            - x141 * x1573 + x486 * x403;
-        let x1591 = x485 * x403;
-        let x1592 = thF_dot * x29;
-        let x1593 = x390 * x564;
-        let x1594 = x1593 * x29;
-        let x1595 = (x1591 + x1592 * x390 - x1594 + x22 * x462) * IFxx
-            + (x1594 - x1591) * IFyy;
-        let x1596 = x390 * x390;
-        let x1597 = x1596 * x211;
-        let x1598 = x583 * x403;
-        let x1599 = x462 * x227;
-        let x1600 = x1569 - x463 + x1579 - x464;
-        let x1601 = IFyy * x1573;
-        let x1602 = x446 * x227;
-        let x1603 = (x1602 - x581) - 2.0 * x580;
-        let x1604 = (x1601 + IHyy * x1573) + (x604 + x1603 * x390);
-        let x1605 = x22 * thF_dot;
-        let x1606 = x22 * x1593 - x482 * x403;
-        let x1607 = IFxx * (x1606 - x1605 * x390 + x462 * x29) - x1606 * IFyy;
-        let x1608 = x462 * x211;
-        let x1609 = IHyy + x1321;
-        let x1610 = x1608 + x1596 * x1609 - x547 * x403;
-        let x1611 = (x598 - x1599) + (x1598 - x1597);
-        let x1612 = g * x70 - x1570;
-        let x1613 = x731 - x732;
-        let x1614 = x1244 / f64::powf(x173, 1.5) + x1488;
-        let x1615 = (x22 * (0.5 * x667 + 0.5 * x668) + (0.5 * x665 - 0.5 * x664) * x29)
+        let x1559 = x100 * x174 * x851
+            + rF
+                * (-(x348 * x1499 - 2.0 * (x70 * x3) - x20 * x1556) * x93 - x348 * x1540)
+            + x355 * x1520 / x174;
+        let x1560 = -x1559;
+        let x1561 = x1534 - x93 * x47;
+        let x1562 = x100 * (x281 * x70 / x174 + x174 * x1499)
+            - rF * (x370 * x1561 - 2.0 * (x789 * x1520));
+        let x1563 = x93 * x1499 + x1540;
+        let x1564 = x100 * (x70 * x277 / x174 - x174 * x47)
+            - rF * (2.0 * (x882 * x1520) - x1563 * x370);
+        let x1565 = x92 - x90;
+        let x1566 = rF * (x93 * x1565 / x174 - x70 * x1070) - x316;
+        let x1567 = rF * x47;
+        let x1568 = rF * x1499;
+        let x1569 = (x452 - x453) * x446;
+        let x1570 = x73 * x403 * x403;
+        let x1571 = x1569 - x1570;
+        let x1572 = delta_dot * (x450 - x451);
+        let x1573 = x457 + x1571 + x1572;
+        let x1574 = -x438 - x441;
+        let x1575 = delta_dot * (x386 - x389) + x1574;
+        let x1576 = x390 * (x454 + x453) - x73 * x1575;
+        let x1577 = x63 * x1575 - x403 * (x399 - 2.0 * x391) + x435 + x448;
+        let x1578 = x452 - x478;
+        let x1579 = x141 * x403 + x22 * x1578;
+        let x1580 = x485 * x1579;
+        let x1581 = (x1572 - x458) - x460;
+        let x1582 = x29 * x1578;
+        let x1583 = x403 * x143;
+        let x1584 = (x1582 - x1583) * x482;
+        let x1585 = x486 * x22 - x473 * x29;
+        let x1586 = x390 * x1585;
+        let x1587 = ((-x1580 - x474) + x1581) + (x1584 + x1586);
+        let x1588 = x483 * x29 + x1587 + x22 * x487;
+        let x1589 = x435 + x1575 * x105;
+        let x1590 = x22 * (x100 * x1575 - x479 * x390) + x471 * x482 - x473 * x403
+            + x1589 * x29 + x1579 * x390;
+        let x1591 = x479 * x29;
+        let x1592 = x22 * x1589 + (x1583 - x1582 + x1591) * x390 - x471 * x485
+            - x141 * x1575 + x486 * x403;
+        let x1593 = x485 * x403;
+        let x1594 = thF_dot * x29;
+        let x1595 = x390 * x564;
+        let x1596 = x1595 * x29;
+        let x1597 = (x1593 + x1594 * x390 - x1596 + x22 * x462) * IFxx
+            + (x1596 - x1593) * IFyy;
+        let x1598 = x390 * x390;
+        let x1599 = x1598 * x211;
+        let x1600 = x583 * x403;
+        let x1601 = x462 * x227;
+        let x1602 = x1571 - x463 + x1581 - x464;
+        let x1603 = IFyy * x1575;
+        let x1604 = x446 * x227;
+        let x1605 = (x1604 - x581) - 2.0 * x580;
+        let x1606 = (x1603 + IHyy * x1575) + (x604 + x1605 * x390);
+        let x1607 = x22 * thF_dot;
+        let x1608 = x22 * x1595 - x482 * x403;
+        let x1609 = IFxx * (x1608 - x1607 * x390 + x462 * x29) - x1608 * IFyy;
+        let x1610 = x462 * x211;
+        let x1611 = IHyy + x1323;
+        let x1612 = x1610 + x1598 * x1611 - x547 * x403;
+        let x1613 = (x598 - x1601) + (x1600 - x1599);
+        let x1614 = g * x70 - x1572;
+        let x1615 = x731 - x732;
+        let x1616 = x1246 / x889 + x1490;
+        let x1617 = (x22 * (0.5 * x667 + 0.5 * x668) + (0.5 * x665 - 0.5 * x664) * x29)
             * x173;
-        let x1616 = -(x685 * x70);
-        let x1617 = -(x637 * x47);
-        let x1618 = x1616 + x1617;
-        let x1619 = x913 * x55;
+        let x1618 = -(x685 * x70);
+        let x1619 = -(x637 * x47);
         let x1620 = x1618 + x1619;
-        let x1621 = x637 * x1554 - x704 * x70;
-        let x1622 = x1592 * x93 + x22 * x637;
-        let x1623 = x637 * x29 - x1605 * x93;
-        let x1624 = x0 * (x913 + x1553 * x688 + x703)
-            + (x633 + x22 * x1622 + delta_dot * x1545 - x636 + x1623 * x29) * x19;
-        let x1625 = x1592 * x55 + x22 * x685;
-        let x1626 = x685 * x29 - x1605 * x55;
-        let x1627 = x702 * x29;
-        let x1628 = x22 * x701;
-        let x1629 = x913 + x1627 + x1628;
-        let x1630 = x22 * x738;
-        let x1631 = x734 * x29;
-        let x1632 = ((x1533 * x637 + 2.0 * (x1622 * x189))
-            + x93 * (2.0 * x912 - 2.0 * x690 + 2.0 * x1627 + 2.0 * x1628))
-            + (2.0 * (x190 * x1623) + 2.0 * x916);
-        let x1633 = x1546 * x637 + (x913 * x310 - x781 * x70);
-        let x1634 = x22 * x1172 - x1592 * x230;
-        let x1635 = x22 * x775 + x779 * x29 + x0 * x767;
-        let x1636 = x19 * (x767 * x29 + x1605 * x74) - x766 * x29;
-        let x1637 = -(delta_dot * x70);
-        let x1638 = x189 * x1634 - x1171 * x70
-            + (x19 * (x688 - x912 + x690 - x1627 - x1628) - (x637 + x1637) * x0) * x74
-            + x190 * x1636 + x1622 * x248 + x246 * x1623 + x93 * x1635;
-        let x1639 = -(x811 * x70);
-        let x1640 = x637 * x1497;
-        let x1641 = x19 * (x958 + x803);
-        let x1642 = x810 * x0;
-        let x1643 = x1641 + x1642;
-        let x1644 = x20 * x1605 + x811 * x29;
-        let x1645 = x811 * x22 - x1592 * x20;
-        let x1646 = x22 * x824;
-        let x1647 = x29 * x829;
-        let x1648 = x1640 + x1639;
-        let x1649 = -x915 - x917;
-        let x1650 = x913 * x20;
-        let x1651 = x825 * x100 / f64::sqrt(x173);
-        let x1652 = x811 * x100 * f64::sqrt(x173);
-        let x1653 = x1648 - x1650;
-        let x1654 = x637 * x1563;
-        let x1655 = x569
-            + (IFxx * (x574 * x29 + x22 * (x567 - x439 + x1572)) + x485 * x576);
-        let x1656 = x482 * x565;
-        let x1657 = x575 - x1656;
-        let x1658 = x1656 + x577;
-        let x1659 = x775 - x771 + x22 * (x773 + x774);
-        let x1660 = x22 * (x730 + x731 - x732) + x738 + x729 * x29;
-        let x1661 = x22 * (x691 - x690 - x692);
-        let x1662 = x701 - x700 + x1661;
-        let x1663 = x1662 * x246 + x190 * x1659;
-        let x1664 = theta_dot * x1662 * x666;
-        let x1665 = (2.0 * x695 + 2.0 * x1661) * x190;
-        let x1666 = x22 * (x821 - x814 - x815) + x824 + x828 * x29;
-        let x1667 = x607 / f64::sqrt(x170);
-        let x1668 = x638 / f64::sqrt(x173);
-        let x1669 = x528 * x4 - x413 * x1;
-        let x1670 = x12 * x1669 + (x628 - x13 * x1175);
-        let x1671 = x636 - x19 * x1670;
-        let x1672 = x86 * x403 - x98 * x390 + x467 - x447 * x93 - x73 * x1671
+        let x1621 = x914 * x55;
+        let x1622 = x1620 + x1621;
+        let x1623 = x637 * x1556 - x704 * x70;
+        let x1624 = x1594 * x93 + x22 * x637;
+        let x1625 = x637 * x29 - x1607 * x93;
+        let x1626 = x0 * (x914 + x1555 * x688 + x703)
+            + (x633 + x22 * x1624 + delta_dot * x1547 - x636 + x1625 * x29) * x19;
+        let x1627 = x1594 * x55 + x22 * x685;
+        let x1628 = x685 * x29 - x1607 * x55;
+        let x1629 = x702 * x29;
+        let x1630 = x22 * x701;
+        let x1631 = x914 + x1629 + x1630;
+        let x1632 = x22 * x738;
+        let x1633 = x734 * x29;
+        let x1634 = ((x1535 * x637 + 2.0 * (x1624 * x189))
+            + x93 * (2.0 * x913 - 2.0 * x690 + 2.0 * x1629 + 2.0 * x1630))
+            + (2.0 * (x190 * x1625) + 2.0 * x917);
+        let x1635 = x1548 * x637 + (x914 * x310 - x781 * x70);
+        let x1636 = x22 * x1173 - x1594 * x230;
+        let x1637 = x22 * x775 + x779 * x29 + x0 * x767;
+        let x1638 = x19 * (x767 * x29 + x1607 * x74) - x766 * x29;
+        let x1639 = -(delta_dot * x70);
+        let x1640 = x189 * x1636 - x1172 * x70
+            + (x19 * (x688 - x913 + x690 - x1629 - x1630) - (x637 + x1639) * x0) * x74
+            + x190 * x1638 + x1624 * x248 + x246 * x1625 + x93 * x1637;
+        let x1641 = -(x811 * x70);
+        let x1642 = x637 * x1499;
+        let x1643 = x19 * (x959 + x803);
+        let x1644 = x810 * x0;
+        let x1645 = x1643 + x1644;
+        let x1646 = x20 * x1607 + x811 * x29;
+        let x1647 = x811 * x22 - x1594 * x20;
+        let x1648 = x22 * x824;
+        let x1649 = x29 * x829;
+        let x1650 = x1642 + x1641;
+        let x1651 = -x916 - x918;
+        let x1652 = x914 * x20;
+        let x1653 = x825 * x100 / x174;
+        let x1654 = x811 * x100 * x174;
+        let x1655 = x1650 - x1652;
+        let x1656 = x637 * x1565;
+        let x1657 = x569
+            + (IFxx * (x574 * x29 + x22 * (x567 - x439 + x1574)) + x485 * x576);
+        let x1658 = x482 * x565;
+        let x1659 = x575 - x1658;
+        let x1660 = x1658 + x577;
+        let x1661 = x775 - x771 + x22 * (x773 + x774);
+        let x1662 = x22 * (x730 + x731 - x732) + x738 + x729 * x29;
+        let x1663 = x22 * (x691 - x690 - x692);
+        let x1664 = x701 - x700 + x1663;
+        let x1665 = x1664 * x246 + x190 * x1661;
+        let x1666 = theta_dot * x1664 * x666;
+        let x1667 = (2.0 * x695 + 2.0 * x1663) * x190;
+        let x1668 = x22 * (x821 - x814 - x815) + x824 + x828 * x29;
+        let x1669 = x607 / x171;
+        let x1670 = x638 / x174;
+        let x1671 = x528 * x4 - x413 * x1;
+        let x1672 = x12 * x1671 + (x628 - x13 * x1176);
+        let x1673 = x636 - x19 * x1672;
+        let x1674 = x86 * x403 - x98 * x390 + x467 - x447 * x93 - x73 * x1673
             + x70 * x455;
-        let x1673 = x0 * x1670;
-        let x1674 = x692 + x1673;
-        let x1675 = rR * x1669 - x1175 * x60;
-        let x1676 = (x0 * x1675 - x425) - delta_dot * x97;
-        let x1677 = x446 * x98;
-        let x1678 = x1175 * x12;
-        let x1679 = x13 * x1669;
-        let x1680 = -x1678 - x1679;
-        let x1681 = x1676 - x1674 * x63 - x94 * x403 - x400 * x70 + x188 * x447 + x1677
-            + x73 * x1680;
-        let x1682 = (x459 + x19 * x1675) + delta_dot * x1501;
-        let x1683 = x1671 * x63 - x446 * x86 + x1682 + x400 * x93 - x188 * x455
+        let x1675 = x0 * x1672;
+        let x1676 = x692 + x1675;
+        let x1677 = rR * x1671 - x1176 * x60;
+        let x1678 = (x0 * x1677 - x425) - delta_dot * x97;
+        let x1679 = x446 * x98;
+        let x1680 = x1176 * x12;
+        let x1681 = x13 * x1671;
+        let x1682 = -x1680 - x1681;
+        let x1683 = x1678 - x1676 * x63 - x94 * x403 - x400 * x70 + x188 * x447 + x1679
+            + x73 * x1682;
+        let x1684 = (x459 + x19 * x1677) + delta_dot * x1503;
+        let x1685 = x1673 * x63 - x446 * x86 + x1684 + x400 * x93 - x188 * x455
             + x94 * x390;
-        let x1684 = 2.0 * x498 - x495 - x496;
-        let x1685 = x1100 * x5 + (x1103 - x1102 + x4 * x1684) * x1;
-        let x1686 = x5 * x1105 + (x1684 * x9 - x1106 - x1107) * x1;
-        let x1687 = x114 * x1669 + x1093 * x1 + x5 * x1094 - x1175 * xB;
-        let x1688 = x467 - x100 * x1671;
-        let x1689 = x1682 + x1671 * x105;
-        let x1690 = x1688 * x29 - x486 * x93 + x190 * x479 + x1689 * x22 - x108 * x390
+        let x1686 = 2.0 * x498 - x495 - x496;
+        let x1687 = x1101 * x5 + (x1104 - x1103 + x4 * x1686) * x1;
+        let x1688 = x5 * x1106 + (x1686 * x9 - x1107 - x1108) * x1;
+        let x1689 = x114 * x1671 + x1094 * x1 + x5 * x1095 - x1176 * xB;
+        let x1690 = x467 - x100 * x1673;
+        let x1691 = x1684 + x1673 * x105;
+        let x1692 = x1690 * x29 - x486 * x93 + x190 * x479 + x1691 * x22 - x108 * x390
             + x111 * x485;
-        let x1691 = x1676 - x485 * x112 + x108 * x482 - x1674 * x105 + x100 * x1680
+        let x1693 = x1678 - x485 * x112 + x108 * x482 - x1676 * x105 + x100 * x1682
             + x486 * x189 - x190 * x473;
-        let x1692 = x473 * x93 - x111 * x482 - x22 * x1688 - x479 * x189 + x1689 * x29
+        let x1694 = x473 * x93 - x111 * x482 - x22 * x1690 - x479 * x189 + x1691 * x29
             + x112 * x390;
-        let x1693 = (x1674 * x227 + (x217 - x188 * IHyy) * x390)
-            + (x583 * x93 + x1680 * x211);
-        let x1694 = x388 * x1;
-        let x1695 = IBxx * x1669 + x561 * x5 + x1175 * IBxz + x1694 * (x200 - x1137);
-        let x1696 = (x1121 + x1122) + (-x1123 - x1124);
-        let x1697 = x205 * x1 * x537 + x532 * x5;
-        let x1698 = (x1175 * x201 + thR_dot * x1015 * x1 + x1697 + x203 * x1669) * IRxx
-            - IRyy * x1697;
-        let x1699 = x1674 * x211;
-        let x1700 = IHyy * x70;
-        let x1701 = x1680 * x216;
-        let x1702 = x1699 + (x1525 + x1700) * x390 + x1701 + x547 * x93;
-        let x1703 = -(x208 * x1);
-        let x1704 = x1703 * x537;
-        let x1705 = x5 * x554;
-        let x1706 = (thR_dot * x1703 - x1704 - x203 * x1175 + x201 * x1669 - x1705)
-            * IRxx + IRyy * (x1704 + x1705);
-        let x1707 = x1694 * (x197 - x1143) - IBxz * x1669 - x1175 * IBzz + x5 * x522;
-        let x1708 = x482 * x93 + x189 * x564;
-        let x1709 = x693 + x1673;
-        let x1710 = IFxx * (x1709 * x29 + x1708 + (x1678 - x696 + x1679) * x22)
-            - x1708 * IFyy;
-        let x1711 = x403 * x217;
-        let x1712 = x188 * x592;
-        let x1713 = x446 * x229;
-        let x1714 = x1671 * IFyy;
-        let x1715 = x582 * x70;
-        let x1716 = x1671 * IHyy;
-        let x1717 = x1711 - x1712 - x1713 - x1714 + x1715 - x1716;
-        let x1718 = x485 * x93;
-        let x1719 = x190 * x564;
-        let x1720 = (x22 * x1709 - x1718 + (x696 + x1680) * x29 - x1719) * IFxx
-            + (x1718 + x1719) * IFyy;
-        let x1721 = x608 - 2.0 * x171 + 2.0 * x1;
-        let x1722 = x9 * (x506 + xB * x405 - x394) + x4 * (x503 + x411 * x114);
-        let x1723 = x120 * x377 - x383 * x126 - x4 * x499;
-        let x1724 = x118 * x377 + x379 * x126 + x499 * x9;
-        let x1725 = x412 * x12 + x13 * x406;
-        let x1726 = x377 - delta_dot * x74;
-        let x1727 = x1726 * x0 - x19 * x1725;
-        let x1728 = x88 * x377;
-        let x1729 = x137 * x403 + x19 * (x74 * x447 - x133 * x390) + x232 * x455
-            - x73 * x1727 + x1728;
-        let x1730 = rR * x412 + x406 * x60;
-        let x1731 = x398 - x396;
-        let x1732 = x377 * x84;
-        let x1733 = delta_dot * x132;
-        let x1734 = x0 * (x1732 + x1733);
-        let x1735 = x63 * x1727 - x135 * x455 - x137 * x446
-            + (x1730 + (x1731 + 2.0 * x391) * x74) * x19 + x1734;
-        let x1736 = x13 * x412;
-        let x1737 = x406 * x12;
-        let x1738 = x1737 - x1736;
-        let x1739 = x0 * x1725 + x1726 * x19;
-        let x1740 = x133 * x446;
-        let x1741 = -x1732 - x1733;
-        let x1742 = x447 * x135 + x73 * x1738 - x63 * x1739 + (x1730 - x400 * x74) * x0
-            + x19 * (x1740 + x1741 - x76 * x403);
-        let x1743 = x1728 - x100 * x1727;
-        let x1744 = x1730 * x19 + x1727 * x105 + x1734;
-        let x1745 = x1744 * x29 - x479 * x248 - x482 * x140 - x22 * x1743
+        let x1695 = (x1676 * x227 + (x217 - x188 * IHyy) * x390)
+            + (x583 * x93 + x1682 * x211);
+        let x1696 = x388 * x1;
+        let x1697 = IBxx * x1671 + x561 * x5 + x1176 * IBxz + x1696 * (x200 - x1138);
+        let x1698 = (x1122 + x1123) + (-x1124 - x1125);
+        let x1699 = x205 * x1 * x537 + x532 * x5;
+        let x1700 = (x1176 * x201 + thR_dot * x1016 * x1 + x1699 + x203 * x1671) * IRxx
+            - IRyy * x1699;
+        let x1701 = x1676 * x211;
+        let x1702 = IHyy * x70;
+        let x1703 = x1682 * x216;
+        let x1704 = x1701 + (x1527 + x1702) * x390 + x1703 + x547 * x93;
+        let x1705 = -(x208 * x1);
+        let x1706 = x1705 * x537;
+        let x1707 = x5 * x554;
+        let x1708 = (thR_dot * x1705 - x1706 - x203 * x1176 + x201 * x1671 - x1707)
+            * IRxx + IRyy * (x1706 + x1707);
+        let x1709 = x1696 * (x197 - x1144) - IBxz * x1671 - x1176 * IBzz + x5 * x522;
+        let x1710 = x482 * x93 + x189 * x564;
+        let x1711 = x693 + x1675;
+        let x1712 = IFxx * (x1711 * x29 + x1710 + (x1680 - x696 + x1681) * x22)
+            - x1710 * IFyy;
+        let x1713 = x403 * x217;
+        let x1714 = x188 * x592;
+        let x1715 = x446 * x229;
+        let x1716 = x1673 * IFyy;
+        let x1717 = x582 * x70;
+        let x1718 = x1673 * IHyy;
+        let x1719 = x1713 - x1714 - x1715 - x1716 + x1717 - x1718;
+        let x1720 = x485 * x93;
+        let x1721 = x190 * x564;
+        let x1722 = (x22 * x1711 - x1720 + (x696 + x1682) * x29 - x1721) * IFxx
+            + (x1720 + x1721) * IFyy;
+        let x1723 = x608 - 2.0 * x171 + 2.0 * x1;
+        let x1724 = x9 * (x506 + xB * x405 - x394) + x4 * (x503 + x411 * x114);
+        let x1725 = x120 * x377 - x383 * x126 - x4 * x499;
+        let x1726 = x118 * x377 + x379 * x126 + x499 * x9;
+        let x1727 = x412 * x12 + x13 * x406;
+        let x1728 = x377 - delta_dot * x74;
+        let x1729 = x1728 * x0 - x19 * x1727;
+        let x1730 = x88 * x377;
+        let x1731 = x137 * x403 + x19 * (x74 * x447 - x133 * x390) + x232 * x455
+            - x73 * x1729 + x1730;
+        let x1732 = rR * x412 + x406 * x60;
+        let x1733 = x398 - x396;
+        let x1734 = x377 * x84;
+        let x1735 = delta_dot * x132;
+        let x1736 = x0 * (x1734 + x1735);
+        let x1737 = x63 * x1729 - x135 * x455 - x137 * x446
+            + (x1732 + (x1733 + 2.0 * x391) * x74) * x19 + x1736;
+        let x1738 = x13 * x412;
+        let x1739 = x406 * x12;
+        let x1740 = x1739 - x1738;
+        let x1741 = x0 * x1727 + x1728 * x19;
+        let x1742 = x133 * x446;
+        let x1743 = -x1734 - x1735;
+        let x1744 = x447 * x135 + x73 * x1740 - x63 * x1741 + (x1732 - x400 * x74) * x0
+            + x19 * (x1742 + x1743 - x76 * x403);
+        let x1745 = x1730 - x100 * x1729;
+        let x1746 = x1732 * x19 + x1729 * x105 + x1736;
+        let x1747 = x1746 * x29 - x479 * x248 - x482 * x140 - x22 * x1745
             + x19 * (x142 * x390 - x74 * x473);
-        let x1746 = x100 * x1738 - x1739 * x105 + x1730 * x0
-            + x19 * (x144 * x482 - x485 * x142 + x1741) - x473 * x246 + x486 * x248;
-        let x1747 = x485 * x140 + x19 * (x486 * x74 - x144 * x390) + x29 * x1743
-            + x479 * x246 + x22 * x1744;
-        let x1748 = x446 * x235;
-        let x1749 = IFyy * x1727;
-        let x1750 = IHyy * x1727;
-        let x1751 = x592 * x135;
-        let x1752 = x403 * x241;
-        let x1753 = x232 * x582;
-        let x1754 = x1752 - x1748 - x1749 - x1750 - x1751 + x1753;
-        let x1755 = ((x241 - x135 * IHyy) * x390 + x1432 * x230)
-            + (x1738 * x211 + x1739 * x227);
-        let x1756 = x1739 - thF_dot * x135;
-        let x1757 = x482 * x230;
-        let x1758 = x232 * thF_dot;
-        let x1759 = x248 * x564;
-        let x1760 = (x1756 * x29 - x1757 + x22 * (x1736 - x1737 - x1758) + x1759) * IFxx
-            + (x1757 - x1759) * IFyy;
-        let x1761 = x246 * x564;
-        let x1762 = x485 * x230;
-        let x1763 = IFxx * (x22 * x1756 - x1761 + (x1738 + x1758) * x29 + x1762)
-            + (x1761 - x1762) * IFyy;
-        let x1764 = x559 * x9;
-        let x1765 = x383 * x244;
-        let x1766 = x4 * x586;
-        let x1767 = x238 * x379;
-        let x1768 = x411 - thR_dot;
-        let x1769 = x208 * x538 + (x207 * x1768 + x206 * x1768) * IRxx;
-        let x1770 = (x204 * (x536 - x387) + x202 * x1768) * IRxx + x205 * x556;
-        let x1771 = x235 * x390;
-        let x1772 = x1738 * x216;
-        let x1773 = x211 * x1739;
-        let x1774 = x74 * x1416 - x1771 + x1772 + x1773;
-        let x1775 = x4 * (x411 * IBxx - x388 * IByy) - x406 * IBxz + x238 * x388;
-        let x1776 = x406 * IBzz - x412 * IBxz + x388 * (x1137 + x198 - x243);
-        let x1777 = x308 * x1 - x609 - x194;
-        let x1778 = x5 * x363 - x1059 - x1062;
-        let x1779 = x1362 + delta_dot;
-        let x1780 = x1361 - delta_dot * x155;
-        let x1781 = x1780 - x1779 * x105;
-        let x1782 = x1365 + x1781 * x19;
-        let x1783 = x1343 * x1779;
-        let x1784 = x1782 * x29 - x150 * x482 + x159 * x390
-            + x22 * (-x1367 - x1783 - x19 * x479) + x473 * x0;
-        let x1785 = x19 * (x485 * x149 + x1589) - x390 * x157 + (x1367 + x1783) * x29
-            + x1782 * x22 - x486 * x0;
-        let x1786 = x1389 + x1781 * x0 + x19 * (x1583 - x1364) + x482 * x157
+        let x1748 = x100 * x1740 - x1741 * x105 + x1732 * x0
+            + x19 * (x144 * x482 - x485 * x142 + x1743) - x473 * x246 + x486 * x248;
+        let x1749 = x485 * x140 + x19 * (x486 * x74 - x144 * x390) + x29 * x1745
+            + x479 * x246 + x22 * x1746;
+        let x1750 = x446 * x235;
+        let x1751 = IFyy * x1729;
+        let x1752 = IHyy * x1729;
+        let x1753 = x592 * x135;
+        let x1754 = x403 * x241;
+        let x1755 = x232 * x582;
+        let x1756 = x1754 - x1750 - x1751 - x1752 - x1753 + x1755;
+        let x1757 = ((x241 - x135 * IHyy) * x390 + x1434 * x230)
+            + (x1740 * x211 + x1741 * x227);
+        let x1758 = x1741 - thF_dot * x135;
+        let x1759 = x482 * x230;
+        let x1760 = x232 * thF_dot;
+        let x1761 = x248 * x564;
+        let x1762 = (x1758 * x29 - x1759 + x22 * (x1738 - x1739 - x1760) + x1761) * IFxx
+            + (x1759 - x1761) * IFyy;
+        let x1763 = x246 * x564;
+        let x1764 = x485 * x230;
+        let x1765 = IFxx * (x22 * x1758 - x1763 + (x1740 + x1760) * x29 + x1764)
+            + (x1763 - x1764) * IFyy;
+        let x1766 = x559 * x9;
+        let x1767 = x383 * x244;
+        let x1768 = x4 * x586;
+        let x1769 = x238 * x379;
+        let x1770 = x411 - thR_dot;
+        let x1771 = x208 * x538 + (x207 * x1770 + x206 * x1770) * IRxx;
+        let x1772 = (x204 * (x536 - x387) + x202 * x1770) * IRxx + x205 * x556;
+        let x1773 = x235 * x390;
+        let x1774 = x1740 * x216;
+        let x1775 = x211 * x1741;
+        let x1776 = x74 * x1418 - x1773 + x1774 + x1775;
+        let x1777 = x4 * (x411 * IBxx - x388 * IByy) - x406 * IBxz + x238 * x388;
+        let x1778 = x406 * IBzz - x412 * IBxz + x388 * (x1138 + x198 - x243);
+        let x1779 = x308 * x1 - x609 - x194;
+        let x1780 = x5 * x363 - x1060 - x1063;
+        let x1781 = x1364 + delta_dot;
+        let x1782 = x1363 - delta_dot * x155;
+        let x1783 = x1782 - x1781 * x105;
+        let x1784 = x1367 + x1783 * x19;
+        let x1785 = x1345 * x1781;
+        let x1786 = x1784 * x29 - x150 * x482 + x159 * x390
+            + x22 * (-x1369 - x1785 - x19 * x479) + x473 * x0;
+        let x1787 = x19 * (x485 * x149 + x1591) - x390 * x157 + (x1369 + x1785) * x29
+            + x1784 * x22 - x486 * x0;
+        let x1788 = x1391 + x1783 * x0 + x19 * (x1585 - x1366) + x482 * x157
             - x485 * x159;
-        let x1787 = x63 * x1779;
-        let x1788 = x19 * (x1731 + x391 - x1364) - x164 * x403 + x1382
-            + x0 * (x162 * x446 + x1780 - x1787);
-        let x1789 = x164 * x390 + x0 * (x400 + x1364)
-            + x19 * (x1780 - x446 * x160 - x1787);
-        let x1790 = (x160 * x403 + x73 * x1779 + x455) * x19 + x1367
+        let x1789 = x63 * x1781;
+        let x1790 = x19 * (x1733 + x391 - x1366) - x164 * x403 + x1384
+            + x0 * (x162 * x446 + x1782 - x1789);
+        let x1791 = x164 * x390 + x0 * (x400 + x1366)
+            + x19 * (x1782 - x446 * x160 - x1789);
+        let x1792 = (x160 * x403 + x73 * x1781 + x455) * x19 + x1369
             - x0 * (x162 * x390 + x447);
-        let x1791 = 2.0 * x381 + 2.0 * x382;
-        let x1792 = 2.0 * x1355 - x1791 * x114;
-        let x1793 = x19 * x390;
-        let x1794 = (x1374 + x1793) * x211;
-        let x1795 = x0 * (x227 * x1779 + x583);
-        let x1796 = x1794 + x1795;
-        let x1797 = x555 * x554 + x1430 * IRxx;
-        let x1798 = x211 * x1779;
-        let x1799 = x1793 * x1609 + x0 * (x547 + x1798) + x1404;
-        let x1800 = x1791 * IBxz + x379 * (IBzz + IByy - IBxx);
-        let x1801 = x532 * x535;
-        let x1802 = x1420 * IRxx + x1801;
-        let x1803 = (IBzz - IByy) * x383 - x1423 - 2.0 * x558;
-        let x1804 = x19 * thF_dot;
-        let x1805 = x666 * x564;
-        let x1806 = x485 * x0;
-        let x1807 = ((x1374 + x1804) * x29 + x158 * x1779 - x1805 - x1806) * IFxx
-            + (x1805 + x1806) * IFyy;
-        let x1808 = x663 * x564 + x0 * x482;
-        let x1809 = IFxx * ((-x380 - x384 - x1804) * x22 + x1808 + x154 * x1779)
-            - x1808 * IFyy;
-        let x1810 = IHyy * x1779;
-        let x1811 = IFyy * x1779;
-        let x1812 = x1810 - x1602 + x1811 + 2.0 * x580 + x581;
-        let x1813 = -(rR * x683);
-        let x1814 = x958 * rR;
-        let x1815 = x1801 - x532 * IRxx;
-        let x1816 = IRyy * x554;
-        let x1817 = 2.0 * x401 + 2.0 * x402;
-        let x1818 = x22 * x473 - x428 - x470 - x430 + x486 * x29;
-        let x1819 = x100 * (-2.0 * x480 - x481) - x100 * x446 * x29;
-        let x1820 = x100 * (x485 + x484) - x22 * x100 * x446;
-        let x1821 = (x300 + x216) * x390;
-        let x1822 = -(x403 * IFyy);
-        let x1823 = (2.0 * x544 + x1822) + (x403 * (x227 - x213 - x215) - x546);
-        let x1824 = (x390 - thF_dot) * IFxx + x576;
+        let x1793 = 2.0 * x381 + 2.0 * x382;
+        let x1794 = 2.0 * x1357 - x1793 * x114;
+        let x1795 = x19 * x390;
+        let x1796 = (x1376 + x1795) * x211;
+        let x1797 = x0 * (x227 * x1781 + x583);
+        let x1798 = x1796 + x1797;
+        let x1799 = x555 * x554 + x1432 * IRxx;
+        let x1800 = x211 * x1781;
+        let x1801 = x1795 * x1611 + x0 * (x547 + x1800) + x1406;
+        let x1802 = x1793 * IBxz + x379 * (IBzz + IByy - IBxx);
+        let x1803 = x532 * x535;
+        let x1804 = x1422 * IRxx + x1803;
+        let x1805 = (IBzz - IByy) * x383 - x1425 - 2.0 * x558;
+        let x1806 = x19 * thF_dot;
+        let x1807 = x666 * x564;
+        let x1808 = x485 * x0;
+        let x1809 = ((x1376 + x1806) * x29 + x158 * x1781 - x1807 - x1808) * IFxx
+            + (x1807 + x1808) * IFyy;
+        let x1810 = x663 * x564 + x0 * x482;
+        let x1811 = IFxx * ((-x380 - x384 - x1806) * x22 + x1810 + x154 * x1781)
+            - x1810 * IFyy;
+        let x1812 = IHyy * x1781;
+        let x1813 = IFyy * x1781;
+        let x1814 = x1812 - x1604 + x1813 + 2.0 * x580 + x581;
+        let x1815 = -(rR * x683);
+        let x1816 = x959 * rR;
+        let x1817 = x1803 - x532 * IRxx;
+        let x1818 = IRyy * x554;
+        let x1819 = 2.0 * x401 + 2.0 * x402;
+        let x1820 = x22 * x473 - x428 - x470 - x430 + x486 * x29;
+        let x1821 = x100 * (-2.0 * x480 - x481) - x100 * x446 * x29;
+        let x1822 = x100 * (x485 + x484) - x22 * x100 * x446;
+        let x1823 = (x300 + x216) * x390;
+        let x1824 = -(x403 * IFyy);
+        let x1825 = (2.0 * x544 + x1824) + (x403 * (x227 - x213 - x215) - x546);
+        let x1826 = (x390 - thF_dot) * IFxx + x576;
         Derivatives {
             qdot: [
                 x_dot,
@@ -4223,26 +4191,24 @@ pub mod lagrange {
                     + (x489 - x488 + x490 + x606 - x491) * x167
                     + x166 * (x404 - x417 + x606 + x443 - x448),
                 -x591,
-                x_dot * x607 / f64::sqrt(x170) + x619,
-                x607 * y_dot / f64::sqrt(x170)
+                x_dot * x607 / x171 + x619,
+                x607 * y_dot / x171
                     + rR
                         * (psi_dot * (x621 - x620 * x264 - x622 * x610)
                             + (-x623 - x625 - (x624 * x626 + x264 * x627) * x1)
                                 * phi_dot),
-                x638 * x_dot / f64::sqrt(x173) - (x658 - x708 * rF) * theta_dot
+                x638 * x_dot / x174 - (x658 - x708 * rF) * theta_dot
                     - psi_dot * (x725 - rF * x747) - (x764 - rF * x787) * phi_dot
                     + x788 * x685 - delta_dot * (x812 - rF * x802),
-                x638 * y_dot / f64::sqrt(x173) - psi_dot * (x820 - rF * x837 - x839)
-                    - x840 - theta_dot * (x855 - rF * x848 - x849 / f64::sqrt(x173))
-                    - phi_dot * (x870 - x638 * x326 / f64::sqrt(x173) - x878)
-                    - delta_dot
-                        * (x100 * (x685 * f64::sqrt(x173) - x879 / f64::sqrt(x173))
-                            - x887 * rF),
+                x638 * y_dot / x174 - psi_dot * (x820 - rF * x837 - x839) - x840
+                    - theta_dot * (x855 - rF * x848 - x849 / x174)
+                    - phi_dot * (x870 - x638 * x326 / x174 - x878)
+                    - delta_dot * (x100 * (x685 * x174 - x879 / x174) - x887 * rF),
                 -(((x888 * theta_dot
-                    - (rF * (x19 * x890 - x93 * x765 / f64::sqrt(x173)) - x891) * x74)
-                    * x1 + x528 * x79 + x892 + x856 * x361) * theta_dot
-                    + (rF * x903 + x905 + x909 + x418 * x132 + x5 * x910) * phi_dot
-                    + (rF * x918 + x919) * delta_dot),
+                    - (rF * (x19 * x891 - x93 * x765 / x174) - x892) * x74) * x1
+                    + x528 * x79 + x893 + x856 * x361) * theta_dot
+                    + (rF * x904 + x906 + x910 + x418 * x132 + x5 * x911) * phi_dot
+                    + (rF * x919 + x920) * delta_dot),
             ],
             checks: [],
             d_qdot: [
@@ -4296,15 +4262,15 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        (2.0 * (x25 * x269) + 2.0 * (x273 * x28) + 2.0 * x921) * mH
+                        (2.0 * (x25 * x269) + 2.0 * (x273 * x28) + 2.0 * x922) * mH
                             + mF
-                                * (2.0 * (x31 * x922) + 2.0 * (x923 * x30) + 2.0 * x921),
-                        x925,
+                                * (2.0 * (x31 * x923) + 2.0 * (x924 * x30) + 2.0 * x922),
                         x926,
                         x927,
                         x928,
-                        0.0,
                         x929,
+                        0.0,
+                        x930,
                         0.0,
                         0.0,
                         0.0,
@@ -4313,7 +4279,7 @@ pub mod lagrange {
                         0.0,
                     ],
                     [
-                        x925,
+                        x926,
                         mH * (2.0 * x57 + 2.0 * x58 - 2.0 * x56)
                             + mF * (2.0 * x51 + 2.0 * x53 - 2.0 * x56),
                         x122,
@@ -4329,7 +4295,7 @@ pub mod lagrange {
                         0.0,
                     ],
                     [
-                        x926,
+                        x927,
                         x122,
                         0.0,
                         0.0,
@@ -4337,14 +4303,14 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x931,
+                        x932,
                         x266,
-                        x936,
-                        x939,
+                        x937,
+                        x940,
                         0.0,
                     ],
                     [
-                        x927,
+                        x928,
                         x146,
                         0.0,
                         0.0,
@@ -4352,14 +4318,14 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x940,
+                        x941,
                         x306,
-                        x943,
-                        x945,
+                        x944,
+                        x946,
                         0.0,
                     ],
                     [
-                        x928,
+                        x929,
                         x165,
                         0.0,
                         0.0,
@@ -4369,13 +4335,13 @@ pub mod lagrange {
                         0.0,
                         x344,
                         x343,
-                        x948,
                         x949,
+                        x950,
                         0.0,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x344, x343, 0.0, 0.0, 0.0],
                     [
-                        x929,
+                        x930,
                         x169,
                         0.0,
                         0.0,
@@ -4385,16 +4351,16 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x951,
                         x952,
+                        x953,
                         0.0,
                     ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x953, x954, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x954, x955, 0.0],
                     [
                         0.0,
                         0.0,
-                        x931,
-                        x940,
+                        x932,
+                        x941,
                         x344,
                         x344,
                         0.0,
@@ -4423,12 +4389,12 @@ pub mod lagrange {
                     [
                         0.0,
                         0.0,
-                        x936,
-                        x943,
-                        x948,
+                        x937,
+                        x944,
+                        x949,
                         0.0,
-                        x951,
-                        x953,
+                        x952,
+                        x954,
                         0.0,
                         0.0,
                         0.0,
@@ -4438,12 +4404,12 @@ pub mod lagrange {
                     [
                         0.0,
                         0.0,
-                        x939,
-                        x945,
-                        x949,
+                        x940,
+                        x946,
+                        x950,
                         0.0,
-                        x952,
-                        x954,
+                        x953,
+                        x955,
                         0.0,
                         0.0,
                         0.0,
@@ -4456,127 +4422,112 @@ pub mod lagrange {
                     [
                         ((2.0 * (x188 * x25) + 2.0 * x281 + 2.0 * (x70 * x28)) * mH
                             + mF * (2.0 * x282 + 2.0 * x281 + 2.0 * x283)) * x2,
-                        x977,
-                        x992,
+                        x978,
                         x993,
                         x994,
+                        x995,
                         0.0,
-                        x996,
-                        0.0,
-                        x998,
+                        x997,
                         0.0,
                         x999,
+                        0.0,
+                        x1000,
                         0.0,
                         0.0,
                     ],
                     [
-                        x977,
+                        x978,
                         x8
-                            * ((2.0 * (x52 * x976) + 2.0 * (x975 * x50) - 2.0 * x1000)
+                            * ((2.0 * (x52 * x977) + 2.0 * (x976 * x50) - 2.0 * x1001)
                                 * mF
-                                + (2.0 * (x322 * x47) + 2.0 * (x49 * x629) - 2.0 * x1000)
+                                + (2.0 * (x322 * x47) + 2.0 * (x49 * x629) - 2.0 * x1001)
                                     * mH),
-                        x1001,
                         x1002,
                         x1003,
+                        x1004,
                         0.0,
-                        x1005,
+                        x1006,
                         0.0,
-                        0.0,
-                        x998,
                         0.0,
                         x999,
                         0.0,
+                        x1000,
+                        0.0,
                     ],
                     [
-                        x992,
-                        x1001,
-                        x333 * x1006 + x221 * x571 + x1010 * IFxx + x70 * x1013
+                        x993,
+                        x1002,
+                        x333 * x1007 + x221 * x571 + x1011 * IFxx + x70 * x1014
                             + mF
-                                * (2.0 * (x112 * x985) + 2.0 * (x111 * x980)
-                                    + 2.0 * (x108 * x986))
+                                * (2.0 * (x112 * x986) + 2.0 * (x111 * x981)
+                                    + 2.0 * (x108 * x987))
                             + mH
-                                * (2.0 * (x987 * x98) + 2.0 * (x988 * x86)
-                                    + 2.0 * (x989 * x94)) + x188 * x1014
-                            + (((2.0 * (x205 * x1015) - 2.0 * x209) * IRxx
+                                * (2.0 * (x988 * x98) + 2.0 * (x989 * x86)
+                                    + 2.0 * (x990 * x94)) + x188 * x1015
+                            + (((2.0 * (x205 * x1016) - 2.0 * x209) * IRxx
                                 - x4 * (2.0 * x195 + 2.0 * x196)
                                 - x9 * (2.0 * x198 + 2.0 * x199) + 2.0 * IRyy + 2.0 * IByy
-                                + (2.0 * x192 + 2.0 * x193 - 2.0 * x1016) * mB) * x1 - x218)
+                                + (2.0 * x192 + 2.0 * x193 - 2.0 * x1017) * mB) * x1 - x218)
                                 * x5 + x330 * x229,
-                        x1019,
-                        x1022,
+                        x1020,
                         x1023,
                         x1024,
                         x1025,
-                        x1027,
+                        x1026,
                         x1028,
-                        x1033,
-                        x1038,
+                        x1029,
+                        x1034,
+                        x1039,
                         0.0,
-                    ],
-                    [
-                        x993,
-                        x1002,
-                        x1019,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1040,
-                        x1043,
-                        x1046,
-                        x1050,
-                        x1053,
                     ],
                     [
                         x994,
                         x1003,
-                        x1022,
+                        x1020,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         x1041,
-                        x930,
-                        x1055,
-                        x1058,
-                        x1063,
+                        x1044,
+                        x1047,
+                        x1051,
+                        x1054,
                     ],
                     [
-                        0.0,
-                        0.0,
+                        x995,
+                        x1004,
                         x1023,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1041,
-                        x930,
-                        0.0,
-                        0.0,
-                        0.0,
+                        x1042,
+                        x931,
+                        x1056,
+                        x1059,
+                        x1064,
                     ],
                     [
-                        x996,
-                        x1005,
+                        0.0,
+                        0.0,
                         x1024,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
+                        x1042,
+                        x931,
                         0.0,
                         0.0,
-                        x1066,
-                        x1068,
-                        x1070,
+                        0.0,
                     ],
                     [
-                        0.0,
-                        0.0,
+                        x997,
+                        x1006,
                         x1025,
                         0.0,
                         0.0,
@@ -4585,32 +4536,32 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
+                        x1067,
+                        x1069,
                         x1071,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x1026,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
                         x1072,
+                        x1073,
                         0.0,
                     ],
                     [
-                        x998,
+                        x999,
                         0.0,
-                        x1027,
-                        x1040,
-                        x1041,
-                        x1041,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x998,
                         x1028,
-                        x1043,
-                        x930,
-                        x930,
+                        x1041,
+                        x1042,
+                        x1042,
                         0.0,
                         0.0,
                         0.0,
@@ -4620,14 +4571,14 @@ pub mod lagrange {
                         0.0,
                     ],
                     [
+                        0.0,
                         x999,
+                        x1029,
+                        x1044,
+                        x931,
+                        x931,
                         0.0,
-                        x1033,
-                        x1046,
-                        x1055,
                         0.0,
-                        x1066,
-                        x1071,
                         0.0,
                         0.0,
                         0.0,
@@ -4635,13 +4586,13 @@ pub mod lagrange {
                         0.0,
                     ],
                     [
+                        x1000,
                         0.0,
-                        x999,
-                        x1038,
-                        x1050,
-                        x1058,
+                        x1034,
+                        x1047,
+                        x1056,
                         0.0,
-                        x1068,
+                        x1067,
                         x1072,
                         0.0,
                         0.0,
@@ -4651,12 +4602,27 @@ pub mod lagrange {
                     ],
                     [
                         0.0,
+                        x1000,
+                        x1039,
+                        x1051,
+                        x1059,
+                        0.0,
+                        x1069,
+                        x1073,
                         0.0,
                         0.0,
-                        x1053,
-                        x1063,
                         0.0,
-                        x1070,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1054,
+                        x1064,
+                        0.0,
+                        x1071,
                         0.0,
                         0.0,
                         0.0,
@@ -4667,127 +4633,112 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        (2.0 * (x18 * x25) + x349 * (2.0 * x1248 + 2.0 * x1249)) * mH
+                        (2.0 * (x18 * x25) + x349 * (2.0 * x1250 + 2.0 * x1251)) * mH
                             + mF
-                                * (2.0 * (x20 * x651) + 2.0 * (x31 * x1250)
-                                    + 2.0 * (x30 * x1251)),
-                        x1256,
-                        x1273,
-                        x1278,
-                        x1282,
-                        0.0,
-                        x1283,
-                        0.0,
-                        0.0,
+                                * (2.0 * (x20 * x651) + 2.0 * (x31 * x1252)
+                                    + 2.0 * (x30 * x1253)),
+                        x1258,
+                        x1275,
+                        x1280,
+                        x1284,
                         0.0,
                         x1285,
                         0.0,
                         0.0,
+                        0.0,
+                        x1287,
+                        0.0,
+                        0.0,
                     ],
                     [
-                        x1256,
+                        x1258,
                         mF
-                            * (2.0 * (x52 * x1253) - 2.0 * (x851 * x55)
-                                + 2.0 * (x50 * x1252))
-                            + (2.0 * (x49 * x354) + (2.0 * x1255 - 2.0 * x1254) * x269)
+                            * (2.0 * (x52 * x1255) - 2.0 * (x851 * x55)
+                                + 2.0 * (x50 * x1254))
+                            + (2.0 * (x49 * x354) + (2.0 * x1257 - 2.0 * x1256) * x269)
                                 * mH,
-                        x1286,
-                        x1287,
+                        x1288,
                         x1289,
+                        x1291,
                         0.0,
-                        x1290,
+                        x1292,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1285,
+                        x1287,
                         0.0,
                     ],
                     [
-                        x1273,
-                        x1286,
+                        x1275,
+                        x1288,
                         mB
-                            * (2.0 * (x1258 * x117)
-                                + rR * x194 * (2.0 * x991 - 2.0 * x990))
+                            * (2.0 * (x1260 * x117)
+                                + rR * x194 * (2.0 * x992 - 2.0 * x991))
                             + mF
-                                * (2.0 * (x108 * x1267) + 2.0 * (x1261 * x111)
-                                    + 2.0 * (x112 * x1266))
+                                * (2.0 * (x108 * x1269) + 2.0 * (x1263 * x111)
+                                    + 2.0 * (x112 * x1268))
                             + mH
-                                * (2.0 * (x1270 * x94) + 2.0 * (x98 * x1272)
-                                    + 2.0 * (x1269 * x86))
+                                * (2.0 * (x1272 * x94) + 2.0 * (x98 * x1274)
+                                    + 2.0 * (x1271 * x86))
                             + x1
-                                * ((x1291 * x74 + x4 * (x243 - 2.0 * x198 - x199)
-                                    + x9 * x1292) * x1 - x74 * (x229 * x0 - x1006 * x359)
-                                    + (x1293 + x602 * x227) * x70 + x67 * x217 + IFxx * x1296),
-                        x1306,
+                                * ((x1293 * x74 + x4 * (x243 - 2.0 * x198 - x199)
+                                    + x9 * x1294) * x1 - x74 * (x229 * x0 - x1007 * x359)
+                                    + (x1295 + x602 * x227) * x70 + x67 * x217 + IFxx * x1298),
                         x1308,
-                        0.0,
                         x1310,
-                        x1311,
+                        0.0,
+                        x1312,
+                        x1313,
                         0.0,
                         0.0,
-                        x1317,
-                        x1320,
+                        x1319,
+                        x1322,
                         0.0,
                     ],
                     [
-                        x1278,
-                        x1287,
-                        x1306,
-                        mH
-                            * (2.0 * (x137 * x1274)
-                                + (2.0 * (x133 * x1155) - 2.0 * (x136 * x76)) * x290)
-                            + (x290 * (2.0 * (x1276 * x142) + 2.0 * (x1275 * x144))
-                                + 2.0 * (x1277 * x140)) * mF
-                            + (x1297 - x288 * x1006 - x287) * x135 + 2.0 * x240
-                            + x74 * (x0 * x1302 + x241) + x9 * (x237 - 2.0 * x195 - x196)
-                            + (2.0 * (x248 * x1304) - 2.0 * (x246 * x1303)) * IFxx
-                            + x4 * x1298,
-                        x1323,
-                        0.0,
-                        x1324,
-                        x1326,
-                        0.0,
-                        0.0,
-                        x1329,
-                        x1331,
-                        x1063,
-                    ],
-                    [
-                        x1282,
+                        x1280,
                         x1289,
                         x1308,
-                        x1323,
+                        mH
+                            * (2.0 * (x137 * x1276)
+                                + (2.0 * (x133 * x1156) - 2.0 * (x136 * x76)) * x290)
+                            + (x290 * (2.0 * (x1278 * x142) + 2.0 * (x1277 * x144))
+                                + 2.0 * (x1279 * x140)) * mF
+                            + (x1299 - x288 * x1007 - x287) * x135 + 2.0 * x240
+                            + x74 * (x0 * x1304 + x241) + x9 * (x237 - 2.0 * x195 - x196)
+                            + (2.0 * (x248 * x1306) - 2.0 * (x246 * x1305)) * IFxx
+                            + x4 * x1300,
+                        x1325,
+                        0.0,
+                        x1326,
+                        x1328,
+                        0.0,
+                        0.0,
+                        x1331,
+                        x1333,
+                        x1064,
+                    ],
+                    [
+                        x1284,
+                        x1291,
+                        x1310,
+                        x1325,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1336,
                         x1338,
-                        x1342,
+                        x1340,
+                        x1344,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [
-                        x1283,
-                        x1290,
-                        x1310,
-                        x1324,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1345,
-                        x1346,
-                        x1350,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1311,
+                        x1285,
+                        x1292,
+                        x1312,
                         x1326,
                         0.0,
                         0.0,
@@ -4795,55 +4746,70 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x1351,
+                        x1347,
+                        x1348,
                         x1352,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x1313,
+                        x1328,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1353,
+                        x1354,
                         0.0,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [
-                        x1285,
+                        x1287,
                         0.0,
-                        x1317,
-                        x1329,
-                        x1336,
-                        0.0,
-                        x1345,
-                        x1351,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x1285,
-                        x1320,
+                        x1319,
                         x1331,
                         x1338,
                         0.0,
-                        x1346,
+                        x1347,
+                        x1353,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x1287,
+                        x1322,
+                        x1333,
+                        x1340,
+                        0.0,
+                        x1348,
+                        x1354,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1064,
+                        x1344,
+                        0.0,
                         x1352,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1063,
-                        x1342,
-                        0.0,
-                        x1350,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
                         0.0,
                     ],
                 ],
@@ -4864,169 +4830,169 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        -((2.0 * x1492 - 2.0 * x26 + 2.0 * x1493 + 2.0 * x27) * x20
+                        -((2.0 * x1494 - 2.0 * x26 + 2.0 * x1495 + 2.0 * x27) * x20
                             * mF),
-                        x1499,
-                        x1507,
-                        x1510,
-                        x1516,
-                        0.0,
-                        x1517,
-                        0.0,
-                        0.0,
+                        x1501,
+                        x1509,
+                        x1512,
+                        x1518,
                         0.0,
                         x1519,
                         0.0,
                         0.0,
-                    ],
-                    [
-                        x1499,
-                        mF * (2.0 * x1494 - 2.0 * x44 + 2.0 * x1495 - 2.0 * x46) * x55,
-                        x1520,
+                        0.0,
                         x1521,
-                        x1522,
                         0.0,
-                        x1523,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1519,
                         0.0,
                     ],
                     [
-                        x1507,
-                        x1520,
-                        (2.0 * (x98 * x1505) - 2.0 * (x94 * x1506) - 2.0 * (x98 * x86))
+                        x1501,
+                        mF * (2.0 * x1496 - 2.0 * x44 + 2.0 * x1497 - 2.0 * x46) * x55,
+                        x1522,
+                        x1523,
+                        x1524,
+                        0.0,
+                        x1525,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1521,
+                        0.0,
+                    ],
+                    [
+                        x1509,
+                        x1522,
+                        (2.0 * (x98 * x1507) - 2.0 * (x94 * x1508) - 2.0 * (x98 * x86))
                             * mH
-                            + (2.0 * x224 - x1006 * x70 + IFxx * x1524 + 2.0 * x228)
+                            + (2.0 * x224 - x1007 * x70 + IFxx * x1526 + 2.0 * x228)
                                 * x93
                             + mF
-                                * (2.0 * (x108 * x1503) - 2.0 * (x111 * x107)
-                                    + 2.0 * (x112 * x1504)),
-                        x1528,
-                        x1529,
-                        0.0,
+                                * (2.0 * (x108 * x1505) - 2.0 * (x111 * x107)
+                                    + 2.0 * (x112 * x1506)),
                         x1530,
                         x1531,
                         0.0,
+                        x1532,
+                        x1533,
                         0.0,
-                        x1536,
-                        x1539,
+                        0.0,
+                        x1538,
+                        x1541,
                         0.0,
                     ],
                     [
-                        x1510,
-                        x1521,
-                        x1528,
+                        x1512,
+                        x1523,
+                        x1530,
                         x19
                             * (mF
-                                * (2.0 * (x140 * x1508) + (2.0 * x291 + 2.0 * x292) * x0)
-                                + (2.0 * (x137 * x1527) + x0 * (2.0 * x293 + 2.0 * x294))
+                                * (2.0 * (x140 * x1510) + (2.0 * x291 + 2.0 * x292) * x0)
+                                + (2.0 * (x137 * x1529) + x0 * (2.0 * x293 + 2.0 * x294))
                                     * mH
-                                + (x232 * (x1006 + x1321) - (2.0 * x296 + 2.0 * x297) * IFxx
+                                + (x232 * (x1007 + x1323) - (2.0 * x296 + 2.0 * x297) * IFxx
                                     - x233 - 2.0 * x234) * x74),
-                        x1540,
-                        0.0,
-                        x1541,
                         x1542,
                         0.0,
+                        x1543,
+                        x1544,
                         0.0,
-                        x1547,
-                        x1550,
-                        x1070,
+                        0.0,
+                        x1549,
+                        x1552,
+                        x1071,
                     ],
                     [
-                        x1516,
-                        x1522,
-                        x1529,
-                        x1540,
-                        ((2.0 * (x1513 * x149) + 2.0 * (x1511 * x157)
-                            + 2.0 * (x1512 * x159)) * mF
+                        x1518,
+                        x1524,
+                        x1531,
+                        x1542,
+                        ((2.0 * (x1515 * x149) + 2.0 * (x1513 * x157)
+                            + 2.0 * (x1514 * x159)) * mF
                             + x0
                                 * (2.0 * x225 - 2.0 * IHyy + 2.0 * x226 - 2.0 * IFyy
                                     + IFxx * (2.0 * x335 + 2.0 * x336)) + 2.0 * (x164 * x166))
                             * x19,
                         0.0,
-                        x1551,
-                        x1552,
+                        x1553,
+                        x1554,
                         0.0,
                         0.0,
-                        x1556,
                         x1558,
-                        x1350,
+                        x1560,
+                        x1352,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [
-                        x1517,
-                        x1523,
-                        x1530,
+                        x1519,
+                        x1525,
+                        x1532,
+                        x1543,
+                        x1553,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1562,
+                        x1564,
+                        x1566,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x1533,
+                        x1544,
+                        x1554,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1567,
+                        x1568,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x1521,
+                        0.0,
+                        x1538,
+                        x1549,
+                        x1558,
+                        0.0,
+                        x1562,
+                        x1567,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x1521,
                         x1541,
-                        x1551,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1560,
-                        x1562,
-                        x1564,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1531,
-                        x1542,
                         x1552,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1565,
-                        x1566,
-                        0.0,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1519,
-                        0.0,
-                        x1536,
-                        x1547,
-                        x1556,
-                        0.0,
                         x1560,
-                        x1565,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x1519,
-                        x1539,
-                        x1550,
-                        x1558,
-                        0.0,
-                        x1562,
-                        x1566,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1070,
-                        x1350,
                         0.0,
                         x1564,
+                        x1568,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1071,
+                        x1352,
+                        0.0,
+                        x1566,
                         0.0,
                         0.0,
                         0.0,
@@ -5176,8 +5142,8 @@ pub mod lagrange {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
                     -(mB * (x268 * x505 - x512 - x513)
-                        + (x269 * x469 - x449 * x920 + x466 * x273) * mH
-                        + mF * (x923 * x483 - x920 * x492 + x487 * x922)
+                        + (x269 * x469 - x449 * x921 + x466 * x273) * mH
+                        + mF * (x924 * x483 - x921 * x492 + x487 * x923)
                         + x99 * (-x514 - 2.0 * x516)),
                     x511,
                     0.0,
@@ -5194,478 +5160,450 @@ pub mod lagrange {
                     x619,
                     x840
                         - theta_dot
-                            * (x955 - rF * (x844 + x845 + x847)
-                                - x638 * x946 / f64::sqrt(x173))
-                        - (f64::sqrt(x173)
-                            * (x957 - (x645 + x813) * rR
+                            * (x956 - rF * (x844 + x845 + x847) - x638 * x947 / x174)
+                        - (x174
+                            * (x958 - (x645 + x813) * rR
                                 + x100
-                                    * (x19 * (x958 - delta_dot * x934) + x0 * (x959 + x809)))
-                            - x638 * x935 / f64::sqrt(x173)
-                            - rF * (x831 + x960 * x93 + x832)) * psi_dot
+                                    * (x19 * (x959 - delta_dot * x935) + x0 * (x960 + x809)))
+                            - x638 * x936 / x174 - rF * (x831 + x961 * x93 + x832))
+                            * psi_dot
                         - phi_dot
-                            * ((x100 * ((x8 * x631 + x135 * x515 + x861) * x0 + x961)
-                                + rR * (x81 * x515 + x8 * (x81 * x528 + x867)) + x963
-                                + x964 * x105) * f64::sqrt(x173)
-                                - rF * (x93 * x965 + x876 + x877)
-                                - x941 * x638 / f64::sqrt(x173))
+                            * ((x100 * ((x8 * x631 + x135 * x515 + x861) * x0 + x962)
+                                + rR * (x81 * x515 + x8 * (x81 * x528 + x867)) + x964
+                                + x965 * x105) * x174 - rF * (x93 * x966 + x876 + x877)
+                                - x942 * x638 / x174)
                         - delta_dot
-                            * ((x967 * f64::sqrt(x173) + x638 * x920 / f64::sqrt(x173))
-                                * x100 - rF * (x885 + x93 * x966 + x886)),
+                            * ((x968 * x174 + x638 * x921 / x174) * x100
+                                - rF * (x885 + x93 * x967 + x886)),
                     -(theta_dot
                         * (x658
                             - rF
                                 * (-(x269 * x669 + 0.5 * x660 + 0.5 * x662) * x173
-                                    - x93 * (2.0 * x687 - x704 * x920 + x967 * x348)
-                                    - x968 * x348))
+                                    - x93 * (2.0 * x687 - x704 * x921 + x968 * x348)
+                                    - x969 * x348))
                         + (x725
-                            - (x93 * (x742 * x920 - x276 * x967 + 2.0 * (x938 * x637))
-                                - x276 * x968
-                                - (x968 + x702 * x923 + x967 * x93 + x971 * x189
-                                    + x190 * x972 + x922 * x701) * x173) * rF) * psi_dot
+                            - (x93 * (x742 * x921 - x276 * x968 + 2.0 * (x939 * x637))
+                                - x276 * x969
+                                - (x969 + x702 * x924 + x968 * x93 + x972 * x189
+                                    + x190 * x973 + x923 * x701) * x173) * rF) * psi_dot
                         + phi_dot
                             * (x764
                                 - rF
-                                    * ((x920 * x781 - x967 * x310 + 2.0 * (x944 * x637)) * x93
-                                        - x968 * x310
+                                    * ((x921 * x781 - x968 * x310 + 2.0 * (x945 * x637)) * x93
+                                        - x969 * x310
                                         - x173
-                                            * (x766 * x920 + x971 * x248 + x972 * x246 + x775 * x922
-                                                + x19 * (-x920 * x767 - x967 * x74) + x923 * x779)))
+                                            * (x766 * x921 + x972 * x248 + x973 * x246 + x775 * x923
+                                                + x19 * (-x921 * x767 - x968 * x74) + x924 * x779)))
                         + delta_dot
                             * (x812
                                 - rF
-                                    * ((2.0 * (x637 * x337 * x269) - x967 * x370 - x799 * x920)
-                                        * x93 - x721 * x367 - x968 * x370)) + x967 * x788),
+                                    * ((2.0 * (x637 * x337 * x269) - x968 * x370 - x799 * x921)
+                                        * x93 - x721 * x367 - x969 * x370)) + x968 * x788),
                     0.0,
                 ],
                 [
                     -(mH
-                        * (psi_dot * (x28 * x1083 - x20 * x1089 + x1091 * x25)
+                        * (psi_dot * (x28 * x1084 - x20 * x1090 + x1092 * x25)
                             + (x188 * x469 + x449 * x93 + x466 * x70) * x2)
                         + mB
-                            * ((x1092 + (x1099 - x1096) * x1) * x2
-                                + (x16 * x1104 + x1108 * x11) * psi_dot)
+                            * ((x1093 + (x1100 - x1097) * x1) * x2
+                                + (x16 * x1105 + x1109 * x11) * psi_dot)
                         + mF
                             * ((x189 * x487 + x93 * x492 + x190 * x483) * x2
-                                + (x31 * x1111 + x1112 * x30 - x20 * x1113) * psi_dot)
+                                + (x31 * x1112 + x1113 * x30 - x20 * x1114) * psi_dot)
                         + x99 * (-x493 * x3 - 2.0 * (phi_dot * x620))),
                     -(x99 * (x493 * x45 - 2.0 * (phi_dot * x612))
                         + mF
-                            * ((x483 * x976 - x973 * x492 + x975 * x487) * x8
-                                + psi_dot * (x52 * x1112 + x50 * x1111 + x1113 * x55))
+                            * ((x483 * x977 - x974 * x492 + x976 * x487) * x8
+                                + psi_dot * (x52 * x1113 + x50 * x1112 + x1114 * x55))
                         + mH
-                            * (psi_dot * (x1089 * x55 + x1091 * x49 + x47 * x1083)
-                                + x8 * (x629 * x469 - x449 * x973 + x466 * x322))
-                        + ((x1 * (x1096 - x1097 + x1098) - x1092) * x8
-                            + (x41 * x1104 + x1108 * x37) * psi_dot) * mB),
+                            * (psi_dot * (x1090 * x55 + x1092 * x49 + x47 * x1084)
+                                + x8 * (x629 * x469 - x449 * x974 + x466 * x322))
+                        + ((x1 * (x1097 - x1098 + x1099) - x1093) * x8
+                            + (x41 * x1105 + x1109 * x37) * psi_dot) * mB),
                     psi_dot
-                        * ((x1125 + x1126 + x1127) * x194 - x1119 * x189
-                            - 2.0 * (x1120 * x223) + x93 * x1134
-                            + (x4 * x1138 - x1135 - x74 * x1142 - x1144 * x9
-                                + x208 * x1146 - x205 * x1150) * x1 - x70 * x1151
-                            - x190 * x1153)
-                        + x5 * (x527 - x1015 * x557 - x541 + x549 - x563) - x588 * x1
-                        - (psi_dot * ((x1108 * x120 + x118 * x1104) * x5 + x117 * x1095)
-                            + x573 * x1 - x1092 * x116) * mB - x1008 * x578
+                        * ((x1126 + x1127 + x1128) * x194 - x1120 * x189
+                            - 2.0 * (x1121 * x223) + x93 * x1135
+                            + (x4 * x1139 - x1136 - x74 * x1143 - x1145 * x9
+                                + x208 * x1147 - x205 * x1151) * x1 - x70 * x1152
+                            - x190 * x1154)
+                        + x5 * (x527 - x1016 * x557 - x541 + x549 - x563) - x588 * x1
+                        - (psi_dot * ((x1109 * x120 + x118 * x1105) * x5 + x117 * x1096)
+                            + x573 * x1 - x1093 * x116) * mB - x1009 * x578
                         - mF
-                            * (x487 * x985 + x483 * x986 + x980 * x492
-                                + (x111 * x1113 + x112 * x1111 + x1112 * x108) * psi_dot)
+                            * (x487 * x986 + x483 * x987 + x981 * x492
+                                + (x111 * x1114 + x112 * x1112 + x1113 * x108) * psi_dot)
                         - x330 * x584
-                        - (x466 * x987 + x989 * x469
-                            + psi_dot * (x1091 * x94 + x98 * x1083 + x86 * x1089)
-                            + x449 * x988) * mH - x1009 * x569 + x332 * x594,
+                        - (x466 * x988 + x990 * x469
+                            + psi_dot * (x1092 * x94 + x98 * x1084 + x86 * x1090)
+                            + x449 * x989) * mH - x1010 * x569 + x332 * x594,
                     g * (x128 * x1 - mH * (x133 * x1 + x73 * x322) - x325 * mF)
                         + psi_dot
                             * (x74
-                                * (x19 * (x1128 - x1129 - x1130 + x1131 + x1132 + x1133)
-                                    - x0 * x1151) - x1095 * x127
-                                - mF * ((x1112 * x144 + x142 * x1111) * x19 + x1113 * x140)
-                                - (x137 * x1089 + x19 * (x133 * x1083 + x1091 * x76)) * mH
-                                - x208 * x1150 - x135 * x1142 - x205 * x1146 - x4 * x1144
-                                - x1119 * x248 - x9 * x1138 - x246 * x1153 + x223 * x570),
+                                * (x19 * (x1129 - x1130 - x1131 + x1132 + x1133 + x1134)
+                                    - x0 * x1152) - x1096 * x127
+                                - mF * ((x1113 * x144 + x142 * x1112) * x19 + x1114 * x140)
+                                - (x137 * x1090 + x19 * (x133 * x1084 + x1092 * x76)) * mH
+                                - x208 * x1151 - x135 * x1143 - x205 * x1147 - x4 * x1145
+                                - x1120 * x248 - x9 * x1139 - x246 * x1154 + x223 * x570),
                     psi_dot
-                        * ((x1125 + phi_dot * x220) * x5
-                            - (x1091 * x164 + x161 * x1089 + x163 * x1083) * mH
-                            - (x1153 * x29 + x1151 + x22 * x1119) * x19
-                            - (x150 * x1113 + x1112 * x157 + x159 * x1111) * mF
-                            - mB * (-xB * x1104 - x1108 * x114) + x0 * x1134) - x1156,
+                        * ((x1126 + phi_dot * x220) * x5
+                            - (x1092 * x164 + x161 * x1090 + x163 * x1084) * mH
+                            - (x1154 * x29 + x1152 + x22 * x1120) * x19
+                            - (x150 * x1114 + x1113 * x157 + x159 * x1112) * mF
+                            - mB * (-xB * x1105 - x1109 * x114) + x0 * x1135) - x1157,
                     x529,
-                    (x22 * x1153 + (x1013 - x1139) * x390 - x1089 * x166 - x1140
-                        - x1119 * x29 - x1141 - x1113 * x167 + x332 * x605) * psi_dot
-                        - x1157,
-                    -(psi_dot * x1132),
+                    (x22 * x1154 + (x1014 - x1140) * x390 - x1090 * x166 - x1141
+                        - x1120 * x29 - x1142 - x1114 * x167 + x332 * x605) * psi_dot
+                        - x1158,
+                    -(psi_dot * x1133),
                     rR
                         * (psi_dot
-                            * (x623 - x5 * (x611 * x1160 + (x616 - 1.0) * x612)
+                            * (x623 - x5 * (x611 * x1161 + (x616 - 1.0) * x612)
                                 - x515 * x308)
                             + phi_dot
-                                * (x5 * (f64::sqrt(x170) * x615 + 2.0 * x614)
-                                    - (x622 * (3.0 * x608 - x171 + (2.0 - x1161) * x1)
-                                        + x617 * x620) * x1 - x621)) + x_dot * x1162,
+                                * (x5 * (x171 * x615 + 2.0 * x614)
+                                    - (x622 * (3.0 * x608 - x171 + (2.0 - x1162) * x1)
+                                        + x617 * x620) * x1 - x621)) + x_dot * x1163,
                     rR
-                        * ((-(2.0 * x624 - f64::sqrt(x170) * x627) * x5
+                        * ((-(2.0 * x624 - x171 * x627) * x5
                             - (x617 * x612
-                                + x611 * ((x1161 - 2.0) * x1 + x171 - 3.0 * x608)) * x1
+                                + x611 * ((x1162 - 2.0) * x1 + x171 - 3.0 * x608)) * x1
                             - x613) * phi_dot
-                            + (-x5 * ((1.0 - x616) * x620 + x622 * x1160) - x618
-                                - x494 * x264) * psi_dot) + y_dot * x1162,
-                    x_dot * x903
-                        - (((-(x1163 / f64::powf(x173, 1.5) + x1164) * x317
-                            - x331 * x637 / f64::sqrt(x173)) * x2
-                            - x332 * x762 / f64::sqrt(x173)) * x93
-                            - x318 * x893 / f64::sqrt(x173)
-                            + f64::sqrt(x173)
+                            + (-x5 * ((1.0 - x616) * x620 + x622 * x1161) - x618
+                                - x494 * x264) * psi_dot) + y_dot * x1163,
+                    x_dot * x904
+                        - (((-(x1164 / x889 + x1165) * x317 - x331 * x637 / x174) * x2
+                            - x332 * x762 / x174) * x93 - x318 * x894 / x174
+                            + x174
                                 * (rR * (x5 * (x81 * x615 - x761) + x81 * x641)
                                     + x100
                                         * (((x135 * x615 + x755) * x5 + x809 + x135 * x641) * x0
                                             + x19 * (x494 - x6 * x862))
-                                    + (x5 * x1165 + x622 * x629) * x105
+                                    + (x5 * x1166 + x622 * x629) * x105
                                     + (x4 * x813 + x413 * x6) * x60)
                             - rF
-                                * (x332 * x785 + x1166 * x310
+                                * (x332 * x785 + x1167 * x310
                                     + x93
-                                        * (x8 * (-x973 * x781 - 2.0 * (x1044 * x637))
-                                            - 2.0 * (x332 * x786) + x1173 * x55 + x685 * x1045
-                                            + x1182 * x310 - 2.0 * (x900 * x311)) + x1183 * x55
+                                        * (x8 * (-x974 * x781 - 2.0 * (x1045 * x637))
+                                            - 2.0 * (x332 * x786) + x1174 * x55 + x685 * x1046
+                                            + x1183 * x310 - 2.0 * (x901 * x311)) + x1184 * x55
                                     + x173
-                                        * (x8 * (x975 * x775 - x973 * x1172 + x779 * x976)
-                                            + x248 * x1188 + x246 * x1189 - x1182 * x230))) * phi_dot
+                                        * (x8 * (x976 * x775 - x974 * x1173 + x779 * x977)
+                                            + x248 * x1189 + x246 * x1190 - x1183 * x230))) * phi_dot
                         - theta_dot
-                            * (((x1190 - x13 * x1192) * x105 + x1192 * x60 - rR * x753
-                                + ((x1192 * x12 + x1193) * x0 - x1195) * x100)
-                                * f64::sqrt(x173) - x350 * x893 / f64::sqrt(x173)
+                            * (((x1191 - x13 * x1193) * x105 + x1193 * x60 - rR * x753
+                                + ((x1193 * x12 + x1194) * x0 - x1196) * x100) * x174
+                                - x350 * x894 / x174
                                 - rF
-                                    * ((x8 * (2.0 * (x637 * x5) - x973 * x704)
-                                        - 2.0 * (x332 * x670) - 2.0 * (x900 * x45) + x1196 * x55
-                                        + x1182 * x348 + x685 * x1054) * x93 + x1054 * x707
-                                        + x332 * x706 + x348 * x1199
-                                        + (x1064 * x669 - 0.5 * x841 + 0.5 * x842) * x173)
+                                    * ((x8 * (2.0 * (x637 * x5) - x974 * x704)
+                                        - 2.0 * (x332 * x670) - 2.0 * (x901 * x45) + x1197 * x55
+                                        + x1183 * x348 + x685 * x1055) * x93 + x1055 * x707
+                                        + x332 * x706 + x348 * x1200
+                                        + (x1065 * x669 - 0.5 * x841 + 0.5 * x842) * x173)
                                 + x93
-                                    * (-x900 * x350 / f64::sqrt(x173)
-                                        - x1200 * x3 / f64::sqrt(x173) - x332 * x1201))
-                        + x788 * x1182
+                                    * (-x901 * x350 / x174 - x1201 * x3 / x174 - x332 * x1202))
+                        + x788 * x1183
                         - (x100
-                            * (x1207 * f64::sqrt(x173)
+                            * (x1208 * x174
                                 + x93
-                                    * (-x1208 / f64::sqrt(x173)
-                                        - (x2 / f64::sqrt(x173) + x1034 / f64::powf(x173, 1.5))
-                                            * x638 - x1209 / f64::sqrt(x173))
-                                + x20 * x893 / f64::sqrt(x173))
+                                    * (-x1209 / x174 - (x2 / x174 + x1035 / x889) * x638
+                                        - x1210 / x174) + x20 * x894 / x174)
                             - rF
-                                * ((x1182 * x370 + x1212 * x55 - x1065 * x685
-                                    - (2.0 * (x900 * x49) + 2.0 * (x637 * x1064)
-                                        + 2.0 * (x332 * x737)) * x337 - x799 * x1004) * x93
-                                    + (-x332 * x799 - x1213) * x55
-                                    + x337 * (x173 * x1185 - 2.0 * (x49 * x893))
-                                    + x370 * x1199)) * delta_dot
+                                * ((x1183 * x370 + x1213 * x55 - x1066 * x685
+                                    - (2.0 * (x901 * x49) + 2.0 * (x637 * x1065)
+                                        + 2.0 * (x332 * x737)) * x337 - x799 * x1005) * x93
+                                    + (-x332 * x799 - x1214) * x55
+                                    + x337 * (x173 * x1186 - 2.0 * (x49 * x894))
+                                    + x370 * x1200)) * delta_dot
                         - psi_dot
-                            * ((-x941 * x637 / f64::sqrt(x173)
-                                - x900 * x274 / f64::sqrt(x173) - x1214 * x332) * x93
-                                - x893 * x274 / f64::sqrt(x173)
-                                + f64::sqrt(x173)
-                                    * ((x1216 - x13 * x962) * x105
-                                        + x100 * (x961 + (x861 + x12 * x962 + x1217) * x0)
-                                        + rR * (x1174 - x624 + x1176 - x515) + x963)
+                            * ((-x942 * x637 / x174 - x901 * x274 / x174 - x1215 * x332)
+                                * x93 - x894 * x274 / x174
+                                + x174
+                                    * ((x1217 - x13 * x963) * x105
+                                        + x100 * (x962 + (x861 + x12 * x963 + x1218) * x0)
+                                        + rR * (x1175 - x624 + x1177 - x515) + x964)
                                 - rF
                                     * (x93
-                                        * (x742 * x1004 + x276 * x1182 + x1218 * x55
-                                            - 2.0 * (x332 * x739) - 2.0 * (x637 * x1032) + x685 * x1029
-                                            - 2.0 * (x900 * x278)) + x1219 * x55
+                                        * (x742 * x1005 + x276 * x1183 + x1219 * x55
+                                            - 2.0 * (x332 * x739) - 2.0 * (x637 * x1033) + x685 * x1030
+                                            - 2.0 * (x901 * x278)) + x1220 * x55
                                         + x173
-                                            * (x1198 + x1170 * x52 + x1169 * x50 + x189 * x1188
-                                                + x1182 * x93 + x1008 * x734 + x1009 * x738 + x190 * x1189
-                                                + (x975 * x701 + x702 * x976 + x1220) * x8) + x276 * x1166
+                                            * (x1199 + x1171 * x52 + x1170 * x50 + x189 * x1189
+                                                + x1183 * x93 + x1009 * x734 + x1010 * x738 + x190 * x1190
+                                                + (x976 * x701 + x702 * x977 + x1221) * x8) + x276 * x1167
                                         + x332 * x746)),
-                    x903 * y_dot
-                        - (f64::sqrt(x173)
-                            * (x1221 * x105 + rR * (x958 + x1191 - x1202) + x754
-                                + x100 * x1222) - x893 * x280 / f64::sqrt(x173)
-                            + (-x332 * x1223 - x1224 - x900 * x280 / f64::sqrt(x173))
-                                * x93
+                    x904 * y_dot
+                        - (x174
+                            * (x1222 * x105 + rR * (x959 + x1192 - x1203) + x754
+                                + x100 * x1223) - x894 * x280 / x174
+                            + (-x332 * x1224 - x1225 - x901 * x280 / x174) * x93
                             - rF
                                 * (x93
-                                    * (x637 * (2.0 * x1035 + 2.0 * x1036 + 2.0 * x1034 + x1037)
-                                        + x20 * x1218 + 2.0 * (x900 * x284) - x811 * x1029
-                                        - x276 * x1207 - x742 * x995 + 2.0 * (x332 * x830))
-                                    + x1219 * x20
+                                    * (x637 * (2.0 * x1036 + 2.0 * x1037 + 2.0 * x1035 + x1038)
+                                        + x20 * x1219 + 2.0 * (x901 * x284) - x811 * x1030
+                                        - x276 * x1208 - x742 * x996 + 2.0 * (x332 * x830))
+                                    + x1220 * x20
                                     - x173
-                                        * (x2 * (x740 + x638 + x741) + x1225 * x189 + x1170 * x30
-                                            + x190 * x1226 + x1009 * x824 + x1008 * x829 + x1207 * x93
-                                            + x1208 + x1209 + x1169 * x31) + x836 * x332)) * psi_dot
-                        - (x8 * (x325 * x1228 - x638 * x1049 / f64::sqrt(x173))
+                                        * (x2 * (x740 + x638 + x741) + x1226 * x189 + x1171 * x30
+                                            + x190 * x1227 + x1010 * x824 + x1009 * x829 + x1208 * x93
+                                            + x1209 + x1210 + x1170 * x31) + x836 * x332)) * psi_dot
+                        - (x8 * (x325 * x1229 - x638 * x1050 / x174)
                             - rF
-                                * (x20 * x1183
-                                    - (x248 * x1225 + (x780 + x93 * x1172) * x2 - x1207 * x230
-                                        + x1226 * x246) * x173 + x332 * x874
-                                    + (2.0 * (x327 * x900) - x781 * x995
-                                        + x310 * (x1227 + x1205 - x1206) + x20 * x1173
-                                        + 2.0 * (x875 * x332) - x811 * x1045) * x93)
-                            + f64::sqrt(x173)
+                                * (x20 * x1184
+                                    - (x248 * x1226 + (x780 + x93 * x1173) * x2 - x1208 * x230
+                                        + x1227 * x246) * x173 + x332 * x874
+                                    + (2.0 * (x327 * x901) - x781 * x996
+                                        + x310 * (x1228 + x1206 - x1207) + x20 * x1174
+                                        + 2.0 * (x875 * x332) - x811 * x1046) * x93)
+                            + x174
                                 * (x100
-                                    * ((x135 * x612 + x8 * (theta_dot * x1007 + x67 * x418)
+                                    * ((x135 * x612 + x8 * (theta_dot * x1008 + x67 * x418)
                                         - x681) * x0 + x19 * (x515 + x35 * x635))
                                     + rR * (x8 * (x418 * x312 + x422) + x81 * x612)
-                                    + (x8 * x1229 - x74 * x612) * x105
+                                    + (x8 * x1230 - x74 * x612) * x105
                                     + (x4 * (x612 - x677) - x413 * x35) * x60)
-                            - x333 * x869 / f64::sqrt(x173)) * phi_dot
+                            - x333 * x869 / x174) * phi_dot
                         - theta_dot
-                            * ((-x1230 * x332 - x687 * x1057 / f64::sqrt(x173)
-                                - x355 * x900 / f64::sqrt(x173)) * x93
+                            * ((-x1231 * x332 - x687 * x1058 / x174 - x355 * x901 / x174)
+                                * x93
                                 - rF
-                                    * ((x900 * x348 + x637 * x1054) * x20
-                                        - (x1067 * x669 - 0.5 * x660 + 0.5 * x662) * x173
+                                    * ((x901 * x348 + x637 * x1055) * x20
+                                        - (x1068 * x669 - 0.5 * x660 + 0.5 * x662) * x173
                                         + x93
-                                            * ((x637 * (2.0 * x5 - x347 - x253) - x1231) * x2
-                                                + 2.0 * (x843 * x332) - x1207 * x348 + x1196 * x20
-                                                - 2.0 * (x900 * x3) - x811 * x1054) - x332 * x846)
-                                + (x100 * ((x1216 + x1184) * x0 - x1232)
-                                    + (x1178 - x1217) * x105 + x1215 * x60 - rR * x866)
-                                    * f64::sqrt(x173) - x355 * x893 / f64::sqrt(x173))
+                                            * ((x637 * (2.0 * x5 - x347 - x253) - x1232) * x2
+                                                + 2.0 * (x843 * x332) - x1208 * x348 + x1197 * x20
+                                                - 2.0 * (x901 * x3) - x811 * x1055) - x332 * x846)
+                                + (x100 * ((x1217 + x1185) * x0 - x1233)
+                                    + (x1179 - x1218) * x105 + x1216 * x60 - rR * x866) * x174
+                                - x355 * x894 / x174)
                         - (x100
-                            * (f64::sqrt(x173) * x1182 - x893 * x55 / f64::sqrt(x173)
-                                + (-x1166 / f64::sqrt(x173) - x1197 / f64::sqrt(x173)
-                                    - x332
-                                        * (x879 / f64::powf(x173, 1.5) + x685 / f64::sqrt(x173)))
-                                    * x93)
+                            * (x174 * x1183 - x894 * x55 / x174
+                                + (-x1167 / x174 - x1198 / x174
+                                    - x332 * (x879 / x889 + x685 / x174)) * x93)
                             - rF
                                 * (x93
-                                    * ((2.0 * (x637 * x1067) + 2.0 * (x900 * x25)
-                                        + 2.0 * (x332 * x818)) * x337 - x370 * (x1207 + x1227)
-                                        + x799 * x995 + x20 * x1212 + x811 * x1065)
-                                    + x20 * (x900 * x370 - x1213) + x332 * x884 - x1221 * x367))
-                            * delta_dot - x1207 * x788,
+                                    * ((2.0 * (x637 * x1068) + 2.0 * (x901 * x25)
+                                        + 2.0 * (x332 * x818)) * x337 - x370 * (x1208 + x1228)
+                                        + x799 * x996 + x20 * x1213 + x811 * x1066)
+                                    + x20 * (x901 * x370 - x1214) + x332 * x884 - x1222 * x367))
+                            * delta_dot - x1208 * x788,
                     -(phi_dot
-                        * (x1233 + x910 * x1 + x1234 * x528
+                        * (x1234 + x911 * x1 + x1235 * x528
                             + x100 * ((x859 - x628) * x0 - x862 * x91)
                             + rF
-                                * (2.0 * (x332 * x900 / f64::sqrt(x173))
+                                * (2.0 * (x332 * x901 / x174)
                                     + x93
-                                        * (x332 * (x1236 + 2.0 * x1237)
-                                            + ((x628 - x857 - x858) * x19 - x1180) / f64::sqrt(x173)
-                                            - x638 * x973 / f64::powf(x173, 1.5))
-                                    + x1220 / f64::sqrt(x173)))
+                                        * (x332 * (x1238 + 2.0 * x1239)
+                                            + ((x628 - x857 - x858) * x19 - x1181) / x174
+                                            - x638 * x974 / x889) + x1221 / x174))
                         + theta_dot
-                            * (x5 * (x1238 - x100 * x774) + x1239
+                            * (x5 * (x1240 - x100 * x774) + x1241
                                 + rF
-                                    * ((x629 * x1061 - x93 * x896 / f64::sqrt(x173)) * x765
+                                    * ((x629 * x1062 - x93 * x897 / x174) * x765
                                         + (x93
-                                            * ((-x1240 / f64::powf(x173, 1.5)
-                                                - (x900 / f64::powf(x173, 1.5)
-                                                    + 3.0 * (x1163 / f64::powf(x173, 2.5))) * x629
-                                                - x1241 / f64::powf(x173, 1.5)) * x93
-                                                - 3.0 * (x629 * x893 / f64::powf(x173, 1.5))
-                                                - x1229 / f64::sqrt(x173)) - x1241 / f64::sqrt(x173)
-                                            - x900 * x629 / f64::sqrt(x173) - x1240 / f64::sqrt(x173))
-                                            * x19) + x152 * x1229) + x1247 * delta_dot),
+                                            * ((-x1242 / x889
+                                                - (x901 / x889 + 3.0 * (x1164 / x1236)) * x629
+                                                - x1243 / x889) * x93 - 3.0 * (x629 * x894 / x889)
+                                                - x1230 / x174) - x1243 / x174 - x901 * x629 / x174
+                                            - x1242 / x174) * x19) + x152 * x1230) + x1249 * delta_dot),
                 ],
                 [
-                    -((x11 * x1359 - x1354 * x3 - x16 * x509 + x16 * x1360) * mB
-                        + (x1386 * x25 - x20 * x1380 + x349 * x1387 + x1388 * x28
+                    -((x11 * x1361 - x1356 * x3 - x16 * x509 + x16 * x1362) * mB
+                        + (x1388 * x25 - x20 * x1382 + x349 * x1389 + x1390 * x28
                             + x18 * x469) * mH
-                        + (x30 * x1399 - x20 * x1402 - x651 * x492 + x483 * x1251
-                            + x1250 * x487 + x31 * x1403) * mF),
-                    -((x269 * x1387 + x1386 * x49 + x1388 * x47 + x1380 * x55
+                        + (x30 * x1401 - x20 * x1404 - x651 * x492 + x483 * x1253
+                            + x1252 * x487 + x31 * x1405) * mF),
+                    -((x269 * x1389 + x1388 * x49 + x1390 * x47 + x1382 * x55
                         + x354 * x469) * mH
                         + mF
-                            * (x483 * x1253 - x492 * x851 + x487 * x1252 + x52 * x1399
-                                + x1402 * x55 + x50 * x1403)
-                        + (x268 * x509 + x1354 * x45 + x41 * x1360 + x1359 * x37) * mB),
-                    x93 * x1413
+                            * (x483 * x1255 - x492 * x851 + x487 * x1254 + x52 * x1401
+                                + x1404 * x55 + x50 * x1405)
+                        + (x268 * x509 + x1356 * x45 + x41 * x1362 + x1361 * x37) * mB),
+                    x93 * x1415
                         - mB
-                            * ((x120 * x1414 + x118 * x1360 + rR * x1099) * x5
-                                + (x1354 * x116 + x510 * x1257) * x1)
-                        + (x1424 * x9 - x1295 * x578 - x67 * x548 - x1294 * x569
-                            - x74 * x1419 - x205 * (x1421 + x1422)
-                            + x4 * (x1425 + x524 - 2.0 * x525 + x1428) - x1429
-                            + x208 * x1431 - x599) * x1
+                            * ((x120 * x1416 + x118 * x1362 + rR * x1100) * x5
+                                + (x1356 * x116 + x510 * x1259) * x1)
+                        + (x1426 * x9 - x1297 * x578 - x67 * x548 - x1296 * x569
+                            - x74 * x1421 - x205 * (x1423 + x1424)
+                            + x4 * (x1427 + x524 - 2.0 * x525 + x1430) - x1431
+                            + x208 * x1433 - x599) * x1
                         - mF
-                            * (x487 * x1266 + x111 * x1402 + x483 * x1267 + x112 * x1403
-                                + x1261 * x492 + x108 * x1399) - x1433 * x70 - x189 * x1438
-                        - (x1439 + x1440 + (x586 - x1426 - x520) * x379) * x5
-                        - x190 * x1443
-                        - (x449 * x1269 + x86 * x1380 + x1270 * x469 + x1386 * x94
-                            + x466 * x1272 + x98 * x1388) * mH,
-                    x578 * x1303 - x1419 * x135 - x248 * x1438
-                        + (x540 - x1421 - x1422) * x208
-                        + x0 * (x135 * x584 - x74 * x1433) - x569 * x1304
+                            * (x487 * x1268 + x111 * x1404 + x483 * x1269 + x112 * x1405
+                                + x1263 * x492 + x108 * x1401) - x1435 * x70 - x189 * x1440
+                        - (x1441 + x1442 + (x586 - x1428 - x520) * x379) * x5
+                        - x190 * x1445
+                        - (x449 * x1271 + x86 * x1382 + x1272 * x469 + x1388 * x94
+                            + x466 * x1274 + x98 * x1390) * mH,
+                    x578 * x1305 - x1421 * x135 - x248 * x1440
+                        + (x540 - x1423 - x1424) * x208
+                        + x0 * (x135 * x584 - x74 * x1435) - x569 * x1306
                         - mF
-                            * (x1402 * x140
-                                + (x142 * x1403 + x483 * x1275 + x144 * x1399
-                                    + x487 * x1276) * x19 + x1277 * x492) + x4 * x1424
-                        - x246 * x1443 + x9 * (2.0 * x525 - x1425 - x517 - x1428 - x523)
+                            * (x1404 * x140
+                                + (x142 * x1405 + x483 * x1277 + x144 * x1401
+                                    + x487 * x1278) * x19 + x1279 * x492) + x4 * x1426
+                        - x246 * x1445 + x9 * (2.0 * x525 - x1427 - x517 - x1430 - x523)
                         + x19
                             * (x135 * x594
-                                + x74 * (x1407 - x1406 - x1408 - x1409 + x1410 + x1412))
-                        - x549 - x205 * x1431 - (x126 * x1354 + x510 * x116) * mB
+                                + x74 * (x1409 - x1408 - x1410 - x1411 + x1412 + x1414))
+                        - x549 - x205 * x1433 - (x126 * x1356 + x510 * x116) * mB
                         - (x19
-                            * (x133 * x1388 + x73 * (x1386 * x74 - x135 * x469)
-                                + x466 * x1155) + x137 * x1380 + x449 * x1274) * mH - x1156,
-                    x0 * x1413 - x19 * (x1443 * x29 + x1433 + x22 * x1438)
-                        - (-x1414 * x114 - xB * x1360) * mB - x1439
-                        - (mF * x1340 + mH * (x73 * x321 + x1268) + x125 * mB) * g * x1
-                        - mF * (x1399 * x157 + x159 * x1403 + x150 * x1402) - x1440
-                        - mH * (x161 * x1380 + x1388 * x163 + x1386 * x164)
-                        + x379 * (x1427 + x521),
+                            * (x133 * x1390 + x73 * (x1388 * x74 - x135 * x469)
+                                + x466 * x1156) + x137 * x1382 + x449 * x1276) * mH - x1157,
+                    x0 * x1415 - x19 * (x1445 * x29 + x1435 + x22 * x1440)
+                        - (-x1416 * x114 - xB * x1362) * mB - x1441
+                        - (mF * x1342 + mH * (x73 * x321 + x1270) + x125 * mB) * g * x1
+                        - mF * (x1401 * x157 + x159 * x1405 + x150 * x1404) - x1442
+                        - mH * (x161 * x1382 + x1390 * x163 + x1388 * x164)
+                        + x379 * (x1429 + x521),
                     0.0,
-                    x22 * x1443 - x1402 * x167 - x1380 * x166 - x1417 - x1418
-                        + (x1411 - x1392 * IHyy) * x390 - x1438 * x29
-                        + x19 * (x1444 + x1362 * x547),
-                    -x1407,
+                    x22 * x1445 - x1404 * x167 - x1382 * x166 - x1419 - x1420
+                        + (x1413 - x1394 * IHyy) * x390 - x1440 * x29
+                        + x19 * (x1446 + x1364 * x547),
+                    -x1409,
                     0.0,
                     0.0,
-                    x_dot * x1450
+                    x_dot * x1452
                         - theta_dot
-                            * ((x957 - rR * x645 + x100 * (x959 * x0 - x777 * x934))
-                                * f64::sqrt(x173)
+                            * ((x958 - rR * x645 + x100 * (x960 * x0 - x777 * x935))
+                                * x174
                                 - rF
-                                    * (x1451 * x55
-                                        + (x1457 * x55 - x1460 * x348 + 2.0 * (x1447 * x45)) * x93
-                                        + x354 * x1461
-                                        + ((x736 * x1333
+                                    * (x1453 * x55
+                                        + (x1459 * x55 - x1462 * x348 + 2.0 * (x1449 * x45)) * x93
+                                        + x354 * x1463
+                                        + ((x736 * x1335
                                             - x74 * (2.0 * x687 - x686 + 2.0 * (x93 * x670) - x705))
-                                            * x1 - x1462 * x269) * x19) + x350 * x1449 / f64::sqrt(x173)
-                                + (x1447 * x350 / f64::sqrt(x173) + x1060 * x1201
-                                    - x637 * x1335 / f64::sqrt(x173)) * x93)
+                                            * x1 - x1464 * x269) * x19) + x350 * x1451 / x174
+                                + (x1449 * x350 / x174 + x1061 * x1202
+                                    - x637 * x1337 / x174) * x93)
                         - psi_dot
                             * (x93
-                                * (x1447 * x274 / f64::sqrt(x173)
-                                    - x637 * x946 / f64::sqrt(x173) + x1214 * x1060)
-                                + x274 * x1449 / f64::sqrt(x173) + x955
+                                * (x1449 * x274 / x174 - x637 * x947 / x174 + x1215 * x1061)
+                                + x274 * x1451 / x174 + x956
                                 - rF
                                     * (x173
-                                        * (x1465 * x189 + x1455 * x50 + x190 * x1466 + x702 * x1253
-                                            - x1447 * x55
-                                            + (x1294 * x738 + x734 * x1295 - x1313 * x685) * x1
-                                            - x1460 * x93 + x52 * x1456 - x637 * x851 + x1252 * x701)
-                                        + x1467 * x55
-                                        + (x19 * (2.0 * (x739 * x629) - x742 * x269) - x276 * x1460
-                                            - 2.0 * (x1316 * x637) + x685 * x1315 + x1468 * x55
-                                            + 2.0 * (x278 * x1447)) * x93
-                                        + x19 * ((2.0 * x745 - x743 - x744) * x629 - x276 * x1469)))
+                                        * (x1467 * x189 + x1457 * x50 + x190 * x1468 + x702 * x1255
+                                            - x1449 * x55
+                                            + (x1296 * x738 + x734 * x1297 - x1315 * x685) * x1
+                                            - x1462 * x93 + x52 * x1458 - x637 * x851 + x1254 * x701)
+                                        + x1469 * x55
+                                        + (x19 * (2.0 * (x739 * x629) - x742 * x269) - x276 * x1462
+                                            - 2.0 * (x1318 * x637) + x685 * x1317 + x1470 * x55
+                                            + 2.0 * (x278 * x1449)) * x93
+                                        + x19 * ((2.0 * x745 - x743 - x744) * x629 - x276 * x1471)))
                         - delta_dot
                             * (x100
                                 * (x19
-                                    * (x349 * x638 / f64::sqrt(x173)
-                                        + (x825 * x889 + x826 / f64::sqrt(x173)) * x629)
-                                    + x281 * x1447 / f64::sqrt(x173) - f64::sqrt(x173) * x1472)
+                                    * (x349 * x638 / x174 + (x825 * x890 + x826 / x174) * x629)
+                                    + x281 * x1449 / x174 - x174 * x1474)
                                 - rF
-                                    * (x853 * x367 + x1473 * x55
-                                        + (x799 * x851 - x1474 * x55 - x1460 * x370
-                                            + (2.0 * (x1060 * x737) + 2.0 * (x49 * x1447)
-                                                - 2.0 * (x637 * x354)) * x337 + x685 * x1344) * x93
-                                        + ((2.0 * x790 + x800 - x801) * x629 - x1469 * x370) * x19))
-                        - ((x318 * x1447 / f64::sqrt(x173)
-                            + (x1313
-                                * (x762 / f64::sqrt(x173) + x748 / f64::powf(x173, 1.5))
-                                - x1200 * x2 / f64::sqrt(x173)) * x1) * x93
+                                    * (x853 * x367 + x1475 * x55
+                                        + (x799 * x851 - x1476 * x55 - x1462 * x370
+                                            + (2.0 * (x1061 * x737) + 2.0 * (x49 * x1449)
+                                                - 2.0 * (x637 * x354)) * x337 + x685 * x1346) * x93
+                                        + ((2.0 * x790 + x800 - x801) * x629 - x1471 * x370) * x19))
+                        - ((x318 * x1449 / x174
+                            + (x1315 * (x762 / x174 + x748 / x889) - x1201 * x2 / x174)
+                                * x1) * x93
                             - rF
                                 * (x173
-                                    * (x738 * x1304 + x775 * x1252
-                                        + (x74 * (x1458 + 2.0 * x1459 + theta_dot * x55)
-                                            + (x685 - theta_dot * x851) * x135) * x19 - x734 * x1303
-                                        + x1466 * x246 + x50 * x1475 + x779 * x1253 + x1476 * x55
-                                        + x52 * x1477 + x1465 * x248) + x1478 * x55
-                                    + (x685 * x1328 - x1460 * x310 + 2.0 * (x1447 * x311)
-                                        + x1480 * x55 + x19 * (2.0 * (x786 * x629) - x269 * x781)
-                                        - 2.0 * (x1327 * x637)) * x93
-                                    + x19 * ((2.0 * x783 - x782 - x784) * x629 - x1469 * x310))
-                            + x318 * x1449 / f64::sqrt(x173)
-                            + f64::sqrt(x173)
+                                    * (x738 * x1306 + x775 * x1254
+                                        + (x74 * (x1460 + 2.0 * x1461 + theta_dot * x55)
+                                            + (x685 - theta_dot * x851) * x135) * x19 - x734 * x1305
+                                        + x1468 * x246 + x50 * x1477 + x779 * x1255 + x1478 * x55
+                                        + x52 * x1479 + x1467 * x248) + x1480 * x55
+                                    + (x685 * x1330 - x1462 * x310 + 2.0 * (x1449 * x311)
+                                        + x1482 * x55 + x19 * (2.0 * (x786 * x629) - x269 * x781)
+                                        - 2.0 * (x1329 * x637)) * x93
+                                    + x19 * ((2.0 * x783 - x782 - x784) * x629 - x1471 * x310))
+                            + x318 * x1451 / x174
+                            + x174
                                 * (x79 * x614 + (x888 * x750 + x615 * x363) * x1
-                                    + x100 * ((x1165 * x1 + x749) * x0 - x1195) + x756 * x105))
-                            * phi_dot - x788 * x1460,
-                    x788 * x1472
+                                    + x100 * ((x1166 * x1 + x749) * x0 - x1196) + x756 * x105))
+                            * phi_dot - x788 * x1462,
+                    x788 * x1474
                         - psi_dot
-                            * ((x1447 * x280 / f64::sqrt(x173) - x1481 + x1060 * x1223)
-                                * x93
+                            * ((x1449 * x280 / x174 - x1483 + x1061 * x1224) * x93
                                 - rF
-                                    * ((x1468 * x20 + x19 * (x349 * x742 - 2.0 * (x629 * x830))
-                                        - 2.0 * (x284 * x1447) - x811 * x1315 + 2.0 * (x1319 * x637)
-                                        + x276 * x1472) * x93 + x19 * (x960 * x629 + x276 * x1482)
-                                        - (x20 * x1447 - x93 * x1472 + x190 * x1485 + x189 * x1486
-                                            + x1456 * x30
-                                            + (x1294 * x824 + x1295 * x829 - x811 * x1313) * x1
-                                            + x31 * x1455 - x637 * x651 + x702 * x1251 + x1250 * x701)
-                                            * x173 + x1467 * x20) + x280 * x1449 / f64::sqrt(x173)
-                                + x657) + y_dot * x1450
+                                    * ((x1470 * x20 + x19 * (x349 * x742 - 2.0 * (x629 * x830))
+                                        - 2.0 * (x284 * x1449) - x811 * x1317 + 2.0 * (x1321 * x637)
+                                        + x276 * x1474) * x93 + x19 * (x961 * x629 + x276 * x1484)
+                                        - (x20 * x1449 - x93 * x1474 + x190 * x1487 + x189 * x1488
+                                            + x1458 * x30
+                                            + (x1296 * x824 + x1297 * x829 - x811 * x1315) * x1
+                                            + x31 * x1457 - x637 * x651 + x702 * x1253 + x1252 * x701)
+                                            * x173 + x1469 * x20) + x280 * x1451 / x174 + x657)
+                        + y_dot * x1452
                         - phi_dot
-                            * (f64::sqrt(x173)
-                                * ((x1238 * x1 + x528 * x363) * x8 + x515 * x363
-                                    + x100 * (x0 * x964 - x1232) + x860 * x105)
+                            * (x174
+                                * ((x1240 * x1 + x528 * x363) * x8 + x515 * x363
+                                    + x100 * (x0 * x965 - x1233) + x860 * x105)
                                 - rF
-                                    * (x19 * (x310 * x1482 + x629 * x965)
+                                    * (x19 * (x310 * x1484 + x629 * x966)
                                         - x173
-                                            * (x824 * x1304 + x1485 * x246 + x248 * x1486 - x20 * x1476
+                                            * (x824 * x1306 + x1487 * x246 + x248 * x1488 - x20 * x1478
                                                 + x19
-                                                    * ((x1470 + 2.0 * x1471 - x20 * theta_dot) * x74
-                                                        + (x811 - theta_dot * x651) * x135) + x779 * x1251
-                                                - x1303 * x829 + x1250 * x775 + x1477 * x30 + x31 * x1475)
-                                        + (x20 * x1480 + x310 * x1472 - x811 * x1328
-                                            - 2.0 * (x327 * x1447) + 2.0 * (x1330 * x637)
+                                                    * ((x1472 + 2.0 * x1473 - x20 * theta_dot) * x74
+                                                        + (x811 - theta_dot * x651) * x135) + x779 * x1253
+                                                - x1305 * x829 + x1252 * x775 + x1479 * x30 + x31 * x1477)
+                                        + (x20 * x1482 + x310 * x1474 - x811 * x1330
+                                            - 2.0 * (x327 * x1449) + 2.0 * (x1332 * x637)
                                             + x19 * (x349 * x781 - 2.0 * (x875 * x629))) * x93
-                                        + x20 * x1478)
+                                        + x20 * x1480)
                                 + x8
-                                    * (x637
-                                        * (x325 * x1313 * x889 - x93 * x1057 / f64::sqrt(x173)) * x1
-                                        - x325 * x1448 / f64::sqrt(x173))
-                                + x869 * x1284 / f64::sqrt(x173))
+                                    * (x637 * (x325 * x1315 * x890 - x93 * x1058 / x174) * x1
+                                        - x325 * x1450 / x174) + x869 * x1286 / x174)
                         - delta_dot
                             * (x100
-                                * (x1447 * x277 / f64::sqrt(x173) - x1460 * f64::sqrt(x173)
+                                * (x1449 * x277 / x174 - x1462 * x174
                                     + x19
-                                        * (x638 * x269 / f64::sqrt(x173)
-                                            + (x889 * x707 + x735 / f64::sqrt(x173)) * x629))
+                                        * (x638 * x269 / x174 + (x890 * x707 + x735 / x174) * x629))
                                 - rF
-                                    * (x20 * x1473 + (x629 * x966 + x370 * x1482) * x19
+                                    * (x20 * x1475 + (x629 * x967 + x370 * x1484) * x19
                                         + x93
-                                            * (x370 * x1472 - x20 * x1474
-                                                + (2.0 * (x18 * x637) - 2.0 * (x1060 * x818)
-                                                    - 2.0 * (x25 * x1447)) * x337 - x799 * x651 - x811 * x1344)
+                                            * (x370 * x1474 - x20 * x1476
+                                                + (2.0 * (x18 * x637) - 2.0 * (x1061 * x818)
+                                                    - 2.0 * (x25 * x1449)) * x337 - x799 * x651 - x811 * x1346)
                                         - x655 * x367))
                         - theta_dot
-                            * (x355 * x1449 / f64::sqrt(x173)
+                            * (x355 * x1451 / x174
                                 + x93
-                                    * (x1230 * x1060 - x637 * x1337 / f64::sqrt(x173)
-                                        + x355 * x1447 / f64::sqrt(x173))
+                                    * (x1231 * x1061 - x637 * x1339 / x174
+                                        + x355 * x1449 / x174)
                                 - (x19
-                                    * ((-x827 * x1333 - x74 * (x846 - 2.0 * (x843 * x93))) * x1
-                                        + x349 * x1462) - x18 * x1461 + x1451 * x20
-                                    - (-x20 * x1457 - x348 * x1472 - 2.0 * (x1447 * x3)) * x93)
+                                    * ((-x827 * x1335 - x74 * (x846 - 2.0 * (x843 * x93))) * x1
+                                        + x349 * x1464) - x18 * x1463 + x1453 * x20
+                                    - (-x20 * x1459 - x348 * x1474 - 2.0 * (x1449 * x3)) * x93)
                                     * rF
                                 + (x722 - rR * x712 + (x0 * x716 - x777 * x272) * x100)
-                                    * f64::sqrt(x173)),
-                    -((x1233 + x859 * x361
+                                    * x174),
+                    -((x1234 + x859 * x361
                         + (rF
                             * (x19
-                                * (x135 * x890
-                                    - (x1445 / f64::sqrt(x173) + x1446 / f64::sqrt(x173)
-                                        + x1447 / f64::sqrt(x173)
+                                * (x135 * x891
+                                    - (x1447 / x174 + x1448 / x174 + x1449 / x174
                                         + x93
-                                            * (3.0 * (x1449 / f64::powf(x173, 1.5))
-                                                + (x629
-                                                    * (3.0 * (x638 * x19 / f64::powf(x173, 2.5))
-                                                        + x765 / f64::powf(x173, 1.5))
-                                                    + x1447 / f64::powf(x173, 1.5)
-                                                    + x1446 / f64::powf(x173, 1.5)) * x93)) * x74)
-                                - x1479 / f64::sqrt(x173)) - x891 * x135 + x910) * x1
-                        - x888 * x528) * theta_dot
+                                            * (3.0 * (x1451 / x889)
+                                                + (x629 * (3.0 * (x638 * x19 / x1236) + x765 / x889)
+                                                    + x1449 / x889 + x1448 / x889) * x93)) * x74)
+                                - x1481 / x174) - x892 * x135 + x911) * x1 - x888 * x528)
+                        * theta_dot
                         + phi_dot
                             * (rF
                                 * (x19
-                                    * (x896 * x890 + ((-x1236 - x1237) * x93 - x1164) * x629)
-                                    - (x19 * x1229 + x896 * x765) * x93 / f64::sqrt(x173)
-                                    - x1051 * x1447) + x100 * (x0 * x1229 - x5 * x774) + x1239
-                                + x5 * x1238)
+                                    * (x897 * x891 + ((-x1238 - x1239) * x93 - x1165) * x629)
+                                    - (x19 * x1230 + x897 * x765) * x93 / x174 - x1052 * x1449)
+                                + x100 * (x0 * x1230 - x5 * x774) + x1241 + x5 * x1240)
                         + delta_dot
                             * (rF
-                                * ((x0 * x890 + (x93 * x1489 - x1488) * x19) * x629
-                                    + x93 * (x1194 - x1453) / f64::sqrt(x173) - x1447 * x1069)
-                                - x1487)),
+                                * ((x0 * x891 + (x93 * x1491 - x1490) * x19) * x629
+                                    + x93 * (x1195 - x1455) / x174 - x1449 * x1070) - x1489)),
                 ],
                 [
                     0.0,
                     0.0,
-                    (x208 * x1491 - x205 * (x534 - x1490) - x1429) * x1,
-                    (x539 + x1490) * x208 - x205 * x1491,
+                    (x208 * x1493 - x205 * (x534 - x1492) - x1431) * x1,
+                    (x539 + x1492) * x208 - x205 * x1493,
                     0.0,
                     0.0,
                     0.0,
@@ -5677,372 +5615,354 @@ pub mod lagrange {
                     0.0,
                 ],
                 [
-                    -(mH * (x25 * x1574 - x1571 * x20 + x1575 * x28 + x449 * x1497)
-                        + mF * (x492 * x1497 - x1586 * x20 + x30 * x1588 + x31 * x1590)),
-                    -(mF * (x1586 * x55 + x52 * x1588 + x50 * x1590 - x47 * x492)
-                        + mH * (x1575 * x47 - x449 * x47 + x1571 * x55 + x49 * x1574)),
-                    -x189 * x1595 - x70 * (x1597 - x1598 + x1599)
-                        - (x1600 * x86 - x1506 * x469 + x466 * x1505 - x449 * x98
-                            + x98 * x1575 + x94 * x1574) * mH - x1604 * x93
-                        - (x483 * x1503 + x487 * x1504 + x108 * x1588 + x111 * x1585
-                            + x112 * x1590 - x107 * x492) * mF - x1607 * x190
-                        - x188 * x1610 - x594 * x70,
-                    (x0 * x1611 + x19 * x1604) * x74 - x1610 * x135
+                    -(mH * (x25 * x1576 - x1573 * x20 + x1577 * x28 + x449 * x1499)
+                        + mF * (x492 * x1499 - x1588 * x20 + x30 * x1590 + x31 * x1592)),
+                    -(mF * (x1588 * x55 + x52 * x1590 + x50 * x1592 - x47 * x492)
+                        + mH * (x1577 * x47 - x449 * x47 + x1573 * x55 + x49 * x1576)),
+                    -x189 * x1597 - x70 * (x1599 - x1600 + x1601)
+                        - (x1602 * x86 - x1508 * x469 + x466 * x1507 - x449 * x98
+                            + x98 * x1577 + x94 * x1576) * mH - x1606 * x93
+                        - (x483 * x1505 + x487 * x1506 + x108 * x1590 + x111 * x1587
+                            + x112 * x1592 - x107 * x492) * mF - x1609 * x190
+                        - x188 * x1612 - x594 * x70,
+                    (x0 * x1613 + x19 * x1606) * x74 - x1612 * x135
                         - mH
-                            * (x19 * (x133 * x1575 + x449 * x1527 + x76 * x1574)
-                                + x0 * x597 + x137 * x1600) - x1607 * x246 - x248 * x1595
-                        - x1157
+                            * (x19 * (x133 * x1577 + x449 * x1529 + x76 * x1576)
+                                + x0 * x597 + x137 * x1602) - x1609 * x246 - x248 * x1597
+                        - x1158
                         - mF
-                            * (x19 * (x492 * x1508 + x144 * x1588 + x142 * x1590)
-                                + x1585 * x140 + x0 * x596),
-                    x19 * (x1444 - x1607 * x29 + x1611 - x22 * x1595)
+                            * (x19 * (x492 * x1510 + x144 * x1590 + x142 * x1592)
+                                + x1587 * x140 + x0 * x596),
+                    x19 * (x1446 - x1609 * x29 + x1613 - x22 * x1597)
                         - mF
-                            * (x1513 * x492
-                                + (x1512 * x487 + x1585 * x149 + x483 * x1511) * x19
-                                + x157 * x1588 + x159 * x1590) - x0 * x1604
+                            * (x1515 * x492
+                                + (x1514 * x487 + x1587 * x149 + x483 * x1513) * x19
+                                + x157 * x1590 + x159 * x1592) - x0 * x1606
                         - mH
-                            * (x164 * x1574 + x0 * (x449 * x160 + x162 * x1575)
-                                + x19 * (x73 * x469 + x1571 * x160)),
+                            * (x164 * x1576 + x0 * (x449 * x160 + x162 * x1577)
+                                + x19 * (x73 * x469 + x1573 * x160)),
                     0.0,
-                    (x1578 - x1582 + x475 + x1612 - x1584) * x167 - x1608 + x1596 * x300
-                        + x1607 * x22 - x605 * x403
-                        + (x1612 + x465 - x1567 + x1568) * x166 - x1595 * x29,
-                    -x1601,
+                    (x1580 - x1584 + x475 + x1614 - x1586) * x167 - x1610 + x1598 * x300
+                        + x1609 * x22 - x605 * x403
+                        + (x1614 + x465 - x1569 + x1570) * x166 - x1597 * x29,
+                    -x1603,
                     0.0,
                     0.0,
-                    x788 * x1613
+                    x788 * x1615
                         - theta_dot
                             * (x93
-                                * (x70 * x656 / f64::sqrt(x173) - x350 * x1614
-                                    + x651 * x919 / f64::sqrt(x173))
-                                - x916 * x350 / f64::sqrt(x173)
+                                * (x70 * x656 / x174 - x350 * x1616 + x651 * x920 / x174)
+                                - x917 * x350 / x174
                                 - rF
-                                    * (x1615 * x49 + x348 * x1620 + x1621 * x55
-                                        - 2.0 * (x916 * x45)
+                                    * (x1617 * x49 + x348 * x1622 + x1623 * x55
+                                        - 2.0 * (x917 * x45)
                                         + x93
-                                            * (x1624 * x55 + x348 * x1613 - 2.0 * (x913 * x45)
-                                                + 2.0 * (x670 * x70) - x704 * x47 + x685 * x1554))
-                                - x100 * f64::sqrt(x173) * x1472)
-                        - (x967 * x100 * f64::sqrt(x173)
-                            + (x723 * x70 / f64::sqrt(x173)
-                                - x100 * x968 / f64::sqrt(x173) - x1614 * x274) * x93
-                            - x916 * x274 / f64::sqrt(x173)
+                                            * (x1626 * x55 + x348 * x1615 - 2.0 * (x914 * x45)
+                                                + 2.0 * (x670 * x70) - x704 * x47 + x685 * x1556))
+                                - x100 * x174 * x1474)
+                        - (x968 * x100 * x174
+                            + (x723 * x70 / x174 - x100 * x969 / x174 - x1616 * x274)
+                                * x93 - x917 * x274 / x174
                             - rF
-                                * ((x189 * x1625 + x190 * x1626 + x52 * x1623 + x1618
-                                    + x1622 * x50 + x1629 * x55 + x93 * (x1630 + x1613 + x1631))
-                                    * x173 + x276 * (x1617 + x1619)
-                                    + (2.0 * (x739 * x70) - 2.0 * (x1535 * x637) - x742 * x47
-                                        - 2.0 * (x913 * x278) + x735 * x1533 + x1632 * x55
-                                        + x276 * x1613) * x93 - x746 * x70)) * psi_dot
+                                * ((x189 * x1627 + x190 * x1628 + x52 * x1625 + x1620
+                                    + x1624 * x50 + x1631 * x55 + x93 * (x1632 + x1615 + x1633))
+                                    * x173 + x276 * (x1619 + x1621)
+                                    + (2.0 * (x739 * x70) - 2.0 * (x1537 * x637) - x742 * x47
+                                        - 2.0 * (x914 * x278) + x735 * x1535 + x1634 * x55
+                                        + x276 * x1615) * x93 - x746 * x70)) * psi_dot
                         - ((x2
-                            * (-x913 * x317 / f64::sqrt(x173)
-                                - x638
-                                    * (x100 / f64::sqrt(x173) + x1543 / f64::powf(x173, 1.5)))
-                            + x762 * x70 / f64::sqrt(x173)) * x93
-                            + x100 * f64::sqrt(x173) * (x1206 - x758 * x19)
-                            - x318 * x916 / f64::sqrt(x173)
-                            - (x1633 * x55
+                            * (-x914 * x317 / x174 - x638 * (x100 / x174 + x1545 / x889))
+                            + x762 * x70 / x174) * x93
+                            + x100 * x174 * (x1207 - x758 * x19) - x318 * x917 / x174
+                            - (x1635 * x55
                                 + x173
                                     * (x74
-                                        * (x19 * (delta_dot * x55 - x731 - x1630 + x732 - x1631)
-                                            - (x685 - delta_dot * x47) * x0) + x1634 * x50 + x1635 * x55
-                                        - x1171 * x47 + x248 * x1625 + x246 * x1626 + x52 * x1636)
-                                + (x1638 * x55 - 2.0 * (x913 * x311) - x781 * x47
-                                    + x1546 * x685 + x310 * x1613 + 2.0 * (x786 * x70)
-                                    - 2.0 * (x1544 * x637)) * x93 + x1618 * x310
-                                - 2.0 * (x916 * x311)) * rF) * phi_dot
+                                        * (x19 * (delta_dot * x55 - x731 - x1632 + x732 - x1633)
+                                            - (x685 - delta_dot * x47) * x0) + x1636 * x50 + x1637 * x55
+                                        - x1172 * x47 + x248 * x1627 + x246 * x1628 + x52 * x1638)
+                                + (x1640 * x55 - 2.0 * (x914 * x311) - x781 * x47
+                                    + x1548 * x685 + x310 * x1615 + 2.0 * (x786 * x70)
+                                    - 2.0 * (x1546 * x637)) * x93 + x1620 * x310
+                                - 2.0 * (x917 * x311)) * rF) * phi_dot
                         - (x100
-                            * (x20 * x916 / f64::sqrt(x173)
-                                + x93
-                                    * (x20 * x1614 - x1639 / f64::sqrt(x173)
-                                        - x1640 / f64::sqrt(x173)) + x1643 * f64::sqrt(x173))
+                            * (x20 * x917 / x174
+                                + x93 * (x20 * x1616 - x1641 / x174 - x1642 / x174)
+                                + x1645 * x174)
                             - rF
-                                * ((x93 * x1613 + x1620) * x370 - x799 * x1559
+                                * ((x93 * x1615 + x1622) * x370 - x799 * x1561
                                     + x337
-                                        * (-2.0 * (x49 * x916)
-                                            - x93 * (2.0 * (x913 * x49) - 2.0 * (x737 * x70)))))
-                            * delta_dot + x918 * x_dot,
-                    x918 * y_dot
+                                        * (-2.0 * (x49 * x917)
+                                            - x93 * (2.0 * (x914 * x49) - 2.0 * (x737 * x70)))))
+                            * delta_dot + x919 * x_dot,
+                    x919 * y_dot
                         - phi_dot
-                            * (x100 * (x1181 - x860 * x19) * f64::sqrt(x173)
+                            * (x100 * (x1182 - x860 * x19) * x174
                                 - rF
-                                    * (x20 * x1633
-                                        - (x246 * x1644 + x31 * x1634 + x1636 * x30 + x1645 * x248
+                                    * (x20 * x1635
+                                        - (x246 * x1646 + x31 * x1636 + x1638 * x30 + x1647 * x248
                                             + x74
-                                                * (x19 * (-x1646 - x1641 - x1642 - delta_dot * x20 - x1647)
-                                                    - x0 * (x811 + delta_dot * x1497)) + x1171 * x1497
-                                            - x20 * x1635) * x173
-                                        + (2.0 * (x637 * x1548) - x1643 * x310 - x781 * x1497
-                                            - 2.0 * (x875 * x70) + 2.0 * (x913 * x327) - x811 * x1546
-                                            + x20 * x1638) * x93 + 2.0 * (x327 * x916) - x1648 * x310)
-                                + (x325 * x1649 - x638 * x1549 / f64::sqrt(x173)) * x8
-                                - x869 * x1518 / f64::sqrt(x173))
+                                                * (x19 * (-x1648 - x1643 - x1644 - delta_dot * x20 - x1649)
+                                                    - x0 * (x811 + delta_dot * x1499)) + x1172 * x1499
+                                            - x20 * x1637) * x173
+                                        + (2.0 * (x637 * x1550) - x1645 * x310 - x781 * x1499
+                                            - 2.0 * (x875 * x70) + 2.0 * (x914 * x327) - x811 * x1548
+                                            + x20 * x1640) * x93 + 2.0 * (x327 * x917) - x1650 * x310)
+                                + (x325 * x1651 - x638 * x1551 / x174) * x8
+                                - x869 * x1520 / x174)
                         - psi_dot
-                            * (x93
-                                * (x70 * x819 / f64::sqrt(x173) - x1651 - x1614 * x280)
-                                - ((2.0 * (x913 * x284) + x20 * x1632 - x1533 * x826
-                                    - x742 * x1497 - x1643 * x276 - 2.0 * (x830 * x70)
-                                    + 2.0 * (x1537 * x637)) * x93 - x836 * x70
-                                    - x276 * (x1640 - x1650)
-                                    - (x30 * x1623 + x190 * x1644 + x1648
-                                        + x93 * (x1643 + x1646 + x1647) - x20 * x1629 + x1622 * x31
-                                        + x1645 * x189) * x173) * rF - x916 * x280 / f64::sqrt(x173)
-                                + x1652) - x1643 * x788
+                            * (x93 * (x70 * x819 / x174 - x1653 - x1616 * x280)
+                                - ((2.0 * (x914 * x284) + x20 * x1634 - x1535 * x826
+                                    - x742 * x1499 - x1645 * x276 - 2.0 * (x830 * x70)
+                                    + 2.0 * (x1539 * x637)) * x93 - x836 * x70
+                                    - x276 * (x1642 - x1652)
+                                    - (x30 * x1625 + x190 * x1646 + x1650
+                                        + x93 * (x1645 + x1648 + x1649) - x20 * x1631 + x1624 * x31
+                                        + x1647 * x189) * x173) * rF - x917 * x280 / x174 + x1654)
+                        - x1645 * x788
                         - theta_dot
-                            * ((x919 * x851 / f64::sqrt(x173) + x1230 * x70
-                                - x913 * x355 / f64::sqrt(x173)) * x93
-                                - x355 * x916 / f64::sqrt(x173)
+                            * ((x920 * x851 / x174 + x1231 * x70 - x914 * x355 / x174)
+                                * x93 - x355 * x917 / x174
                                 - rF
                                     * (x93
-                                        * (x20 * x1624 - x811 * x1554 - x704 * x1497 - x1643 * x348
-                                            - 2.0 * (x913 * x3) - 2.0 * (x843 * x70)) - x1615 * x25
-                                        + x20 * x1621 - x1653 * x348 - 2.0 * (x916 * x3))
-                                - x100 * x1460 * f64::sqrt(x173))
+                                        * (x20 * x1626 - x811 * x1556 - x704 * x1499 - x1645 * x348
+                                            - 2.0 * (x914 * x3) - 2.0 * (x843 * x70)) - x1617 * x25
+                                        + x20 * x1623 - x1655 * x348 - 2.0 * (x917 * x3))
+                                - x100 * x1462 * x174)
                         - delta_dot
                             * (x100
-                                * (x93
-                                    * (-x1617 / f64::sqrt(x173) - x1616 / f64::sqrt(x173)
-                                        - x1614 * x55) - x916 * x55 / f64::sqrt(x173)
-                                    + f64::sqrt(x173) * x1613)
+                                * (x93 * (-x1619 / x174 - x1618 / x174 - x1616 * x55)
+                                    - x917 * x55 / x174 + x174 * x1615)
                                 - rF
-                                    * (x799 * x1561 - (x1653 + x1643 * x93) * x370
+                                    * (x799 * x1563 - (x1655 + x1645 * x93) * x370
                                         + x337
-                                            * (x25 * (2.0 * x914 + 2.0 * x916)
-                                                + 2.0 * (x818 * x1518)))),
-                    -(x1247 * phi_dot
+                                            * (x25 * (2.0 * x915 + 2.0 * x917)
+                                                + 2.0 * (x818 * x1520)))),
+                    -(x1249 * phi_dot
                         + delta_dot
-                            * (x913 * x100
+                            * (x914 * x100
                                 + rF
-                                    * (x1654 / f64::sqrt(x173)
-                                        + ((x1654 / f64::powf(x173, 1.5)
-                                            - (2.0 * x1243 + 3.0 * x1245) * x70) * x93
-                                            - 3.0 * (x916 * x70 / f64::powf(x173, 1.5))
-                                            + (x633 + x64 * x911) / f64::sqrt(x173)) * x93
-                                        - 2.0 * (x913 * x70 / f64::sqrt(x173))))
+                                    * (x1656 / x174
+                                        + ((x1656 / x889 - (2.0 * x1245 + 3.0 * x1247) * x70) * x93
+                                            - 3.0 * (x917 * x70 / x889) + (x633 + x64 * x912) / x174)
+                                            * x93 - 2.0 * (x914 * x70 / x174)))
                         + theta_dot
                             * (rF
                                 * ((x93
-                                    * (x19 * (delta_dot / f64::sqrt(x173) + x1489)
-                                        - (x1637 / f64::powf(x173, 1.5)
-                                            + x637 / f64::powf(x173, 1.5)) * x253)
-                                    - x0 * (x637 / f64::sqrt(x173) + x1637 / f64::sqrt(x173))
-                                    - x913 * x19 / f64::sqrt(x173)) * x629 + x856 * x1347)
-                                - x1487)),
+                                    * (x19 * (delta_dot / x174 + x1491)
+                                        - (x1639 / x889 + x637 / x889) * x253)
+                                    - x0 * (x637 / x174 + x1639 / x174) - x914 * x19 / x174)
+                                    * x629 + x856 * x1349) - x1489)),
                 ],
                 [
                     0.0,
                     0.0,
-                    x189 * x578 - x190 * x1655 - x189 * x1657,
-                    x248 * x578 - x1655 * x246 - x248 * x1657,
-                    x19 * (x22 * x1658 - x1655 * x29),
+                    x189 * x578 - x190 * x1657 - x189 * x1659,
+                    x248 * x578 - x1657 * x246 - x248 * x1659,
+                    x19 * (x22 * x1660 - x1657 * x29),
                     0.0,
-                    x1658 * x29 + x22 * x1655,
+                    x1660 * x29 + x22 * x1657,
                     0.0,
                     0.0,
                     0.0,
                     rF
-                        * ((x173 * (x52 * x1659 + x1660 * x246) + x1663 * x277) * phi_dot
-                            + x277 * x1664
+                        * ((x173 * (x52 * x1661 + x1662 * x246) + x1665 * x277) * phi_dot
+                            + x277 * x1666
                             + psi_dot
-                                * (x1665 * x277 + x173 * (x52 * x1662 + x190 * x1660))),
-                    (-((x190 * x1666 + x1662 * x30) * x173 + x1665 * x281) * psi_dot
-                        - x281 * x1664
-                        - (x281 * x1663 + (x30 * x1659 + x1666 * x246) * x173) * phi_dot)
+                                * (x1667 * x277 + x173 * (x52 * x1664 + x190 * x1662))),
+                    (-((x190 * x1668 + x1664 * x30) * x173 + x1667 * x281) * psi_dot
+                        - x281 * x1666
+                        - (x281 * x1665 + (x30 * x1661 + x1668 * x246) * x173) * phi_dot)
                         * rF,
                     0.0,
                 ],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1667, 0.0, x1668, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1667, 0.0, x1668, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1669, 0.0, x1670, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1669, 0.0, x1670, 0.0],
                 [
-                    -((x1672 * x25 - x20 * x1681 + x1683 * x28) * mH
-                        + (x1685 * x16 + x11 * x1686 - x1687 * x3) * mB
-                        + mF * (x1690 * x31 - x20 * x1691 + x30 * x1692)
+                    -((x1674 * x25 - x20 * x1683 + x1685 * x28) * mH
+                        + (x1687 * x16 + x11 * x1688 - x1689 * x3) * mB
+                        + mF * (x1692 * x31 - x20 * x1693 + x30 * x1694)
                         + x99 * (2.0 * x677 - 2.0 * x612)),
                     -(x99 * (2.0 * x620 + 2.0 * x641)
-                        + mF * (x1690 * x50 + x52 * x1692 + x1691 * x55)
-                        + (x1686 * x37 + x1687 * x45 + x41 * x1685) * mB
-                        + (x1681 * x55 + x1672 * x49 + x1683 * x47) * mH),
-                    (x4 * x1695 + (x1696 - x1126 - x1127) * x5 + x1698 * x208
-                        - x74 * x1702 - x205 * x1706 - x9 * x1707) * x1 - x1693 * x70
-                        - x190 * x1710
-                        - mF * (x1690 * x112 + x111 * x1691 + x108 * x1692)
-                        - x1120 * x571 - (x1672 * x94 + x1683 * x98 + x1681 * x86) * mH
-                        + x93 * x1717 - x189 * x1720
-                        - mB * ((x120 * x1686 + x118 * x1685) * x5 + x117 * x1687),
+                        + mF * (x1692 * x50 + x52 * x1694 + x1693 * x55)
+                        + (x1688 * x37 + x1689 * x45 + x41 * x1687) * mB
+                        + (x1683 * x55 + x1674 * x49 + x1685 * x47) * mH),
+                    (x4 * x1697 + (x1698 - x1127 - x1128) * x5 + x1700 * x208
+                        - x74 * x1704 - x205 * x1708 - x9 * x1709) * x1 - x1695 * x70
+                        - x190 * x1712
+                        - mF * (x1692 * x112 + x111 * x1693 + x108 * x1694)
+                        - x1121 * x571 - (x1674 * x94 + x1685 * x98 + x1683 * x86) * mH
+                        + x93 * x1719 - x189 * x1722
+                        - mB * ((x120 * x1688 + x118 * x1687) * x5 + x117 * x1689),
                     x74
-                        * (x19 * (x1712 - x1711 + x1713 + x1714 - x1715 + x1716)
-                            - x1693 * x0) - x205 * x1698 - x248 * x1720 - x9 * x1695
-                        - mF * (x1691 * x140 + x19 * (x144 * x1692 + x1690 * x142))
-                        - x208 * x1706 - x246 * x1710 + x572 - x135 * x1702
-                        - x1687 * x127 - x4 * x1707
-                        - mH * (x19 * (x133 * x1683 + x1672 * x76) + x137 * x1681),
-                    (x600 + x1696) * x1 - mB * (-x1686 * x114 - x1685 * xB)
-                        - (x161 * x1681 + x1683 * x163 + x1672 * x164) * mH
-                        - x19 * (x1710 * x29 + x1693 + x22 * x1720) + x0 * x1717
-                        - (x157 * x1692 + x1690 * x159 + x150 * x1691) * mF,
-                    -x1135,
-                    x605 * x93 - x1699 - x1681 * x166 - x1691 * x167
-                        + (x229 - x1700) * x390 + x22 * x1710 - x1701 - x1720 * x29,
-                    -x1714,
+                        * (x19 * (x1714 - x1713 + x1715 + x1716 - x1717 + x1718)
+                            - x1695 * x0) - x205 * x1700 - x248 * x1722 - x9 * x1697
+                        - mF * (x1693 * x140 + x19 * (x144 * x1694 + x1692 * x142))
+                        - x208 * x1708 - x246 * x1712 + x572 - x135 * x1704
+                        - x1689 * x127 - x4 * x1709
+                        - mH * (x19 * (x133 * x1685 + x1674 * x76) + x137 * x1683),
+                    (x600 + x1698) * x1 - mB * (-x1688 * x114 - x1687 * xB)
+                        - (x161 * x1683 + x1685 * x163 + x1674 * x164) * mH
+                        - x19 * (x1712 * x29 + x1695 + x22 * x1722) + x0 * x1719
+                        - (x157 * x1694 + x1692 * x159 + x150 * x1693) * mF,
+                    -x1136,
+                    x605 * x93 - x1701 - x1683 * x166 - x1693 * x167
+                        + (x229 - x1702) * x390 + x22 * x1712 - x1703 - x1722 * x29,
+                    -x1716,
                     rR
-                        * (x1 * (x1721 * x611 - x2 * x537)
+                        * (x1 * (x1723 * x611 - x2 * x537)
                             + (x627 * (2.0 * x171 - x1) - x624) * x5),
                     rR
-                        * ((x622 * x1721 + x8 * x537) * x1
+                        * ((x622 * x1723 + x8 * x537) * x1
                             + x5 * (x615 * (x1 - 2.0 * x171) - x614)),
-                    rF * (x747 - x20 * thF_dot) - x951 * delta_dot - phi_dot * x943
-                        + x710 - x936 * psi_dot - x724 - theta_dot * x948,
-                    rF * (x837 + thF_dot * x920) - theta_dot * x949 - x945 * phi_dot
-                        - psi_dot * x939 - x820 - delta_dot * x952 + x839,
+                    rF * (x747 - x20 * thF_dot) - x952 * delta_dot - phi_dot * x944
+                        + x710 - x937 * psi_dot - x724 - theta_dot * x949,
+                    rF * (x837 + thF_dot * x921) - theta_dot * x950 - x946 * phi_dot
+                        - psi_dot * x940 - x820 - delta_dot * x953 + x839,
                     0.0,
                 ],
                 [
-                    -(mB * (x1723 * x11 - x3 * x1722 + x1724 * x16)
-                        + mH * (x25 * x1729 + x1735 * x28 - x20 * x1742)
+                    -(mB * (x1725 * x11 - x3 * x1724 + x1726 * x16)
+                        + mH * (x25 * x1731 + x1737 * x28 - x20 * x1744)
                         + x99 * (2.0 * x494 - 2.0 * x614)
-                        + mF * (x1745 * x30 - x20 * x1746 + x31 * x1747)),
-                    -((x1723 * x37 + x1724 * x41 + x1722 * x45) * mB
-                        + (x1742 * x55 + x49 * x1729 + x1735 * x47) * mH
+                        + mF * (x1747 * x30 - x20 * x1748 + x31 * x1749)),
+                    -((x1725 * x37 + x1726 * x41 + x1724 * x45) * mB
+                        + (x1744 * x55 + x49 * x1731 + x1737 * x47) * mH
                         + x99 * (2.0 * x624 + 2.0 * x515)
-                        + mF * (x1746 * x55 + x50 * x1747 + x52 * x1745)),
-                    x1754 * x93
-                        - mB * ((x1723 * x120 + x1724 * x118) * x5 + x117 * x1722)
-                        - x1755 * x70 - (x94 * x1729 + x1742 * x86 + x1735 * x98) * mH
-                        - x572 - x190 * x1760 - x1763 * x189
-                        - (x111 * x1746 + x1745 * x108 + x112 * x1747) * mF
-                        - x5 * (x1765 - x1764 + x377 * IByy + x1766 - x1767)
-                        + (x1769 * x208 - x205 * x1770 - x1774 * x74 + x4 * x1775
-                            - x387 * IRyy - x9 * x1776) * x1,
+                        + mF * (x1748 * x55 + x50 * x1749 + x52 * x1747)),
+                    x1756 * x93
+                        - mB * ((x1725 * x120 + x1726 * x118) * x5 + x117 * x1724)
+                        - x1757 * x70 - (x94 * x1731 + x1744 * x86 + x1737 * x98) * mH
+                        - x572 - x190 * x1762 - x1765 * x189
+                        - (x111 * x1748 + x1747 * x108 + x112 * x1749) * mF
+                        - x5 * (x1767 - x1766 + x377 * IByy + x1768 - x1769)
+                        + (x1771 * x208 - x205 * x1772 - x1776 * x74 + x4 * x1777
+                            - x387 * IRyy - x9 * x1778) * x1,
                     x74
-                        * (x19 * (x1748 + x1749 + x1750 + x1751 - x1752 - x1753)
-                            - x0 * x1755) - x246 * x1760
-                        - mH * (x19 * (x76 * x1729 + x133 * x1735) + x137 * x1742)
-                        - x1722 * x127 - x205 * x1769 - x4 * x1776 - x1775 * x9
-                        - x1763 * x248 - x1770 * x208
-                        - (x19 * (x142 * x1747 + x1745 * x144) + x1746 * x140) * mF
-                        - x1774 * x135,
-                    x1754 * x0 - mH * (x161 * x1742 + x164 * x1729 + x1735 * x163)
-                        + x1764 - (-x1724 * xB - x1723 * x114) * mB - x1765
-                        - mF * (x150 * x1746 + x159 * x1747 + x1745 * x157) - x1766
-                        + x1767 - x19 * (x1760 * x29 + x1755 + x22 * x1763)
+                        * (x19 * (x1750 + x1751 + x1752 + x1753 - x1754 - x1755)
+                            - x0 * x1757) - x246 * x1762
+                        - mH * (x19 * (x76 * x1731 + x133 * x1737) + x137 * x1744)
+                        - x1724 * x127 - x205 * x1771 - x4 * x1778 - x1777 * x9
+                        - x1765 * x248 - x1772 * x208
+                        - (x19 * (x142 * x1749 + x1747 * x144) + x1748 * x140) * mF
+                        - x1776 * x135,
+                    x1756 * x0 - mH * (x161 * x1744 + x164 * x1731 + x1737 * x163)
+                        + x1766 - (-x1726 * xB - x1725 * x114) * mB - x1767
+                        - mF * (x150 * x1748 + x159 * x1749 + x1747 * x157) - x1768
+                        + x1769 - x19 * (x1762 * x29 + x1757 + x22 * x1765)
                         - x377 * x220,
                     -(IRyy * x377),
-                    x1771 - x1763 * x29 - x1742 * x166 + x22 * x1760 - x1746 * x167
-                        - x1772 - x1773 + x74 * (x19 * x547 - x1415),
-                    -x1749,
+                    x1773 - x1765 * x29 - x1744 * x166 + x22 * x1762 - x1748 * x167
+                        - x1774 - x1775 + x74 * (x19 * x547 - x1417),
+                    -x1751,
                     rR
-                        * (x615 * x1777
-                            + ((2.0 * x171 - x1039 + x1042) * x622 - x536 * x8) * x5)
-                        + x_dot * x997 / f64::sqrt(x170),
+                        * (x615 * x1779
+                            + ((2.0 * x171 - x1040 + x1043) * x622 - x536 * x8) * x5)
+                        + x_dot * x998 / x171,
                     rR
-                        * (x5 * ((x1039 - 2.0 * x171 - x1042) * x611 - x536 * x2)
-                            + x627 * x1777) + y_dot * x997 / f64::sqrt(x170),
-                    rF * (x787 + thF_dot * x1004) - x1046 * phi_dot - delta_dot * x1066
-                        - x1033 * psi_dot - theta_dot * x1055
-                        + x93 * (x1224 + x332 * x_dot / f64::sqrt(x173)) - x763,
-                    x93
-                        * (x332 * y_dot / f64::sqrt(x173) - x788 * x2
-                            + x637 * x326 / f64::sqrt(x173)) - delta_dot * x1068 - x870
-                        - x1038 * psi_dot + x878 - x1050 * phi_dot - x1058 * theta_dot,
-                    x1778 * theta_dot - delta_dot * x1070 - x905 - x909 + rF * x1228
-                        + (x1234 * x1 - x323 - x1052 - x324) * phi_dot,
+                        * (x5 * ((x1040 - 2.0 * x171 - x1043) * x611 - x536 * x2)
+                            + x627 * x1779) + y_dot * x998 / x171,
+                    rF * (x787 + thF_dot * x1005) - x1047 * phi_dot - delta_dot * x1067
+                        - x1034 * psi_dot - theta_dot * x1056
+                        + x93 * (x1225 + x332 * x_dot / x174) - x763,
+                    x93 * (x332 * y_dot / x174 - x788 * x2 + x637 * x326 / x174)
+                        - delta_dot * x1069 - x870 - x1039 * psi_dot + x878
+                        - x1051 * phi_dot - x1059 * theta_dot,
+                    x1780 * theta_dot - delta_dot * x1071 - x906 - x910 + rF * x1229
+                        + (x1235 * x1 - x323 - x1053 - x324) * phi_dot,
                 ],
                 [
-                    -(mF * (x30 * x1784 + x31 * x1785 - x20 * x1786)
-                        + (x1789 * x28 - x20 * x1788 + x25 * x1790) * mH
-                        + (-(2.0 * x1279 - 2.0 * x1280) * x388 - x1792 * x3) * mB),
-                    -(mF * (x50 * x1785 + x52 * x1784 + x1786 * x55)
-                        + (x1792 * x45 - (2.0 * x1288 - 2.0 * (x41 * x114)) * x388) * mB
-                        + (x1788 * x55 + x1789 * x47 + x49 * x1790) * mH),
+                    -(mF * (x30 * x1786 + x31 * x1787 - x20 * x1788)
+                        + (x1791 * x28 - x20 * x1790 + x25 * x1792) * mH
+                        + (-(2.0 * x1281 - 2.0 * x1282) * x388 - x1794 * x3) * mB),
+                    -(mF * (x50 * x1787 + x52 * x1786 + x1788 * x55)
+                        + (x1794 * x45 - (2.0 * x1290 - 2.0 * (x41 * x114)) * x388) * mB
+                        + (x1790 * x55 + x1791 * x47 + x49 * x1792) * mH),
                     x1
-                        * (x1802 * x208 - x205 * x1797 - x1799 * x74 - x9 * x1800
-                            + x4 * x1803)
-                        - mH * (x94 * x1790 + x86 * x1788 + x98 * x1789)
-                        - (x117 * x1792
-                            - x1136 * (2.0 * (x120 * xB) - 2.0 * (x118 * x114))) * mB
-                        - mF * (x112 * x1785 + x108 * x1784 + x111 * x1786) - x70 * x1796
-                        - x189 * x1807 - x190 * x1809 + x359 * x1812,
-                    (x290 * (x1603 - x1810 - x1811) - x0 * x1796) * x74 - x4 * x1800
-                        - x1792 * x127 - x248 * x1807
-                        - mF * (x19 * (x142 * x1785 + x144 * x1784) + x1786 * x140)
-                        - x205 * x1802 - x1799 * x135
-                        - mH * ((x76 * x1790 + x133 * x1789) * x19 + x137 * x1788)
-                        - x9 * x1803 - x208 * x1797 - x246 * x1809,
-                    (x0 * x1812 - x22 * x1807 - x1794 - x1809 * x29 - x1795) * x19
-                        - mF * (x159 * x1785 + x1784 * x157 + x150 * x1786)
-                        - (x161 * x1788 + x1790 * x164 + x163 * x1789) * mH,
+                        * (x1804 * x208 - x205 * x1799 - x1801 * x74 - x9 * x1802
+                            + x4 * x1805)
+                        - mH * (x94 * x1792 + x86 * x1790 + x98 * x1791)
+                        - (x117 * x1794
+                            - x1137 * (2.0 * (x120 * xB) - 2.0 * (x118 * x114))) * mB
+                        - mF * (x112 * x1787 + x108 * x1786 + x111 * x1788) - x70 * x1798
+                        - x189 * x1809 - x190 * x1811 + x359 * x1814,
+                    (x290 * (x1605 - x1812 - x1813) - x0 * x1798) * x74 - x4 * x1802
+                        - x1794 * x127 - x248 * x1809
+                        - mF * (x19 * (x142 * x1787 + x144 * x1786) + x1788 * x140)
+                        - x205 * x1804 - x1801 * x135
+                        - mH * ((x76 * x1792 + x133 * x1791) * x19 + x137 * x1790)
+                        - x9 * x1805 - x208 * x1799 - x246 * x1811,
+                    (x0 * x1814 - x22 * x1809 - x1796 - x1811 * x29 - x1797) * x19
+                        - mF * (x159 * x1787 + x1786 * x157 + x150 * x1788)
+                        - (x161 * x1790 + x1792 * x164 + x163 * x1791) * mH,
                     0.0,
-                    (x605 - x1798) * x0 - x29 * x1807 + x22 * x1809 - x1404
-                        - x1786 * x167 - x1788 * x166 + x1793 * x300,
-                    x1325 * x1779,
-                    x1813,
-                    x1814,
-                    rF * (x708 - thF_dot * x851) - psi_dot * x1317 - delta_dot * x1345
-                        + (x1481 - x1060 * x_dot / f64::sqrt(x173)) * x93
-                        - x1329 * phi_dot - x1336 * theta_dot - x657,
-                    (x355 * x637 / f64::sqrt(x173) - x1060 * y_dot / f64::sqrt(x173))
-                        * x93 - x1346 * delta_dot - psi_dot * x1320 - theta_dot * x1338
-                        - x1331 * phi_dot + rF * (thF_dot * x651 + x848) - x855,
-                    x1778 * phi_dot
+                    (x605 - x1800) * x0 - x29 * x1809 + x22 * x1811 - x1406
+                        - x1788 * x167 - x1790 * x166 + x1795 * x300,
+                    x1327 * x1781,
+                    x1815,
+                    x1816,
+                    rF * (x708 - thF_dot * x851) - psi_dot * x1319 - delta_dot * x1347
+                        + (x1483 - x1061 * x_dot / x174) * x93 - x1331 * phi_dot
+                        - x1338 * theta_dot - x657,
+                    (x355 * x637 / x174 - x1061 * y_dot / x174) * x93 - x1348 * delta_dot
+                        - psi_dot * x1322 - theta_dot * x1340 - x1333 * phi_dot
+                        + rF * (thF_dot * x651 + x848) - x855,
+                    x1780 * phi_dot
                         + (-x74
-                            * (delta_dot
-                                * (2.0 * x1343 - x1348 + rF * x253 / f64::sqrt(x173))
-                                + x637 * x889 * x1334)
-                            - theta_dot * (x1339 + 2.0 * x119 + 2.0 * x130 + x1341)) * x1
-                        + (x360 - x152) * x856 - x892,
+                            * (delta_dot * (2.0 * x1345 - x1350 + rF * x253 / x174)
+                                + x637 * x890 * x1336)
+                            - theta_dot * (x1341 + 2.0 * x119 + 2.0 * x130 + x1343)) * x1
+                        + (x360 - x152) * x856 - x893,
                 ],
                 [
                     0.0,
                     0.0,
-                    -(x1 * (x205 * x1816 - x1815 * x208)),
-                    -(x205 * x1815 + x208 * x1816),
+                    -(x1 * (x205 * x1818 - x1817 * x208)),
+                    -(x205 * x1817 + x208 * x1818),
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    x1813,
-                    x1814,
+                    x1815,
+                    x1816,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    -((x25 * x1817 - 2.0 * (x446 * x28)) * x166
-                        + (x1819 * x30 - x20 * x1818 + x31 * x1820) * mF),
-                    -((x49 * x1817 - 2.0 * (x446 * x47)) * x166
-                        + mF * (x52 * x1819 + x1818 * x55 + x1820 * x50)),
-                    -x1821 * x70 - x1823 * x93 - x257 * x1824
-                        - (x1819 * x108 + x1820 * x112 + x111 * x1818) * mF
-                        - (x94 * x1817 - 2.0 * x1677) * x166,
-                    x19 * (x74 * x1823 - x166 * (x76 * x1817 - 2.0 * x1740))
-                        - ((x1820 * x142 + x1819 * x144) * x19 + x1818 * x140) * mF
-                        - x1824 * x298 - x1821 * x232,
-                    x19 * (-x1821 - x1824 * x337)
-                        - (x1817 * x164 - 2.0 * (x446 * x163)) * x166 - x0 * x1823
-                        - mF * (x150 * x1818 + x1820 * x159 + x1819 * x157),
+                    -((x25 * x1819 - 2.0 * (x446 * x28)) * x166
+                        + (x1821 * x30 - x20 * x1820 + x31 * x1822) * mF),
+                    -((x49 * x1819 - 2.0 * (x446 * x47)) * x166
+                        + mF * (x52 * x1821 + x1820 * x55 + x1822 * x50)),
+                    -x1823 * x70 - x1825 * x93 - x257 * x1826
+                        - (x1821 * x108 + x1822 * x112 + x111 * x1820) * mF
+                        - (x94 * x1819 - 2.0 * x1679) * x166,
+                    x19 * (x74 * x1825 - x166 * (x76 * x1819 - 2.0 * x1742))
+                        - ((x1822 * x142 + x1821 * x144) * x19 + x1820 * x140) * mF
+                        - x1826 * x298 - x1823 * x232,
+                    x19 * (-x1823 - x1826 * x337)
+                        - (x1819 * x164 - 2.0 * (x446 * x163)) * x166 - x0 * x1825
+                        - mF * (x150 * x1820 + x1822 * x159 + x1821 * x157),
                     0.0,
-                    -(x1818 * x167),
-                    -x1822,
+                    -(x1820 * x167),
+                    -x1824,
                     0.0,
                     0.0,
-                    (x802 - x726) * rF - x1547 * phi_dot - psi_dot * x1536
-                        + (x1651 - x_dot * x70 / f64::sqrt(x173)) * x93
-                        + x1555 * theta_dot - delta_dot * x1560 - x1652,
-                    theta_dot * x1557 - delta_dot * x1562 - x1539 * psi_dot
-                        + x93
-                            * (x100 * x707 / f64::sqrt(x173)
-                                - y_dot * x70 / f64::sqrt(x173))
-                        - x100 * x685 * f64::sqrt(x173) + rF * (x887 - thF_dot * x1497)
-                        - phi_dot * x1550,
-                    rF * x1649 - x1070 * phi_dot - x630 * x1349 - delta_dot * x1564
-                        - x919,
+                    (x802 - x726) * rF - x1549 * phi_dot - psi_dot * x1538
+                        + (x1653 - x_dot * x70 / x174) * x93 + x1557 * theta_dot
+                        - delta_dot * x1562 - x1654,
+                    theta_dot * x1559 - delta_dot * x1564 - x1541 * psi_dot
+                        + x93 * (x100 * x707 / x174 - y_dot * x70 / x174)
+                        - x100 * x685 * x174 + rF * (x887 - thF_dot * x1499)
+                        - phi_dot * x1552,
+                    rF * x1651 - x1071 * phi_dot - x630 * x1351 - delta_dot * x1566
+                        - x920,
                 ],
                 [
                     0.0,
                     0.0,
                     IFyy * (x190 * x482 - x485 * x189),
                     (x246 * x482 - x485 * x248) * IFyy,
-                    (x482 * x29 - x22 * x485) * x1325,
+                    (x482 * x29 - x22 * x485) * x1327,
                     0.0,
                     -(IFyy * (x22 * x482 + x485 * x29)),
                     0.0,

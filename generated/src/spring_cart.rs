@@ -232,7 +232,7 @@ pub mod lagrange {
         let x0 = mp * lp;
         let x1 = x0 * f64::cos(th);
         let x2 = x + L0;
-        let x3 = x2 * x2;
+        let x3 = f64::sqrt(x2 * x2);
         let x4 = c_ * (1.0 / (-x2)) * x_dot;
         let x5 = 2.0 * x + 2.0 * L0;
         let x6 = x0 * f64::sin(th);
@@ -240,8 +240,7 @@ pub mod lagrange {
             qdot: [x_dot, th_dot],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                (0.5 * x4 - 0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))) * x5
-                    + x6 * th_dot * th_dot,
+                (0.5 * x4 - 0.5 * ((x3 - L0) * k / x3)) * x5 + x6 * th_dot * th_dot,
                 -(x6 * g),
             ],
             power: 0.5 * x5 * x_dot * x4,
@@ -415,40 +414,41 @@ pub mod lagrange {
         let x3 = th_dot * th_dot;
         let x4 = x + L0;
         let x5 = x4 * x4;
-        let x6 = f64::sqrt(x5) - L0;
-        let x7 = x6 * k / f64::sqrt(x5);
-        let x8 = 1.0 / (-x4);
-        let x9 = c_ * x8;
-        let x10 = x9 * x_dot;
-        let x11 = 2.0 * x + 2.0 * L0;
-        let x12 = x_dot * x10;
-        let x13 = -x2;
+        let x6 = f64::sqrt(x5);
+        let x7 = x6 - L0;
+        let x8 = x7 * k / x6;
+        let x9 = 1.0 / (-x4);
+        let x10 = c_ * x9;
+        let x11 = x10 * x_dot;
+        let x12 = 2.0 * x + 2.0 * L0;
+        let x13 = x_dot * x11;
+        let x14 = -x2;
         Derivatives {
             qdot: [x_dot, th_dot],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
-            force: [x2 * x3 + (0.5 * x10 - 0.5 * x7) * x11, -(x2 * g)],
+            force: [x2 * x3 + (0.5 * x11 - 0.5 * x8) * x12, -(x2 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x13], [x13, 0.0]],
+                [[0.0, x14], [x14, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x11
-                        * (0.5 * (x8 * x10)
-                            + x11 * (0.25 * (x6 / f64::powf(x5, 1.5)) - 0.25 * (x8 * x8))
-                                * k) - x7 + x10,
+                    x12
+                        * (0.5 * (x9 * x11)
+                            + x12 * (0.25 * (x7 / f64::powf(x5, 1.5)) - 0.25 * (x9 * x9))
+                                * k) - x8 + x11,
                     0.0,
                 ],
                 [x3 * x1, -(g * x1)],
-                [0.5 * x11 * x9, 0.0],
+                [0.5 * x12 * x10, 0.0],
                 [2.0 * x2 * th_dot, 0.0],
             ],
-            power: 0.5 * x11 * x12,
-            d_power: [(0.5 * (x11 * x8) + 1.0) * x12, 0.0, x11 * x10, 0.0],
+            power: 0.5 * x12 * x13,
+            d_power: [(0.5 * (x12 * x9) + 1.0) * x13, 0.0, x12 * x11, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -537,23 +537,24 @@ pub mod lagrange {
         let x2 = x0 * x1;
         let x3 = x + L0;
         let x4 = x3 * x3;
-        let x5 = f64::sqrt(x4) - L0;
-        let x6 = x5 * k / f64::sqrt(x4);
-        let x7 = 1.0 / (-x3);
-        let x8 = x_dot * x7;
-        let x9 = c_ * x8;
-        let x10 = 2.0 * x + 2.0 * L0;
-        let x11 = f64::sin(th);
-        let x12 = x11 * th_dot * th_dot;
-        let x13 = x11 * g;
-        let x14 = x10 * x_dot;
-        let x15 = x1 * lp;
-        let x16 = mp * x1;
-        let x17 = x10 * x5;
+        let x5 = f64::sqrt(x4);
+        let x6 = x5 - L0;
+        let x7 = x6 * k / x5;
+        let x8 = 1.0 / (-x3);
+        let x9 = x_dot * x8;
+        let x10 = c_ * x9;
+        let x11 = 2.0 * x + 2.0 * L0;
+        let x12 = f64::sin(th);
+        let x13 = x12 * th_dot * th_dot;
+        let x14 = x12 * g;
+        let x15 = x11 * x_dot;
+        let x16 = x1 * lp;
+        let x17 = mp * x1;
+        let x18 = x11 * x6;
         ParameterDerivatives {
             qdot: [x_dot, th_dot],
             matrix: [[mc + mp, x2], [x2, x0 * lp]],
-            force: [(0.5 * x9 - 0.5 * x6) * x10 + x0 * x12, -(x0 * x13)],
+            force: [(0.5 * x10 - 0.5 * x7) * x11 + x0 * x13, -(x0 * x14)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -566,8 +567,8 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x15], [x15, lp * lp]],
-                [[0.0, x16], [x16, 2.0 * x0]],
+                [[1.0, x16], [x16, lp * lp]],
+                [[0.0, x17], [x17, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -575,30 +576,28 @@ pub mod lagrange {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x12 * lp, -(x13 * lp)],
-                [x12 * mp, -(x13 * mp)],
-                [-(0.5 * x17 / f64::sqrt(x4)), 0.0],
-                [0.5 * x10 * x8, 0.0],
+                [x13 * lp, -(x14 * lp)],
+                [x13 * mp, -(x14 * mp)],
+                [-(0.5 * x18 / x5), 0.0],
+                [0.5 * x11 * x9, 0.0],
                 [
-                    x9 - x6
-                        + x10
-                            * (0.5 * (x9 * x7)
-                                + (0.25 * (x17 / f64::powf(x4, 1.5))
-                                    - 0.5
-                                        * ((0.5 * (x10 / f64::sqrt(x4)) - 1.0) / f64::sqrt(x4)))
-                                    * k),
+                    x10 - x7
+                        + x11
+                            * (0.5 * (x10 * x8)
+                                + (0.25 * (x18 / f64::powf(x4, 1.5))
+                                    - 0.5 * ((0.5 * (x11 / x5) - 1.0) / x5)) * k),
                     0.0,
                 ],
-                [0.0, -(x0 * x11)],
+                [0.0, -(x0 * x12)],
             ],
-            power: 0.5 * x14 * x9,
+            power: 0.5 * x15 * x10,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x14 * x8,
-                x_dot * x9 * (0.5 * (x10 * x7) + 1.0),
+                0.5 * x15 * x9,
+                x_dot * x10 * (0.5 * (x11 * x8) + 1.0),
                 0.0,
             ],
         }
@@ -823,7 +822,7 @@ pub mod maggi {
         let x0 = mp * lp;
         let x1 = x0 * f64::cos(th);
         let x2 = x + L0;
-        let x3 = x2 * x2;
+        let x3 = f64::sqrt(x2 * x2);
         let x4 = c_ * (1.0 / (-x2)) * x_dot;
         let x5 = 2.0 * x + 2.0 * L0;
         let x6 = x0 * f64::sin(th);
@@ -831,8 +830,7 @@ pub mod maggi {
             qdot: [x_dot, th_dot],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                (0.5 * x4 - 0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))) * x5
-                    + x6 * th_dot * th_dot,
+                (0.5 * x4 - 0.5 * ((x3 - L0) * k / x3)) * x5 + x6 * th_dot * th_dot,
                 -(x6 * g),
             ],
             w: [[1.0, 0.0], [0.0, 1.0]],
@@ -992,36 +990,37 @@ pub mod maggi {
         let x3 = th_dot * th_dot;
         let x4 = x + L0;
         let x5 = x4 * x4;
-        let x6 = f64::sqrt(x5) - L0;
-        let x7 = x6 * k / f64::sqrt(x5);
-        let x8 = 1.0 / (-x4);
-        let x9 = c_ * x8;
-        let x10 = x9 * x_dot;
-        let x11 = 2.0 * x + 2.0 * L0;
-        let x12 = x_dot * x10;
-        let x13 = -x2;
+        let x6 = f64::sqrt(x5);
+        let x7 = x6 - L0;
+        let x8 = x7 * k / x6;
+        let x9 = 1.0 / (-x4);
+        let x10 = c_ * x9;
+        let x11 = x10 * x_dot;
+        let x12 = 2.0 * x + 2.0 * L0;
+        let x13 = x_dot * x11;
+        let x14 = -x2;
         Derivatives {
             qdot: [x_dot, th_dot],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
-            force: [x2 * x3 + (0.5 * x10 - 0.5 * x7) * x11, -(x2 * g)],
+            force: [x2 * x3 + (0.5 * x11 - 0.5 * x8) * x12, -(x2 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x13], [x13, 0.0]],
+                [[0.0, x14], [x14, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x11
-                        * (0.5 * (x8 * x10)
-                            + x11 * (0.25 * (x6 / f64::powf(x5, 1.5)) - 0.25 * (x8 * x8))
-                                * k) - x7 + x10,
+                    x12
+                        * (0.5 * (x9 * x11)
+                            + x12 * (0.25 * (x7 / f64::powf(x5, 1.5)) - 0.25 * (x9 * x9))
+                                * k) - x8 + x11,
                     0.0,
                 ],
                 [x3 * x1, -(g * x1)],
-                [0.5 * x11 * x9, 0.0],
+                [0.5 * x12 * x10, 0.0],
                 [2.0 * x2 * th_dot, 0.0],
             ],
             w: [[1.0, 0.0], [0.0, 1.0]],
@@ -1033,8 +1032,8 @@ pub mod maggi {
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_c: [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
-            power: 0.5 * x11 * x12,
-            d_power: [(0.5 * (x11 * x8) + 1.0) * x12, 0.0, x11 * x10, 0.0],
+            power: 0.5 * x12 * x13,
+            d_power: [(0.5 * (x12 * x9) + 1.0) * x13, 0.0, x12 * x11, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1135,23 +1134,24 @@ pub mod maggi {
         let x2 = x0 * x1;
         let x3 = x + L0;
         let x4 = x3 * x3;
-        let x5 = f64::sqrt(x4) - L0;
-        let x6 = x5 * k / f64::sqrt(x4);
-        let x7 = 1.0 / (-x3);
-        let x8 = x_dot * x7;
-        let x9 = c_ * x8;
-        let x10 = 2.0 * x + 2.0 * L0;
-        let x11 = f64::sin(th);
-        let x12 = x11 * th_dot * th_dot;
-        let x13 = x11 * g;
-        let x14 = x10 * x_dot;
-        let x15 = x1 * lp;
-        let x16 = mp * x1;
-        let x17 = x10 * x5;
+        let x5 = f64::sqrt(x4);
+        let x6 = x5 - L0;
+        let x7 = x6 * k / x5;
+        let x8 = 1.0 / (-x3);
+        let x9 = x_dot * x8;
+        let x10 = c_ * x9;
+        let x11 = 2.0 * x + 2.0 * L0;
+        let x12 = f64::sin(th);
+        let x13 = x12 * th_dot * th_dot;
+        let x14 = x12 * g;
+        let x15 = x11 * x_dot;
+        let x16 = x1 * lp;
+        let x17 = mp * x1;
+        let x18 = x11 * x6;
         ParameterDerivatives {
             qdot: [x_dot, th_dot],
             matrix: [[mc + mp, x2], [x2, x0 * lp]],
-            force: [(0.5 * x9 - 0.5 * x6) * x10 + x0 * x12, -(x0 * x13)],
+            force: [(0.5 * x10 - 0.5 * x7) * x11 + x0 * x13, -(x0 * x14)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -1164,8 +1164,8 @@ pub mod maggi {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x15], [x15, lp * lp]],
-                [[0.0, x16], [x16, 2.0 * x0]],
+                [[1.0, x16], [x16, lp * lp]],
+                [[0.0, x17], [x17, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -1173,21 +1173,19 @@ pub mod maggi {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x12 * lp, -(x13 * lp)],
-                [x12 * mp, -(x13 * mp)],
-                [-(0.5 * x17 / f64::sqrt(x4)), 0.0],
-                [0.5 * x10 * x8, 0.0],
+                [x13 * lp, -(x14 * lp)],
+                [x13 * mp, -(x14 * mp)],
+                [-(0.5 * x18 / x5), 0.0],
+                [0.5 * x11 * x9, 0.0],
                 [
-                    x9 - x6
-                        + x10
-                            * (0.5 * (x9 * x7)
-                                + (0.25 * (x17 / f64::powf(x4, 1.5))
-                                    - 0.5
-                                        * ((0.5 * (x10 / f64::sqrt(x4)) - 1.0) / f64::sqrt(x4)))
-                                    * k),
+                    x10 - x7
+                        + x11
+                            * (0.5 * (x10 * x8)
+                                + (0.25 * (x18 / f64::powf(x4, 1.5))
+                                    - 0.5 * ((0.5 * (x11 / x5) - 1.0) / x5)) * k),
                     0.0,
                 ],
-                [0.0, -(x0 * x11)],
+                [0.0, -(x0 * x12)],
             ],
             w: [[1.0, 0.0], [0.0, 1.0]],
             c: [0.0, 0.0],
@@ -1209,14 +1207,14 @@ pub mod maggi {
                 [0.0, 0.0],
                 [0.0, 0.0],
             ],
-            power: 0.5 * x14 * x9,
+            power: 0.5 * x15 * x10,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x14 * x8,
-                x_dot * x9 * (0.5 * (x10 * x7) + 1.0),
+                0.5 * x15 * x9,
+                x_dot * x10 * (0.5 * (x11 * x8) + 1.0),
                 0.0,
             ],
         }
@@ -1436,7 +1434,7 @@ pub mod kane {
         let x0 = mp * lp;
         let x1 = x0 * f64::cos(th);
         let x2 = x + L0;
-        let x3 = x2 * x2;
+        let x3 = f64::sqrt(x2 * x2);
         let x4 = c_ * (1.0 / (-x2)) * u1;
         let x5 = 2.0 * x + 2.0 * L0;
         let x6 = x0 * f64::sin(th);
@@ -1444,8 +1442,7 @@ pub mod kane {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                (0.5 * x4 - 0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))) * x5
-                    + x6 * u2 * u2,
+                (0.5 * x4 - 0.5 * ((x3 - L0) * k / x3)) * x5 + x6 * u2 * u2,
                 -(x6 * g),
             ],
             power: 0.5 * x5 * u1 * x4,
@@ -1597,40 +1594,41 @@ pub mod kane {
         let x3 = u2 * u2;
         let x4 = x + L0;
         let x5 = x4 * x4;
-        let x6 = f64::sqrt(x5) - L0;
-        let x7 = x6 * k / f64::sqrt(x5);
-        let x8 = 1.0 / (-x4);
-        let x9 = c_ * x8;
-        let x10 = x9 * u1;
-        let x11 = 2.0 * x + 2.0 * L0;
-        let x12 = u1 * x10;
-        let x13 = -x2;
+        let x6 = f64::sqrt(x5);
+        let x7 = x6 - L0;
+        let x8 = x7 * k / x6;
+        let x9 = 1.0 / (-x4);
+        let x10 = c_ * x9;
+        let x11 = x10 * u1;
+        let x12 = 2.0 * x + 2.0 * L0;
+        let x13 = u1 * x11;
+        let x14 = -x2;
         Derivatives {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
-            force: [x2 * x3 + (0.5 * x10 - 0.5 * x7) * x11, -(x2 * g)],
+            force: [x2 * x3 + (0.5 * x11 - 0.5 * x8) * x12, -(x2 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x13], [x13, 0.0]],
+                [[0.0, x14], [x14, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x11
-                        * (0.5 * (x8 * x10)
-                            + x11 * (0.25 * (x6 / f64::powf(x5, 1.5)) - 0.25 * (x8 * x8))
-                                * k) - x7 + x10,
+                    x12
+                        * (0.5 * (x9 * x11)
+                            + x12 * (0.25 * (x7 / f64::powf(x5, 1.5)) - 0.25 * (x9 * x9))
+                                * k) - x8 + x11,
                     0.0,
                 ],
                 [x3 * x1, -(g * x1)],
-                [0.5 * x11 * x9, 0.0],
+                [0.5 * x12 * x10, 0.0],
                 [2.0 * x2 * u2, 0.0],
             ],
-            power: 0.5 * x11 * x12,
-            d_power: [(0.5 * (x11 * x8) + 1.0) * x12, 0.0, x11 * x10, 0.0],
+            power: 0.5 * x12 * x13,
+            d_power: [(0.5 * (x12 * x9) + 1.0) * x13, 0.0, x12 * x11, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1719,23 +1717,24 @@ pub mod kane {
         let x2 = x0 * x1;
         let x3 = x + L0;
         let x4 = x3 * x3;
-        let x5 = f64::sqrt(x4) - L0;
-        let x6 = x5 * k / f64::sqrt(x4);
-        let x7 = 1.0 / (-x3);
-        let x8 = u1 * x7;
-        let x9 = c_ * x8;
-        let x10 = 2.0 * x + 2.0 * L0;
-        let x11 = f64::sin(th);
-        let x12 = x11 * u2 * u2;
-        let x13 = x11 * g;
-        let x14 = x10 * u1;
-        let x15 = x1 * lp;
-        let x16 = mp * x1;
-        let x17 = x10 * x5;
+        let x5 = f64::sqrt(x4);
+        let x6 = x5 - L0;
+        let x7 = x6 * k / x5;
+        let x8 = 1.0 / (-x3);
+        let x9 = u1 * x8;
+        let x10 = c_ * x9;
+        let x11 = 2.0 * x + 2.0 * L0;
+        let x12 = f64::sin(th);
+        let x13 = x12 * u2 * u2;
+        let x14 = x12 * g;
+        let x15 = x11 * u1;
+        let x16 = x1 * lp;
+        let x17 = mp * x1;
+        let x18 = x11 * x6;
         ParameterDerivatives {
             qdot: [u1, u2],
             matrix: [[mc + mp, x2], [x2, x0 * lp]],
-            force: [(0.5 * x9 - 0.5 * x6) * x10 + x0 * x12, -(x0 * x13)],
+            force: [(0.5 * x10 - 0.5 * x7) * x11 + x0 * x13, -(x0 * x14)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -1748,8 +1747,8 @@ pub mod kane {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x15], [x15, lp * lp]],
-                [[0.0, x16], [x16, 2.0 * x0]],
+                [[1.0, x16], [x16, lp * lp]],
+                [[0.0, x17], [x17, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -1757,30 +1756,28 @@ pub mod kane {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x12 * lp, -(x13 * lp)],
-                [x12 * mp, -(x13 * mp)],
-                [-(0.5 * x17 / f64::sqrt(x4)), 0.0],
-                [0.5 * x10 * x8, 0.0],
+                [x13 * lp, -(x14 * lp)],
+                [x13 * mp, -(x14 * mp)],
+                [-(0.5 * x18 / x5), 0.0],
+                [0.5 * x11 * x9, 0.0],
                 [
-                    x9 - x6
-                        + x10
-                            * (0.5 * (x9 * x7)
-                                + (0.25 * (x17 / f64::powf(x4, 1.5))
-                                    - 0.5
-                                        * ((0.5 * (x10 / f64::sqrt(x4)) - 1.0) / f64::sqrt(x4)))
-                                    * k),
+                    x10 - x7
+                        + x11
+                            * (0.5 * (x10 * x8)
+                                + (0.25 * (x18 / f64::powf(x4, 1.5))
+                                    - 0.5 * ((0.5 * (x11 / x5) - 1.0) / x5)) * k),
                     0.0,
                 ],
-                [0.0, -(x0 * x11)],
+                [0.0, -(x0 * x12)],
             ],
-            power: 0.5 * x14 * x9,
+            power: 0.5 * x15 * x10,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x14 * x8,
-                u1 * x9 * (0.5 * (x10 * x7) + 1.0),
+                0.5 * x15 * x9,
+                u1 * x10 * (0.5 * (x11 * x8) + 1.0),
                 0.0,
             ],
         }
@@ -1993,15 +1990,14 @@ pub mod reduced_volterra {
         let x1 = x0 * f64::cos(th);
         let x2 = 2.0 * x + 2.0 * L0;
         let x3 = x + L0;
-        let x4 = x3 * x3;
+        let x4 = f64::sqrt(x3 * x3);
         let x5 = c_ * (1.0 / (-x3)) * u1;
         let x6 = x0 * f64::sin(th);
         Assembly {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                x2 * (0.5 * x5 - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                    + x6 * u2 * u2,
+                x2 * (0.5 * x5 - 0.5 * ((x4 - L0) * k / x4)) + x6 * u2 * u2,
                 -(x6 * g),
             ],
             power: 0.5 * x2 * u1 * x5,
@@ -2152,41 +2148,42 @@ pub mod reduced_volterra {
         let x2 = 2.0 * x + 2.0 * L0;
         let x3 = x + L0;
         let x4 = x3 * x3;
-        let x5 = f64::sqrt(x4) - L0;
-        let x6 = x5 * k / f64::sqrt(x4);
-        let x7 = 1.0 / (-x3);
-        let x8 = c_ * x7;
-        let x9 = x8 * u1;
-        let x10 = x0 * f64::sin(th);
-        let x11 = u2 * u2;
-        let x12 = u1 * x9;
-        let x13 = -x10;
+        let x5 = f64::sqrt(x4);
+        let x6 = x5 - L0;
+        let x7 = x6 * k / x5;
+        let x8 = 1.0 / (-x3);
+        let x9 = c_ * x8;
+        let x10 = x9 * u1;
+        let x11 = x0 * f64::sin(th);
+        let x12 = u2 * u2;
+        let x13 = u1 * x10;
+        let x14 = -x11;
         Derivatives {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
-            force: [x2 * (0.5 * x9 - 0.5 * x6) + x10 * x11, -(x10 * g)],
+            force: [x2 * (0.5 * x10 - 0.5 * x7) + x11 * x12, -(x11 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x13], [x13, 0.0]],
+                [[0.0, x14], [x14, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
                     x2
-                        * (0.5 * (x7 * x9)
-                            + x2 * (0.25 * (x5 / f64::powf(x4, 1.5)) - 0.25 * (x7 * x7))
-                                * k) - x6 + x9,
+                        * (0.5 * (x8 * x10)
+                            + x2 * (0.25 * (x6 / f64::powf(x4, 1.5)) - 0.25 * (x8 * x8))
+                                * k) - x7 + x10,
                     0.0,
                 ],
-                [x11 * x1, -(g * x1)],
-                [0.5 * x2 * x8, 0.0],
-                [2.0 * x10 * u2, 0.0],
+                [x12 * x1, -(g * x1)],
+                [0.5 * x2 * x9, 0.0],
+                [2.0 * x11 * u2, 0.0],
             ],
-            power: 0.5 * x2 * x12,
-            d_power: [x12 * (0.5 * (x2 * x7) + 1.0), 0.0, x2 * x9, 0.0],
+            power: 0.5 * x2 * x13,
+            d_power: [x13 * (0.5 * (x2 * x8) + 1.0), 0.0, x2 * x10, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -2278,20 +2275,21 @@ pub mod reduced_volterra {
         let x5 = 2.0 * x + 2.0 * L0;
         let x6 = x + L0;
         let x7 = x6 * x6;
-        let x8 = f64::sqrt(x7) - L0;
-        let x9 = x8 * k / f64::sqrt(x7);
-        let x10 = 1.0 / (-x6);
-        let x11 = u1 * x10;
-        let x12 = c_ * x11;
-        let x13 = x3 * g;
-        let x14 = x5 * u1;
-        let x15 = x1 * lp;
-        let x16 = mp * x1;
-        let x17 = x5 * x8;
+        let x8 = f64::sqrt(x7);
+        let x9 = x8 - L0;
+        let x10 = x9 * k / x8;
+        let x11 = 1.0 / (-x6);
+        let x12 = u1 * x11;
+        let x13 = c_ * x12;
+        let x14 = x3 * g;
+        let x15 = x5 * u1;
+        let x16 = x1 * lp;
+        let x17 = mp * x1;
+        let x18 = x5 * x9;
         ParameterDerivatives {
             qdot: [u1, u2],
             matrix: [[mc + mp, x2], [x2, x0 * lp]],
-            force: [x0 * x4 + x5 * (0.5 * x12 - 0.5 * x9), -(x0 * x13)],
+            force: [x0 * x4 + x5 * (0.5 * x13 - 0.5 * x10), -(x0 * x14)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -2304,8 +2302,8 @@ pub mod reduced_volterra {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x15], [x15, lp * lp]],
-                [[0.0, x16], [x16, 2.0 * x0]],
+                [[1.0, x16], [x16, lp * lp]],
+                [[0.0, x17], [x17, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -2313,29 +2311,27 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x4 * lp, -(x13 * lp)],
-                [x4 * mp, -(x13 * mp)],
-                [-(0.5 * x17 / f64::sqrt(x7)), 0.0],
-                [0.5 * x5 * x11, 0.0],
+                [x4 * lp, -(x14 * lp)],
+                [x4 * mp, -(x14 * mp)],
+                [-(0.5 * x18 / x8), 0.0],
+                [0.5 * x5 * x12, 0.0],
                 [
                     x5
-                        * (0.5 * (x10 * x12)
-                            + (0.25 * (x17 / f64::powf(x7, 1.5))
-                                - 0.5
-                                    * ((0.5 * (x5 / f64::sqrt(x7)) - 1.0) / f64::sqrt(x7))) * k)
-                        - x9 + x12,
+                        * (0.5 * (x11 * x13)
+                            + (0.25 * (x18 / f64::powf(x7, 1.5))
+                                - 0.5 * ((0.5 * (x5 / x8) - 1.0) / x8)) * k) - x10 + x13,
                     0.0,
                 ],
                 [0.0, -(x0 * x3)],
             ],
-            power: 0.5 * x14 * x12,
+            power: 0.5 * x15 * x13,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x14 * x11,
-                u1 * (0.5 * (x5 * x10) + 1.0) * x12,
+                0.5 * x15 * x12,
+                u1 * (0.5 * (x5 * x11) + 1.0) * x13,
                 0.0,
             ],
         }

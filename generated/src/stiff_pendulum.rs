@@ -154,12 +154,12 @@ pub fn work_rate(
     let x3 = f64::sin(th);
     let x4 = l * x3;
     let x5 = x4 - x;
-    let x6 = m2 * k;
+    let x6 = f64::sqrt(m2 * k);
     let x7 = l * th_dot;
     -(zeta
-        * (0.5 * (f64::sqrt(x6) * y_dot * (2.0 * x1 + 2.0 * y))
-            - 0.5 * ((2.0 * (x3 * y) + 2.0 * (x * x0)) * f64::sqrt(x6) * x7)
-            + 0.5 * (f64::sqrt(x6) * (2.0 * x - 2.0 * x4) * x_dot))
+        * (0.5 * (x6 * y_dot * (2.0 * x1 + 2.0 * y))
+            - 0.5 * ((2.0 * (x3 * y) + 2.0 * (x * x0)) * x6 * x7)
+            + 0.5 * (x6 * (2.0 * x - 2.0 * x4) * x_dot))
         * (2.0 * (x5 * (x7 * x0 - x_dot)) - 2.0 * (x2 * (x3 * x7 - y_dot)))
         / (x2 * x2 + x5 * x5))
 }
@@ -262,22 +262,22 @@ pub mod lagrange {
         let x5 = l * x0;
         let x6 = x5 - x;
         let x7 = x4 * x4 + x6 * x6;
-        let x8 = l * th_dot;
-        let x9 = zeta * (2.0 * (x6 * (x8 * x1 - x_dot)) - 2.0 * (x4 * (x0 * x8 - y_dot)))
+        let x8 = f64::sqrt(x7);
+        let x9 = l * th_dot;
+        let x10 = zeta
+            * (2.0 * (x6 * (x9 * x1 - x_dot)) - 2.0 * (x4 * (x0 * x9 - y_dot)))
             * (1.0 / x7);
-        let x10 = m2 * k;
-        let x11 = 0.5 * ((f64::sqrt(x7) - L) * k / f64::sqrt(x7))
-            + 0.5 * (x9 * f64::sqrt(x10));
-        let x12 = 2.0 * x - 2.0 * x5;
-        let x13 = 2.0 * x3 + 2.0 * y;
+        let x11 = f64::sqrt(m2 * k);
+        let x12 = 0.5 * ((x8 - L) * k / x8) + 0.5 * (x10 * x11);
+        let x13 = 2.0 * x - 2.0 * x5;
+        let x14 = 2.0 * x3 + 2.0 * y;
         Assembly {
             qdot: [th_dot, x_dot, y_dot],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x2 * x11 - x0 * g * m1), -(x12 * x11), -x11 * x13 - m2 * g],
-            power: -(x9
-                * (0.5 * (f64::sqrt(x10) * y_dot * x13)
-                    - 0.5 * (x2 * f64::sqrt(x10) * x8)
-                    + 0.5 * (f64::sqrt(x10) * x12 * x_dot))),
+            force: [l * (x2 * x12 - x0 * g * m1), -(x13 * x12), -x12 * x14 - m2 * g],
+            power: -(x10
+                * (0.5 * (x11 * y_dot * x14) - 0.5 * (x2 * x11 * x9)
+                    + 0.5 * (x11 * x13 * x_dot))),
             checks: [],
             residuals: [],
             positions: [],
@@ -461,9 +461,9 @@ pub mod lagrange {
         let x6 = l * x0;
         let x7 = x6 - x;
         let x8 = x5 * x5 + x7 * x7;
-        let x9 = (f64::sqrt(x8) - L) * k;
-        let x10 = x9 / f64::sqrt(x8);
-        let x11 = m2 * k;
+        let x9 = f64::sqrt(x8);
+        let x10 = (x9 - L) * k;
+        let x11 = x10 / x9;
         let x12 = 1.0 / x8;
         let x13 = zeta * x12;
         let x14 = l * th_dot;
@@ -471,41 +471,43 @@ pub mod lagrange {
         let x16 = x0 * x14;
         let x17 = 2.0 * ((x15 - x_dot) * x7) - 2.0 * (x5 * (x16 - y_dot));
         let x18 = x13 * x17;
-        let x19 = f64::sqrt(x11) * x18;
-        let x20 = 0.5 * x10 + 0.5 * x19;
-        let x21 = 2.0 * x - 2.0 * x6;
-        let x22 = 2.0 * x4 + 2.0 * y;
-        let x23 = (0.5 * (f64::sqrt(x11) * y_dot * x22)
-            - 0.5 * (x3 * f64::sqrt(x11) * x14)) + 0.5 * (f64::sqrt(x11) * x21 * x_dot);
-        let x24 = 2.0 * (x * x0) - 2.0 * (y * x2);
-        let x25 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
-        let x26 = x12 * x25;
-        let x27 = x2 * (2.0 * x15 - 2.0 * x_dot - 2.0 * (x5 * th_dot))
+        let x19 = f64::sqrt(m2 * k);
+        let x20 = x19 * x18;
+        let x21 = 0.5 * x11 + 0.5 * x20;
+        let x22 = 2.0 * x - 2.0 * x6;
+        let x23 = 2.0 * x4 + 2.0 * y;
+        let x24 = (0.5 * (x19 * y_dot * x23) - 0.5 * (x3 * x19 * x14))
+            + 0.5 * (x19 * x22 * x_dot);
+        let x25 = 2.0 * (x * x0) - 2.0 * (y * x2);
+        let x26 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
+        let x27 = f64::powf(x8, 1.5);
+        let x28 = x12 * x26;
+        let x29 = x2 * (2.0 * x15 - 2.0 * x_dot - 2.0 * (x5 * th_dot))
             + x0 * (2.0 * x16 - 2.0 * (x7 * th_dot) - 2.0 * y_dot);
-        let x28 = 0.25 * (x9 * x25 / f64::powf(x8, 1.5))
-            + (zeta * (0.5 * (x17 * f64::sqrt(x11) * x26) - 0.5 * (f64::sqrt(x11) * x27))
-                - 0.25 * (x25 * k)) * x12;
-        let x29 = -(x3 * l);
-        let x30 = x0 / f64::sqrt(x8);
-        let x31 = x12 * x22;
-        let x32 = f64::sqrt(x11) * x0;
-        let x33 = k * x22;
-        let x34 = x13 * l;
-        let x35 = -(x3 * x21);
-        let x36 = 2.0 * x_dot - 2.0 * x15;
-        let x37 = ((0.5 * x19 - 0.25 * k) * x12 + 0.25 * (x9 / f64::powf(x8, 1.5))) * x21
-            - 0.5 * (x13 * x36 * f64::sqrt(x11));
-        let x38 = -(x3 * x22);
-        let x39 = 2.0 * y_dot - 2.0 * x16;
-        let x40 = x25 * x34;
-        let x41 = x13 * x21;
-        let x42 = -(0.5 * x41 * f64::sqrt(x11) * x22);
-        let x43 = 0.5 * (x17 * f64::sqrt(x11)) + x23;
-        let x44 = x13 * x22;
+        let x30 = 0.25 * (x10 * x26 / x27)
+            + (zeta * (0.5 * (x17 * x19 * x28) - 0.5 * (x19 * x29)) - 0.25 * (x26 * k))
+                * x12;
+        let x31 = -(x3 * l);
+        let x32 = x0 / x9;
+        let x33 = x12 * x23;
+        let x34 = x19 * x0;
+        let x35 = k * x23;
+        let x36 = x13 * l;
+        let x37 = -(x3 * x22);
+        let x38 = 2.0 * x_dot - 2.0 * x15;
+        let x39 = ((0.5 * x20 - 0.25 * k) * x12 + 0.25 * (x10 / x27)) * x22
+            - 0.5 * (x13 * x38 * x19);
+        let x40 = -(x3 * x23);
+        let x41 = 2.0 * y_dot - 2.0 * x16;
+        let x42 = x26 * x36;
+        let x43 = x13 * x22;
+        let x44 = -(0.5 * x43 * x19 * x23);
+        let x45 = 0.5 * (x17 * x19) + x24;
+        let x46 = x13 * x23;
         Derivatives {
             qdot: [th_dot, x_dot, y_dot],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x3 * x20 - x0 * x1), -(x21 * x20), -x20 * x22 - m2 * g],
+            force: [l * (x3 * x21 - x0 * x1), -(x22 * x21), -x21 * x23 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -525,79 +527,58 @@ pub mod lagrange {
             ],
             d_force: [
                 [
-                    l * (x28 * x29 - x2 * x1 - x24 * x20),
-                    (x28 * x21 + (x10 + x19) * x2) * l,
+                    l * (x30 * x31 - x2 * x1 - x25 * x21),
+                    (x30 * x22 + (x11 + x20) * x2) * l,
                     l
-                        * ((x30 + 0.25 * (x25 * x22 / f64::powf(x8, 1.5))) * x9
+                        * ((x32 + 0.25 * (x26 * x23 / x27)) * x10
                             + (zeta
-                                * (x17 * (0.5 * (f64::sqrt(x11) * x31 * x25) + x32)
-                                    - 0.5 * (f64::sqrt(x11) * x27 * x22)) - 0.25 * (x33 * x25))
-                                * x12),
+                                * (x17 * (0.5 * (x19 * x33 * x26) + x34)
+                                    - 0.5 * (x19 * x29 * x23)) - 0.25 * (x35 * x26)) * x12),
                 ],
                 [
                     l
                         * ((zeta
-                            * (0.5 * (x3 * x36 * f64::sqrt(x11))
-                                + x17
-                                    * (f64::sqrt(x11) * x2
-                                        + 0.5 * (f64::sqrt(x11) * x12 * x35))) - 0.25 * (x35 * k))
-                            * x12
-                            + (x2 / f64::sqrt(x8) + 0.25 * (x35 / f64::powf(x8, 1.5)))
-                                * x9),
-                    x21 * x37 - x10 - x19,
-                    x37 * x22,
+                            * (0.5 * (x3 * x38 * x19)
+                                + x17 * (x19 * x2 + 0.5 * (x19 * x12 * x37)))
+                            - 0.25 * (x37 * k)) * x12
+                            + (x2 / x9 + 0.25 * (x37 / x27)) * x10),
+                    x22 * x39 - x11 - x20,
+                    x39 * x23,
                 ],
                 [
-                    ((0.25 * (x38 / f64::powf(x8, 1.5)) + x30) * x9
+                    ((0.25 * (x40 / x27) + x32) * x10
                         + x12
-                            * (0.25 * (x3 * x33)
+                            * (0.25 * (x3 * x35)
                                 + zeta
-                                    * (0.5 * (x3 * f64::sqrt(x11) * x39)
-                                        + (x32 - 0.5 * (x3 * f64::sqrt(x11) * x31)) * x17))) * l,
-                    (0.25 * (x9 * x22 / f64::powf(x8, 1.5))
-                        + (zeta
-                            * (0.5 * (x17 * f64::sqrt(x11) * x31)
-                                - 0.5 * (f64::sqrt(x11) * x39)) - 0.25 * x33) * x12) * x21,
+                                    * (0.5 * (x3 * x19 * x41)
+                                        + (x34 - 0.5 * (x3 * x19 * x33)) * x17))) * l,
+                    (0.25 * (x10 * x23 / x27)
+                        + (zeta * (0.5 * (x17 * x19 * x33) - 0.5 * (x19 * x41))
+                            - 0.25 * x35) * x12) * x22,
                     x12
                         * (zeta
-                            * (x17
-                                * (0.5 * (f64::sqrt(x11) * x31 * x22) - f64::sqrt(x11))
-                                - 0.5 * (f64::sqrt(x11) * x39 * x22)) - 0.25 * (x33 * x22))
-                        + (0.25 * (x22 * x22 / f64::powf(x8, 1.5)) - 1.0 / f64::sqrt(x8))
-                            * x9,
+                            * (x17 * (0.5 * (x19 * x33 * x23) - x19)
+                                - 0.5 * (x19 * x41 * x23)) - 0.25 * (x35 * x23))
+                        + (0.25 * (x23 * x23 / x27) - 1.0 / x9) * x10,
                 ],
                 [
-                    -(0.5 * f64::sqrt(x11) * x29 * x40),
-                    -(0.5 * f64::sqrt(x11) * x21 * x40),
-                    -(0.5 * f64::sqrt(x11) * x40 * x22),
+                    -(0.5 * x19 * x31 * x42),
+                    -(0.5 * x19 * x22 * x42),
+                    -(0.5 * x19 * x42 * x23),
                 ],
-                [
-                    -(0.5 * f64::sqrt(x11) * x35 * x34),
-                    -(0.5 * x41 * f64::sqrt(x11) * x21),
-                    x42,
-                ],
-                [
-                    -(0.5 * x38 * f64::sqrt(x11) * x34),
-                    x42,
-                    -(0.5 * x44 * f64::sqrt(x11) * x22),
-                ],
+                [-(0.5 * x19 * x37 * x36), -(0.5 * x43 * x19 * x22), x44],
+                [-(0.5 * x40 * x19 * x36), x44, -(0.5 * x46 * x19 * x23)],
             ],
-            power: -(x18 * x23),
+            power: -(x18 * x24),
             d_power: [
                 (x17
-                    * (f64::sqrt(x11) * x0 * y_dot + f64::sqrt(x11) * x_dot * x2
-                        + x26 * x23 - 0.5 * (x24 * f64::sqrt(x11) * th_dot)) - x27 * x23)
-                    * x34,
-                x13
-                    * (x17
-                        * (x21 * x12 * x23 - f64::sqrt(x11) * x_dot
-                            + x15 * f64::sqrt(x11)) - x36 * x23),
-                x13
-                    * (x17 * (x31 * x23 - f64::sqrt(x11) * y_dot + f64::sqrt(x11) * x16)
-                        - x39 * x23),
-                (0.5 * (x3 * x17 * f64::sqrt(x11)) - x25 * x23) * x34,
-                -(x41 * x43),
-                -(x44 * x43),
+                    * (x19 * x0 * y_dot + x19 * x_dot * x2 + x28 * x24
+                        - 0.5 * (x25 * x19 * th_dot)) - x29 * x24) * x36,
+                x13 * (x17 * (x22 * x12 * x24 - x19 * x_dot + x15 * x19) - x38 * x24),
+                x13 * (x17 * (x33 * x24 - x19 * y_dot + x19 * x16) - x41 * x24),
+                (0.5 * (x3 * x17 * x19) - x26 * x24) * x36,
+                -(x43 * x45),
+                -(x46 * x45),
             ],
         }
     }
@@ -689,49 +670,48 @@ pub mod lagrange {
         let x2 = x1 * g * m1;
         let x3 = f64::cos(th);
         let x4 = 2.0 * (x1 * y) + 2.0 * (x * x3);
-        let x5 = m2 * k;
-        let x6 = l * x3;
-        let x7 = x6 * th_dot;
-        let x8 = l * x1;
-        let x9 = x8 - x;
-        let x10 = x8 * th_dot;
-        let x11 = x6 + y;
-        let x12 = 2.0 * ((x7 - x_dot) * x9) - 2.0 * ((x10 - y_dot) * x11);
-        let x13 = x11 * x11 + x9 * x9;
-        let x14 = 1.0 / x13;
-        let x15 = x12 * x14;
-        let x16 = zeta * x15;
-        let x17 = f64::sqrt(x5) * x16;
-        let x18 = f64::sqrt(x13) - L;
-        let x19 = x18 * k;
-        let x20 = x19 / f64::sqrt(x13);
-        let x21 = 0.5 * x17 + 0.5 * x20;
-        let x22 = 2.0 * x - 2.0 * x8;
-        let x23 = 2.0 * x6 + 2.0 * y;
-        let x24 = -(x4 * l);
-        let x25 = x24 * th_dot;
-        let x26 = x23 * y_dot;
-        let x27 = x22 * x_dot;
-        let x28 = (0.5 * (f64::sqrt(x5) * x25) + 0.5 * (f64::sqrt(x5) * x26))
-            + 0.5 * (f64::sqrt(x5) * x27);
-        let x29 = x16 * k;
-        let x30 = 0.25 * (x26 / f64::sqrt(x5)) + 0.25 * (x25 / f64::sqrt(x5))
-            + 0.25 * (x27 / f64::sqrt(x5));
-        let x31 = 2.0 * (x1 * x9) + 2.0 * (x3 * x11);
-        let x32 = (2.0 * (x9 * th_dot) - 2.0 * x10 + 2.0 * y_dot) * x3
-            + x1 * (2.0 * x7 - 2.0 * (x11 * th_dot) - 2.0 * x_dot);
-        let x33 = 0.25 * (x31 * x19 / f64::powf(x13, 1.5))
-            + x14
-                * (zeta
-                    * (0.5 * (x31 * f64::sqrt(x5) * x15) - 0.5 * (f64::sqrt(x5) * x32))
-                    - 0.25 * (x31 * k));
-        let x34 = x31 * x23;
-        let x35 = m2 * x16;
-        let x36 = 0.5 * (x18 / f64::sqrt(x13)) + 0.25 * (x35 / f64::sqrt(x5));
+        let x5 = l * x3;
+        let x6 = x5 * th_dot;
+        let x7 = l * x1;
+        let x8 = x7 - x;
+        let x9 = x7 * th_dot;
+        let x10 = x5 + y;
+        let x11 = 2.0 * ((x6 - x_dot) * x8) - 2.0 * ((x9 - y_dot) * x10);
+        let x12 = x10 * x10 + x8 * x8;
+        let x13 = 1.0 / x12;
+        let x14 = x11 * x13;
+        let x15 = zeta * x14;
+        let x16 = f64::sqrt(m2 * k);
+        let x17 = x16 * x15;
+        let x18 = f64::sqrt(x12);
+        let x19 = x18 - L;
+        let x20 = x19 * k;
+        let x21 = x20 / x18;
+        let x22 = 0.5 * x17 + 0.5 * x21;
+        let x23 = 2.0 * x - 2.0 * x7;
+        let x24 = 2.0 * x5 + 2.0 * y;
+        let x25 = -(x4 * l);
+        let x26 = x25 * th_dot;
+        let x27 = x24 * y_dot;
+        let x28 = x23 * x_dot;
+        let x29 = (0.5 * (x16 * x26) + 0.5 * (x16 * x27)) + 0.5 * (x16 * x28);
+        let x30 = x15 * k;
+        let x31 = 0.25 * (x27 / x16) + 0.25 * (x26 / x16) + 0.25 * (x28 / x16);
+        let x32 = 2.0 * (x1 * x8) + 2.0 * (x3 * x10);
+        let x33 = f64::powf(x12, 1.5);
+        let x34 = (2.0 * (x8 * th_dot) - 2.0 * x9 + 2.0 * y_dot) * x3
+            + x1 * (2.0 * x6 - 2.0 * (x10 * th_dot) - 2.0 * x_dot);
+        let x35 = 0.25 * (x32 * x20 / x33)
+            + x13
+                * (zeta * (0.5 * (x32 * x16 * x14) - 0.5 * (x16 * x34))
+                    - 0.25 * (x32 * k));
+        let x36 = x32 * x24;
+        let x37 = m2 * x15;
+        let x38 = 0.5 * (x19 / x18) + 0.25 * (x37 / x16);
         ParameterDerivatives {
             qdot: [th_dot, x_dot, y_dot],
             matrix: [[x0 * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x4 * x21 - x2), -(x22 * x21), -x23 * x21 - m2 * g],
+            force: [l * (x4 * x22 - x2), -(x23 * x22), -x24 * x22 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -752,45 +732,39 @@ pub mod lagrange {
                 [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
             ],
             d_force: [
-                [-(g * x8), 0.0, 0.0],
+                [-(g * x7), 0.0, 0.0],
                 [
-                    -(0.25 * x24 * x29 / f64::sqrt(x5)),
-                    -(0.25 * x22 * x29 / f64::sqrt(x5)),
-                    -(g + 0.25 * (x23 * x29 / f64::sqrt(x5))),
+                    -(0.25 * x25 * x30 / x16),
+                    -(0.25 * x23 * x30 / x16),
+                    -(g + 0.25 * (x24 * x30 / x16)),
                 ],
                 [
-                    -(l * x33 - 0.5 * x17 - 0.5 * x20) * x4 - x2,
-                    x22 * x33 + x1 * (x17 + x20),
-                    (0.25 * (x34 / f64::powf(x13, 1.5)) - x3 / f64::sqrt(x13)) * x19
+                    -(l * x35 - 0.5 * x17 - 0.5 * x21) * x4 - x2,
+                    x23 * x35 + x1 * (x17 + x21),
+                    (0.25 * (x36 / x33) - x3 / x18) * x20
                         + (zeta
-                            * ((0.5 * (x34 * f64::sqrt(x5) * x14) - f64::sqrt(x5) * x3)
-                                * x12 - 0.5 * (f64::sqrt(x5) * x23 * x32))
-                            - 0.25 * (x34 * k)) * x14,
+                            * ((0.5 * (x36 * x16 * x13) - x16 * x3) * x11
+                                - 0.5 * (x16 * x24 * x34)) - 0.25 * (x36 * k)) * x13,
                 ],
+                [0.5 * x25 * k / x18, 0.5 * x23 * k / x18, 0.5 * x24 * k / x18],
+                [-(x38 * x25), -(x38 * x23), -(x24 * x38)],
                 [
-                    0.5 * x24 * k / f64::sqrt(x13),
-                    0.5 * x22 * k / f64::sqrt(x13),
-                    0.5 * x23 * k / f64::sqrt(x13),
+                    -(0.5 * x16 * x25 * x14),
+                    -(0.5 * x16 * x23 * x14),
+                    -(0.5 * x16 * x24 * x14),
                 ],
-                [-(x36 * x24), -(x36 * x22), -(x23 * x36)],
-                [
-                    -(0.5 * f64::sqrt(x5) * x24 * x15),
-                    -(0.5 * f64::sqrt(x5) * x22 * x15),
-                    -(0.5 * f64::sqrt(x5) * x23 * x15),
-                ],
-                [-(x8 * m1), 0.0, -m2],
+                [-(x7 * m1), 0.0, -m2],
             ],
-            power: -(x16 * x28),
+            power: -(x15 * x29),
             d_power: [
                 0.0,
-                -(x30 * x29),
+                -(x31 * x30),
                 zeta
-                    * ((0.5 * (x4 * f64::sqrt(x5) * th_dot) + x31 * x14 * x28
-                        + f64::sqrt(x5) * x1 * x_dot - f64::sqrt(x5) * y_dot * x3) * x12
-                        - x32 * x28) * x14,
+                    * ((0.5 * (x4 * x16 * th_dot) + x32 * x13 * x29 + x16 * x1 * x_dot
+                        - x16 * y_dot * x3) * x11 - x34 * x29) * x13,
                 0.0,
-                -(x35 * x30),
-                -(x28 * x15),
+                -(x37 * x31),
+                -(x29 * x14),
                 0.0,
             ],
         }
@@ -1022,24 +996,24 @@ pub mod maggi {
         let x5 = l * x0;
         let x6 = x5 - x;
         let x7 = x4 * x4 + x6 * x6;
-        let x8 = l * th_dot;
-        let x9 = zeta * (2.0 * (x6 * (x8 * x1 - x_dot)) - 2.0 * (x4 * (x0 * x8 - y_dot)))
+        let x8 = f64::sqrt(x7);
+        let x9 = l * th_dot;
+        let x10 = zeta
+            * (2.0 * (x6 * (x9 * x1 - x_dot)) - 2.0 * (x4 * (x0 * x9 - y_dot)))
             * (1.0 / x7);
-        let x10 = m2 * k;
-        let x11 = 0.5 * ((f64::sqrt(x7) - L) * k / f64::sqrt(x7))
-            + 0.5 * (x9 * f64::sqrt(x10));
-        let x12 = 2.0 * x - 2.0 * x5;
-        let x13 = 2.0 * x3 + 2.0 * y;
+        let x11 = f64::sqrt(m2 * k);
+        let x12 = 0.5 * ((x8 - L) * k / x8) + 0.5 * (x10 * x11);
+        let x13 = 2.0 * x - 2.0 * x5;
+        let x14 = 2.0 * x3 + 2.0 * y;
         Assembly {
             qdot: [th_dot, x_dot, y_dot],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x2 * x11 - x0 * g * m1), -(x12 * x11), -x11 * x13 - m2 * g],
+            force: [l * (x2 * x12 - x0 * g * m1), -(x13 * x12), -x12 * x14 - m2 * g],
             w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             c: [0.0, 0.0, 0.0],
-            power: -(x9
-                * (0.5 * (f64::sqrt(x10) * y_dot * x13)
-                    - 0.5 * (x2 * f64::sqrt(x10) * x8)
-                    + 0.5 * (f64::sqrt(x10) * x12 * x_dot))),
+            power: -(x10
+                * (0.5 * (x11 * y_dot * x14) - 0.5 * (x2 * x11 * x9)
+                    + 0.5 * (x11 * x13 * x_dot))),
             checks: [],
         }
     }
@@ -1207,9 +1181,9 @@ pub mod maggi {
         let x6 = l * x0;
         let x7 = x6 - x;
         let x8 = x5 * x5 + x7 * x7;
-        let x9 = (f64::sqrt(x8) - L) * k;
-        let x10 = x9 / f64::sqrt(x8);
-        let x11 = m2 * k;
+        let x9 = f64::sqrt(x8);
+        let x10 = (x9 - L) * k;
+        let x11 = x10 / x9;
         let x12 = 1.0 / x8;
         let x13 = zeta * x12;
         let x14 = l * th_dot;
@@ -1217,41 +1191,43 @@ pub mod maggi {
         let x16 = x0 * x14;
         let x17 = 2.0 * ((x15 - x_dot) * x7) - 2.0 * (x5 * (x16 - y_dot));
         let x18 = x13 * x17;
-        let x19 = f64::sqrt(x11) * x18;
-        let x20 = 0.5 * x10 + 0.5 * x19;
-        let x21 = 2.0 * x - 2.0 * x6;
-        let x22 = 2.0 * x4 + 2.0 * y;
-        let x23 = (0.5 * (f64::sqrt(x11) * y_dot * x22)
-            - 0.5 * (x3 * f64::sqrt(x11) * x14)) + 0.5 * (f64::sqrt(x11) * x21 * x_dot);
-        let x24 = 2.0 * (x * x0) - 2.0 * (y * x2);
-        let x25 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
-        let x26 = x12 * x25;
-        let x27 = x2 * (2.0 * x15 - 2.0 * x_dot - 2.0 * (x5 * th_dot))
+        let x19 = f64::sqrt(m2 * k);
+        let x20 = x19 * x18;
+        let x21 = 0.5 * x11 + 0.5 * x20;
+        let x22 = 2.0 * x - 2.0 * x6;
+        let x23 = 2.0 * x4 + 2.0 * y;
+        let x24 = (0.5 * (x19 * y_dot * x23) - 0.5 * (x3 * x19 * x14))
+            + 0.5 * (x19 * x22 * x_dot);
+        let x25 = 2.0 * (x * x0) - 2.0 * (y * x2);
+        let x26 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
+        let x27 = f64::powf(x8, 1.5);
+        let x28 = x12 * x26;
+        let x29 = x2 * (2.0 * x15 - 2.0 * x_dot - 2.0 * (x5 * th_dot))
             + x0 * (2.0 * x16 - 2.0 * (x7 * th_dot) - 2.0 * y_dot);
-        let x28 = 0.25 * (x9 * x25 / f64::powf(x8, 1.5))
-            + (zeta * (0.5 * (x17 * f64::sqrt(x11) * x26) - 0.5 * (f64::sqrt(x11) * x27))
-                - 0.25 * (x25 * k)) * x12;
-        let x29 = -(x3 * l);
-        let x30 = x0 / f64::sqrt(x8);
-        let x31 = x12 * x22;
-        let x32 = f64::sqrt(x11) * x0;
-        let x33 = k * x22;
-        let x34 = x13 * l;
-        let x35 = -(x3 * x21);
-        let x36 = 2.0 * x_dot - 2.0 * x15;
-        let x37 = ((0.5 * x19 - 0.25 * k) * x12 + 0.25 * (x9 / f64::powf(x8, 1.5))) * x21
-            - 0.5 * (x13 * x36 * f64::sqrt(x11));
-        let x38 = -(x3 * x22);
-        let x39 = 2.0 * y_dot - 2.0 * x16;
-        let x40 = x25 * x34;
-        let x41 = x13 * x21;
-        let x42 = -(0.5 * x41 * f64::sqrt(x11) * x22);
-        let x43 = 0.5 * (x17 * f64::sqrt(x11)) + x23;
-        let x44 = x13 * x22;
+        let x30 = 0.25 * (x10 * x26 / x27)
+            + (zeta * (0.5 * (x17 * x19 * x28) - 0.5 * (x19 * x29)) - 0.25 * (x26 * k))
+                * x12;
+        let x31 = -(x3 * l);
+        let x32 = x0 / x9;
+        let x33 = x12 * x23;
+        let x34 = x19 * x0;
+        let x35 = k * x23;
+        let x36 = x13 * l;
+        let x37 = -(x3 * x22);
+        let x38 = 2.0 * x_dot - 2.0 * x15;
+        let x39 = ((0.5 * x20 - 0.25 * k) * x12 + 0.25 * (x10 / x27)) * x22
+            - 0.5 * (x13 * x38 * x19);
+        let x40 = -(x3 * x23);
+        let x41 = 2.0 * y_dot - 2.0 * x16;
+        let x42 = x26 * x36;
+        let x43 = x13 * x22;
+        let x44 = -(0.5 * x43 * x19 * x23);
+        let x45 = 0.5 * (x17 * x19) + x24;
+        let x46 = x13 * x23;
         Derivatives {
             qdot: [th_dot, x_dot, y_dot],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x3 * x20 - x0 * x1), -(x21 * x20), -x20 * x22 - m2 * g],
+            force: [l * (x3 * x21 - x0 * x1), -(x22 * x21), -x21 * x23 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -1271,62 +1247,47 @@ pub mod maggi {
             ],
             d_force: [
                 [
-                    l * (x28 * x29 - x2 * x1 - x24 * x20),
-                    (x28 * x21 + (x10 + x19) * x2) * l,
+                    l * (x30 * x31 - x2 * x1 - x25 * x21),
+                    (x30 * x22 + (x11 + x20) * x2) * l,
                     l
-                        * ((x30 + 0.25 * (x25 * x22 / f64::powf(x8, 1.5))) * x9
+                        * ((x32 + 0.25 * (x26 * x23 / x27)) * x10
                             + (zeta
-                                * (x17 * (0.5 * (f64::sqrt(x11) * x31 * x25) + x32)
-                                    - 0.5 * (f64::sqrt(x11) * x27 * x22)) - 0.25 * (x33 * x25))
-                                * x12),
+                                * (x17 * (0.5 * (x19 * x33 * x26) + x34)
+                                    - 0.5 * (x19 * x29 * x23)) - 0.25 * (x35 * x26)) * x12),
                 ],
                 [
                     l
                         * ((zeta
-                            * (0.5 * (x3 * x36 * f64::sqrt(x11))
-                                + x17
-                                    * (f64::sqrt(x11) * x2
-                                        + 0.5 * (f64::sqrt(x11) * x12 * x35))) - 0.25 * (x35 * k))
-                            * x12
-                            + (x2 / f64::sqrt(x8) + 0.25 * (x35 / f64::powf(x8, 1.5)))
-                                * x9),
-                    x21 * x37 - x10 - x19,
-                    x37 * x22,
+                            * (0.5 * (x3 * x38 * x19)
+                                + x17 * (x19 * x2 + 0.5 * (x19 * x12 * x37)))
+                            - 0.25 * (x37 * k)) * x12
+                            + (x2 / x9 + 0.25 * (x37 / x27)) * x10),
+                    x22 * x39 - x11 - x20,
+                    x39 * x23,
                 ],
                 [
-                    ((0.25 * (x38 / f64::powf(x8, 1.5)) + x30) * x9
+                    ((0.25 * (x40 / x27) + x32) * x10
                         + x12
-                            * (0.25 * (x3 * x33)
+                            * (0.25 * (x3 * x35)
                                 + zeta
-                                    * (0.5 * (x3 * f64::sqrt(x11) * x39)
-                                        + (x32 - 0.5 * (x3 * f64::sqrt(x11) * x31)) * x17))) * l,
-                    (0.25 * (x9 * x22 / f64::powf(x8, 1.5))
-                        + (zeta
-                            * (0.5 * (x17 * f64::sqrt(x11) * x31)
-                                - 0.5 * (f64::sqrt(x11) * x39)) - 0.25 * x33) * x12) * x21,
+                                    * (0.5 * (x3 * x19 * x41)
+                                        + (x34 - 0.5 * (x3 * x19 * x33)) * x17))) * l,
+                    (0.25 * (x10 * x23 / x27)
+                        + (zeta * (0.5 * (x17 * x19 * x33) - 0.5 * (x19 * x41))
+                            - 0.25 * x35) * x12) * x22,
                     x12
                         * (zeta
-                            * (x17
-                                * (0.5 * (f64::sqrt(x11) * x31 * x22) - f64::sqrt(x11))
-                                - 0.5 * (f64::sqrt(x11) * x39 * x22)) - 0.25 * (x33 * x22))
-                        + (0.25 * (x22 * x22 / f64::powf(x8, 1.5)) - 1.0 / f64::sqrt(x8))
-                            * x9,
+                            * (x17 * (0.5 * (x19 * x33 * x23) - x19)
+                                - 0.5 * (x19 * x41 * x23)) - 0.25 * (x35 * x23))
+                        + (0.25 * (x23 * x23 / x27) - 1.0 / x9) * x10,
                 ],
                 [
-                    -(0.5 * f64::sqrt(x11) * x29 * x40),
-                    -(0.5 * f64::sqrt(x11) * x21 * x40),
-                    -(0.5 * f64::sqrt(x11) * x40 * x22),
+                    -(0.5 * x19 * x31 * x42),
+                    -(0.5 * x19 * x22 * x42),
+                    -(0.5 * x19 * x42 * x23),
                 ],
-                [
-                    -(0.5 * f64::sqrt(x11) * x35 * x34),
-                    -(0.5 * x41 * f64::sqrt(x11) * x21),
-                    x42,
-                ],
-                [
-                    -(0.5 * x38 * f64::sqrt(x11) * x34),
-                    x42,
-                    -(0.5 * x44 * f64::sqrt(x11) * x22),
-                ],
+                [-(0.5 * x19 * x37 * x36), -(0.5 * x43 * x19 * x22), x44],
+                [-(0.5 * x40 * x19 * x36), x44, -(0.5 * x46 * x19 * x23)],
             ],
             w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             c: [0.0, 0.0, 0.0],
@@ -1346,22 +1307,16 @@ pub mod maggi {
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
             ],
-            power: -(x18 * x23),
+            power: -(x18 * x24),
             d_power: [
                 (x17
-                    * (f64::sqrt(x11) * x0 * y_dot + f64::sqrt(x11) * x_dot * x2
-                        + x26 * x23 - 0.5 * (x24 * f64::sqrt(x11) * th_dot)) - x27 * x23)
-                    * x34,
-                x13
-                    * (x17
-                        * (x21 * x12 * x23 - f64::sqrt(x11) * x_dot
-                            + x15 * f64::sqrt(x11)) - x36 * x23),
-                x13
-                    * (x17 * (x31 * x23 - f64::sqrt(x11) * y_dot + f64::sqrt(x11) * x16)
-                        - x39 * x23),
-                (0.5 * (x3 * x17 * f64::sqrt(x11)) - x25 * x23) * x34,
-                -(x41 * x43),
-                -(x44 * x43),
+                    * (x19 * x0 * y_dot + x19 * x_dot * x2 + x28 * x24
+                        - 0.5 * (x25 * x19 * th_dot)) - x29 * x24) * x36,
+                x13 * (x17 * (x22 * x12 * x24 - x19 * x_dot + x15 * x19) - x38 * x24),
+                x13 * (x17 * (x33 * x24 - x19 * y_dot + x19 * x16) - x41 * x24),
+                (0.5 * (x3 * x17 * x19) - x26 * x24) * x36,
+                -(x43 * x45),
+                -(x46 * x45),
             ],
         }
     }
@@ -1465,49 +1420,48 @@ pub mod maggi {
         let x2 = x1 * g * m1;
         let x3 = f64::cos(th);
         let x4 = 2.0 * (x1 * y) + 2.0 * (x * x3);
-        let x5 = m2 * k;
-        let x6 = l * x3;
-        let x7 = x6 * th_dot;
-        let x8 = l * x1;
-        let x9 = x8 - x;
-        let x10 = x8 * th_dot;
-        let x11 = x6 + y;
-        let x12 = 2.0 * ((x7 - x_dot) * x9) - 2.0 * ((x10 - y_dot) * x11);
-        let x13 = x11 * x11 + x9 * x9;
-        let x14 = 1.0 / x13;
-        let x15 = x12 * x14;
-        let x16 = zeta * x15;
-        let x17 = f64::sqrt(x5) * x16;
-        let x18 = f64::sqrt(x13) - L;
-        let x19 = x18 * k;
-        let x20 = x19 / f64::sqrt(x13);
-        let x21 = 0.5 * x17 + 0.5 * x20;
-        let x22 = 2.0 * x - 2.0 * x8;
-        let x23 = 2.0 * x6 + 2.0 * y;
-        let x24 = -(x4 * l);
-        let x25 = x24 * th_dot;
-        let x26 = x23 * y_dot;
-        let x27 = x22 * x_dot;
-        let x28 = (0.5 * (f64::sqrt(x5) * x25) + 0.5 * (f64::sqrt(x5) * x26))
-            + 0.5 * (f64::sqrt(x5) * x27);
-        let x29 = x16 * k;
-        let x30 = 0.25 * (x26 / f64::sqrt(x5)) + 0.25 * (x25 / f64::sqrt(x5))
-            + 0.25 * (x27 / f64::sqrt(x5));
-        let x31 = 2.0 * (x1 * x9) + 2.0 * (x3 * x11);
-        let x32 = (2.0 * (x9 * th_dot) - 2.0 * x10 + 2.0 * y_dot) * x3
-            + x1 * (2.0 * x7 - 2.0 * (x11 * th_dot) - 2.0 * x_dot);
-        let x33 = 0.25 * (x31 * x19 / f64::powf(x13, 1.5))
-            + x14
-                * (zeta
-                    * (0.5 * (x31 * f64::sqrt(x5) * x15) - 0.5 * (f64::sqrt(x5) * x32))
-                    - 0.25 * (x31 * k));
-        let x34 = x31 * x23;
-        let x35 = m2 * x16;
-        let x36 = 0.5 * (x18 / f64::sqrt(x13)) + 0.25 * (x35 / f64::sqrt(x5));
+        let x5 = l * x3;
+        let x6 = x5 * th_dot;
+        let x7 = l * x1;
+        let x8 = x7 - x;
+        let x9 = x7 * th_dot;
+        let x10 = x5 + y;
+        let x11 = 2.0 * ((x6 - x_dot) * x8) - 2.0 * ((x9 - y_dot) * x10);
+        let x12 = x10 * x10 + x8 * x8;
+        let x13 = 1.0 / x12;
+        let x14 = x11 * x13;
+        let x15 = zeta * x14;
+        let x16 = f64::sqrt(m2 * k);
+        let x17 = x16 * x15;
+        let x18 = f64::sqrt(x12);
+        let x19 = x18 - L;
+        let x20 = x19 * k;
+        let x21 = x20 / x18;
+        let x22 = 0.5 * x17 + 0.5 * x21;
+        let x23 = 2.0 * x - 2.0 * x7;
+        let x24 = 2.0 * x5 + 2.0 * y;
+        let x25 = -(x4 * l);
+        let x26 = x25 * th_dot;
+        let x27 = x24 * y_dot;
+        let x28 = x23 * x_dot;
+        let x29 = (0.5 * (x16 * x26) + 0.5 * (x16 * x27)) + 0.5 * (x16 * x28);
+        let x30 = x15 * k;
+        let x31 = 0.25 * (x27 / x16) + 0.25 * (x26 / x16) + 0.25 * (x28 / x16);
+        let x32 = 2.0 * (x1 * x8) + 2.0 * (x3 * x10);
+        let x33 = f64::powf(x12, 1.5);
+        let x34 = (2.0 * (x8 * th_dot) - 2.0 * x9 + 2.0 * y_dot) * x3
+            + x1 * (2.0 * x6 - 2.0 * (x10 * th_dot) - 2.0 * x_dot);
+        let x35 = 0.25 * (x32 * x20 / x33)
+            + x13
+                * (zeta * (0.5 * (x32 * x16 * x14) - 0.5 * (x16 * x34))
+                    - 0.25 * (x32 * k));
+        let x36 = x32 * x24;
+        let x37 = m2 * x15;
+        let x38 = 0.5 * (x19 / x18) + 0.25 * (x37 / x16);
         ParameterDerivatives {
             qdot: [th_dot, x_dot, y_dot],
             matrix: [[x0 * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x4 * x21 - x2), -(x22 * x21), -x23 * x21 - m2 * g],
+            force: [l * (x4 * x22 - x2), -(x23 * x22), -x24 * x22 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -1528,33 +1482,28 @@ pub mod maggi {
                 [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
             ],
             d_force: [
-                [-(g * x8), 0.0, 0.0],
+                [-(g * x7), 0.0, 0.0],
                 [
-                    -(0.25 * x24 * x29 / f64::sqrt(x5)),
-                    -(0.25 * x22 * x29 / f64::sqrt(x5)),
-                    -(g + 0.25 * (x23 * x29 / f64::sqrt(x5))),
+                    -(0.25 * x25 * x30 / x16),
+                    -(0.25 * x23 * x30 / x16),
+                    -(g + 0.25 * (x24 * x30 / x16)),
                 ],
                 [
-                    -(l * x33 - 0.5 * x17 - 0.5 * x20) * x4 - x2,
-                    x22 * x33 + x1 * (x17 + x20),
-                    (0.25 * (x34 / f64::powf(x13, 1.5)) - x3 / f64::sqrt(x13)) * x19
+                    -(l * x35 - 0.5 * x17 - 0.5 * x21) * x4 - x2,
+                    x23 * x35 + x1 * (x17 + x21),
+                    (0.25 * (x36 / x33) - x3 / x18) * x20
                         + (zeta
-                            * ((0.5 * (x34 * f64::sqrt(x5) * x14) - f64::sqrt(x5) * x3)
-                                * x12 - 0.5 * (f64::sqrt(x5) * x23 * x32))
-                            - 0.25 * (x34 * k)) * x14,
+                            * ((0.5 * (x36 * x16 * x13) - x16 * x3) * x11
+                                - 0.5 * (x16 * x24 * x34)) - 0.25 * (x36 * k)) * x13,
                 ],
+                [0.5 * x25 * k / x18, 0.5 * x23 * k / x18, 0.5 * x24 * k / x18],
+                [-(x38 * x25), -(x38 * x23), -(x24 * x38)],
                 [
-                    0.5 * x24 * k / f64::sqrt(x13),
-                    0.5 * x22 * k / f64::sqrt(x13),
-                    0.5 * x23 * k / f64::sqrt(x13),
+                    -(0.5 * x16 * x25 * x14),
+                    -(0.5 * x16 * x23 * x14),
+                    -(0.5 * x16 * x24 * x14),
                 ],
-                [-(x36 * x24), -(x36 * x22), -(x23 * x36)],
-                [
-                    -(0.5 * f64::sqrt(x5) * x24 * x15),
-                    -(0.5 * f64::sqrt(x5) * x22 * x15),
-                    -(0.5 * f64::sqrt(x5) * x23 * x15),
-                ],
-                [-(x8 * m1), 0.0, -m2],
+                [-(x7 * m1), 0.0, -m2],
             ],
             w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             c: [0.0, 0.0, 0.0],
@@ -1576,17 +1525,16 @@ pub mod maggi {
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
             ],
-            power: -(x16 * x28),
+            power: -(x15 * x29),
             d_power: [
                 0.0,
-                -(x30 * x29),
+                -(x31 * x30),
                 zeta
-                    * ((0.5 * (x4 * f64::sqrt(x5) * th_dot) + x31 * x14 * x28
-                        + f64::sqrt(x5) * x1 * x_dot - f64::sqrt(x5) * y_dot * x3) * x12
-                        - x32 * x28) * x14,
+                    * ((0.5 * (x4 * x16 * th_dot) + x32 * x13 * x29 + x16 * x1 * x_dot
+                        - x16 * y_dot * x3) * x11 - x34 * x29) * x13,
                 0.0,
-                -(x35 * x30),
-                -(x28 * x15),
+                -(x37 * x31),
+                -(x29 * x14),
                 0.0,
             ],
         }
@@ -1813,21 +1761,21 @@ pub mod kane {
         let x5 = l * x0;
         let x6 = x5 - x;
         let x7 = x4 * x4 + x6 * x6;
-        let x8 = l * u1;
-        let x9 = zeta * (2.0 * (x6 * (x8 * x1 - u2)) - 2.0 * (x4 * (x0 * x8 - u3)))
+        let x8 = f64::sqrt(x7);
+        let x9 = l * u1;
+        let x10 = zeta * (2.0 * (x6 * (x9 * x1 - u2)) - 2.0 * (x4 * (x0 * x9 - u3)))
             * (1.0 / x7);
-        let x10 = m2 * k;
-        let x11 = 0.5 * ((f64::sqrt(x7) - L) * k / f64::sqrt(x7))
-            + 0.5 * (x9 * f64::sqrt(x10));
-        let x12 = 2.0 * x - 2.0 * x5;
-        let x13 = 2.0 * x3 + 2.0 * y;
+        let x11 = f64::sqrt(m2 * k);
+        let x12 = 0.5 * ((x8 - L) * k / x8) + 0.5 * (x10 * x11);
+        let x13 = 2.0 * x - 2.0 * x5;
+        let x14 = 2.0 * x3 + 2.0 * y;
         Assembly {
             qdot: [u1, u2, u3],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x2 * x11 - x0 * g * m1), -(x12 * x11), -x11 * x13 - m2 * g],
-            power: -(x9
-                * (0.5 * (f64::sqrt(x10) * u3 * x13) - 0.5 * (x2 * f64::sqrt(x10) * x8)
-                    + 0.5 * (f64::sqrt(x10) * x12 * u2))),
+            force: [l * (x2 * x12 - x0 * g * m1), -(x13 * x12), -x12 * x14 - m2 * g],
+            power: -(x10
+                * (0.5 * (x11 * u3 * x14) - 0.5 * (x2 * x11 * x9)
+                    + 0.5 * (x11 * x13 * u2))),
             checks: [],
         }
     }
@@ -1989,9 +1937,9 @@ pub mod kane {
         let x6 = l * x0;
         let x7 = x6 - x;
         let x8 = x5 * x5 + x7 * x7;
-        let x9 = (f64::sqrt(x8) - L) * k;
-        let x10 = x9 / f64::sqrt(x8);
-        let x11 = m2 * k;
+        let x9 = f64::sqrt(x8);
+        let x10 = (x9 - L) * k;
+        let x11 = x10 / x9;
         let x12 = 1.0 / x8;
         let x13 = zeta * x12;
         let x14 = l * u1;
@@ -1999,41 +1947,43 @@ pub mod kane {
         let x16 = x0 * x14;
         let x17 = 2.0 * ((x15 - u2) * x7) - 2.0 * (x5 * (x16 - u3));
         let x18 = x13 * x17;
-        let x19 = f64::sqrt(x11) * x18;
-        let x20 = 0.5 * x10 + 0.5 * x19;
-        let x21 = 2.0 * x - 2.0 * x6;
-        let x22 = 2.0 * x4 + 2.0 * y;
-        let x23 = (0.5 * (f64::sqrt(x11) * u3 * x22) - 0.5 * (x3 * f64::sqrt(x11) * x14))
-            + 0.5 * (f64::sqrt(x11) * x21 * u2);
-        let x24 = 2.0 * (x * x0) - 2.0 * (y * x2);
-        let x25 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
-        let x26 = x12 * x25;
-        let x27 = x2 * (2.0 * x15 - 2.0 * u2 - 2.0 * (x5 * u1))
+        let x19 = f64::sqrt(m2 * k);
+        let x20 = x19 * x18;
+        let x21 = 0.5 * x11 + 0.5 * x20;
+        let x22 = 2.0 * x - 2.0 * x6;
+        let x23 = 2.0 * x4 + 2.0 * y;
+        let x24 = (0.5 * (x19 * u3 * x23) - 0.5 * (x3 * x19 * x14))
+            + 0.5 * (x19 * x22 * u2);
+        let x25 = 2.0 * (x * x0) - 2.0 * (y * x2);
+        let x26 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
+        let x27 = f64::powf(x8, 1.5);
+        let x28 = x12 * x26;
+        let x29 = x2 * (2.0 * x15 - 2.0 * u2 - 2.0 * (x5 * u1))
             + x0 * (2.0 * x16 - 2.0 * (x7 * u1) - 2.0 * u3);
-        let x28 = 0.25 * (x9 * x25 / f64::powf(x8, 1.5))
-            + (zeta * (0.5 * (x17 * f64::sqrt(x11) * x26) - 0.5 * (f64::sqrt(x11) * x27))
-                - 0.25 * (x25 * k)) * x12;
-        let x29 = -(x3 * l);
-        let x30 = x0 / f64::sqrt(x8);
-        let x31 = x12 * x22;
-        let x32 = f64::sqrt(x11) * x0;
-        let x33 = k * x22;
-        let x34 = x13 * l;
-        let x35 = -(x3 * x21);
-        let x36 = 2.0 * u2 - 2.0 * x15;
-        let x37 = ((0.5 * x19 - 0.25 * k) * x12 + 0.25 * (x9 / f64::powf(x8, 1.5))) * x21
-            - 0.5 * (x13 * x36 * f64::sqrt(x11));
-        let x38 = -(x3 * x22);
-        let x39 = 2.0 * u3 - 2.0 * x16;
-        let x40 = x25 * x34;
-        let x41 = x13 * x21;
-        let x42 = -(0.5 * x41 * f64::sqrt(x11) * x22);
-        let x43 = 0.5 * (x17 * f64::sqrt(x11)) + x23;
-        let x44 = x13 * x22;
+        let x30 = 0.25 * (x10 * x26 / x27)
+            + (zeta * (0.5 * (x17 * x19 * x28) - 0.5 * (x19 * x29)) - 0.25 * (x26 * k))
+                * x12;
+        let x31 = -(x3 * l);
+        let x32 = x0 / x9;
+        let x33 = x12 * x23;
+        let x34 = x19 * x0;
+        let x35 = k * x23;
+        let x36 = x13 * l;
+        let x37 = -(x3 * x22);
+        let x38 = 2.0 * u2 - 2.0 * x15;
+        let x39 = ((0.5 * x20 - 0.25 * k) * x12 + 0.25 * (x10 / x27)) * x22
+            - 0.5 * (x13 * x38 * x19);
+        let x40 = -(x3 * x23);
+        let x41 = 2.0 * u3 - 2.0 * x16;
+        let x42 = x26 * x36;
+        let x43 = x13 * x22;
+        let x44 = -(0.5 * x43 * x19 * x23);
+        let x45 = 0.5 * (x17 * x19) + x24;
+        let x46 = x13 * x23;
         Derivatives {
             qdot: [u1, u2, u3],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x3 * x20 - x0 * x1), -(x21 * x20), -x20 * x22 - m2 * g],
+            force: [l * (x3 * x21 - x0 * x1), -(x22 * x21), -x21 * x23 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -2053,78 +2003,58 @@ pub mod kane {
             ],
             d_force: [
                 [
-                    l * (x28 * x29 - x2 * x1 - x24 * x20),
-                    (x28 * x21 + (x10 + x19) * x2) * l,
+                    l * (x30 * x31 - x2 * x1 - x25 * x21),
+                    (x30 * x22 + (x11 + x20) * x2) * l,
                     l
-                        * ((x30 + 0.25 * (x25 * x22 / f64::powf(x8, 1.5))) * x9
+                        * ((x32 + 0.25 * (x26 * x23 / x27)) * x10
                             + (zeta
-                                * (x17 * (0.5 * (f64::sqrt(x11) * x31 * x25) + x32)
-                                    - 0.5 * (f64::sqrt(x11) * x27 * x22)) - 0.25 * (x33 * x25))
-                                * x12),
+                                * (x17 * (0.5 * (x19 * x33 * x26) + x34)
+                                    - 0.5 * (x19 * x29 * x23)) - 0.25 * (x35 * x26)) * x12),
                 ],
                 [
                     l
                         * ((zeta
-                            * (0.5 * (x3 * x36 * f64::sqrt(x11))
-                                + x17
-                                    * (f64::sqrt(x11) * x2
-                                        + 0.5 * (f64::sqrt(x11) * x12 * x35))) - 0.25 * (x35 * k))
-                            * x12
-                            + (x2 / f64::sqrt(x8) + 0.25 * (x35 / f64::powf(x8, 1.5)))
-                                * x9),
-                    x21 * x37 - x10 - x19,
-                    x37 * x22,
+                            * (0.5 * (x3 * x38 * x19)
+                                + x17 * (x19 * x2 + 0.5 * (x19 * x12 * x37)))
+                            - 0.25 * (x37 * k)) * x12
+                            + (x2 / x9 + 0.25 * (x37 / x27)) * x10),
+                    x22 * x39 - x11 - x20,
+                    x39 * x23,
                 ],
                 [
-                    ((0.25 * (x38 / f64::powf(x8, 1.5)) + x30) * x9
+                    ((0.25 * (x40 / x27) + x32) * x10
                         + x12
-                            * (0.25 * (x3 * x33)
+                            * (0.25 * (x3 * x35)
                                 + zeta
-                                    * (0.5 * (x3 * f64::sqrt(x11) * x39)
-                                        + (x32 - 0.5 * (x3 * f64::sqrt(x11) * x31)) * x17))) * l,
-                    (0.25 * (x9 * x22 / f64::powf(x8, 1.5))
-                        + (zeta
-                            * (0.5 * (x17 * f64::sqrt(x11) * x31)
-                                - 0.5 * (f64::sqrt(x11) * x39)) - 0.25 * x33) * x12) * x21,
+                                    * (0.5 * (x3 * x19 * x41)
+                                        + (x34 - 0.5 * (x3 * x19 * x33)) * x17))) * l,
+                    (0.25 * (x10 * x23 / x27)
+                        + (zeta * (0.5 * (x17 * x19 * x33) - 0.5 * (x19 * x41))
+                            - 0.25 * x35) * x12) * x22,
                     x12
                         * (zeta
-                            * (x17
-                                * (0.5 * (f64::sqrt(x11) * x31 * x22) - f64::sqrt(x11))
-                                - 0.5 * (f64::sqrt(x11) * x39 * x22)) - 0.25 * (x33 * x22))
-                        + (0.25 * (x22 * x22 / f64::powf(x8, 1.5)) - 1.0 / f64::sqrt(x8))
-                            * x9,
+                            * (x17 * (0.5 * (x19 * x33 * x23) - x19)
+                                - 0.5 * (x19 * x41 * x23)) - 0.25 * (x35 * x23))
+                        + (0.25 * (x23 * x23 / x27) - 1.0 / x9) * x10,
                 ],
                 [
-                    -(0.5 * f64::sqrt(x11) * x29 * x40),
-                    -(0.5 * f64::sqrt(x11) * x21 * x40),
-                    -(0.5 * f64::sqrt(x11) * x40 * x22),
+                    -(0.5 * x19 * x31 * x42),
+                    -(0.5 * x19 * x22 * x42),
+                    -(0.5 * x19 * x42 * x23),
                 ],
-                [
-                    -(0.5 * f64::sqrt(x11) * x35 * x34),
-                    -(0.5 * x41 * f64::sqrt(x11) * x21),
-                    x42,
-                ],
-                [
-                    -(0.5 * x38 * f64::sqrt(x11) * x34),
-                    x42,
-                    -(0.5 * x44 * f64::sqrt(x11) * x22),
-                ],
+                [-(0.5 * x19 * x37 * x36), -(0.5 * x43 * x19 * x22), x44],
+                [-(0.5 * x40 * x19 * x36), x44, -(0.5 * x46 * x19 * x23)],
             ],
-            power: -(x18 * x23),
+            power: -(x18 * x24),
             d_power: [
                 (x17
-                    * (f64::sqrt(x11) * x0 * u3 + f64::sqrt(x11) * u2 * x2 + x26 * x23
-                        - 0.5 * (x24 * f64::sqrt(x11) * u1)) - x27 * x23) * x34,
-                x13
-                    * (x17
-                        * (x21 * x12 * x23 - f64::sqrt(x11) * u2 + x15 * f64::sqrt(x11))
-                        - x36 * x23),
-                x13
-                    * (x17 * (x31 * x23 - f64::sqrt(x11) * u3 + f64::sqrt(x11) * x16)
-                        - x39 * x23),
-                (0.5 * (x3 * x17 * f64::sqrt(x11)) - x25 * x23) * x34,
-                -(x41 * x43),
-                -(x44 * x43),
+                    * (x19 * x0 * u3 + x19 * u2 * x2 + x28 * x24
+                        - 0.5 * (x25 * x19 * u1)) - x29 * x24) * x36,
+                x13 * (x17 * (x22 * x12 * x24 - x19 * u2 + x15 * x19) - x38 * x24),
+                x13 * (x17 * (x33 * x24 - x19 * u3 + x19 * x16) - x41 * x24),
+                (0.5 * (x3 * x17 * x19) - x26 * x24) * x36,
+                -(x43 * x45),
+                -(x46 * x45),
             ],
         }
     }
@@ -2216,49 +2146,48 @@ pub mod kane {
         let x2 = x1 * g * m1;
         let x3 = f64::cos(th);
         let x4 = 2.0 * (x1 * y) + 2.0 * (x * x3);
-        let x5 = m2 * k;
-        let x6 = l * x3;
-        let x7 = x6 * u1;
-        let x8 = l * x1;
-        let x9 = x8 - x;
-        let x10 = x8 * u1;
-        let x11 = x6 + y;
-        let x12 = 2.0 * ((x7 - u2) * x9) - 2.0 * ((x10 - u3) * x11);
-        let x13 = x11 * x11 + x9 * x9;
-        let x14 = 1.0 / x13;
-        let x15 = x12 * x14;
-        let x16 = zeta * x15;
-        let x17 = f64::sqrt(x5) * x16;
-        let x18 = f64::sqrt(x13) - L;
-        let x19 = x18 * k;
-        let x20 = x19 / f64::sqrt(x13);
-        let x21 = 0.5 * x17 + 0.5 * x20;
-        let x22 = 2.0 * x - 2.0 * x8;
-        let x23 = 2.0 * x6 + 2.0 * y;
-        let x24 = -(x4 * l);
-        let x25 = x24 * u1;
-        let x26 = x23 * u3;
-        let x27 = x22 * u2;
-        let x28 = (0.5 * (f64::sqrt(x5) * x25) + 0.5 * (f64::sqrt(x5) * x26))
-            + 0.5 * (f64::sqrt(x5) * x27);
-        let x29 = x16 * k;
-        let x30 = 0.25 * (x26 / f64::sqrt(x5)) + 0.25 * (x25 / f64::sqrt(x5))
-            + 0.25 * (x27 / f64::sqrt(x5));
-        let x31 = 2.0 * (x1 * x9) + 2.0 * (x3 * x11);
-        let x32 = (2.0 * (x9 * u1) - 2.0 * x10 + 2.0 * u3) * x3
-            + x1 * (2.0 * x7 - 2.0 * (x11 * u1) - 2.0 * u2);
-        let x33 = 0.25 * (x31 * x19 / f64::powf(x13, 1.5))
-            + x14
-                * (zeta
-                    * (0.5 * (x31 * f64::sqrt(x5) * x15) - 0.5 * (f64::sqrt(x5) * x32))
-                    - 0.25 * (x31 * k));
-        let x34 = x31 * x23;
-        let x35 = m2 * x16;
-        let x36 = 0.5 * (x18 / f64::sqrt(x13)) + 0.25 * (x35 / f64::sqrt(x5));
+        let x5 = l * x3;
+        let x6 = x5 * u1;
+        let x7 = l * x1;
+        let x8 = x7 - x;
+        let x9 = x7 * u1;
+        let x10 = x5 + y;
+        let x11 = 2.0 * ((x6 - u2) * x8) - 2.0 * ((x9 - u3) * x10);
+        let x12 = x10 * x10 + x8 * x8;
+        let x13 = 1.0 / x12;
+        let x14 = x11 * x13;
+        let x15 = zeta * x14;
+        let x16 = f64::sqrt(m2 * k);
+        let x17 = x16 * x15;
+        let x18 = f64::sqrt(x12);
+        let x19 = x18 - L;
+        let x20 = x19 * k;
+        let x21 = x20 / x18;
+        let x22 = 0.5 * x17 + 0.5 * x21;
+        let x23 = 2.0 * x - 2.0 * x7;
+        let x24 = 2.0 * x5 + 2.0 * y;
+        let x25 = -(x4 * l);
+        let x26 = x25 * u1;
+        let x27 = x24 * u3;
+        let x28 = x23 * u2;
+        let x29 = (0.5 * (x16 * x26) + 0.5 * (x16 * x27)) + 0.5 * (x16 * x28);
+        let x30 = x15 * k;
+        let x31 = 0.25 * (x27 / x16) + 0.25 * (x26 / x16) + 0.25 * (x28 / x16);
+        let x32 = 2.0 * (x1 * x8) + 2.0 * (x3 * x10);
+        let x33 = f64::powf(x12, 1.5);
+        let x34 = (2.0 * (x8 * u1) - 2.0 * x9 + 2.0 * u3) * x3
+            + x1 * (2.0 * x6 - 2.0 * (x10 * u1) - 2.0 * u2);
+        let x35 = 0.25 * (x32 * x20 / x33)
+            + x13
+                * (zeta * (0.5 * (x32 * x16 * x14) - 0.5 * (x16 * x34))
+                    - 0.25 * (x32 * k));
+        let x36 = x32 * x24;
+        let x37 = m2 * x15;
+        let x38 = 0.5 * (x19 / x18) + 0.25 * (x37 / x16);
         ParameterDerivatives {
             qdot: [u1, u2, u3],
             matrix: [[x0 * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x4 * x21 - x2), -(x22 * x21), -x23 * x21 - m2 * g],
+            force: [l * (x4 * x22 - x2), -(x23 * x22), -x24 * x22 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -2279,45 +2208,39 @@ pub mod kane {
                 [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
             ],
             d_force: [
-                [-(g * x8), 0.0, 0.0],
+                [-(g * x7), 0.0, 0.0],
                 [
-                    -(0.25 * x24 * x29 / f64::sqrt(x5)),
-                    -(0.25 * x22 * x29 / f64::sqrt(x5)),
-                    -(g + 0.25 * (x23 * x29 / f64::sqrt(x5))),
+                    -(0.25 * x25 * x30 / x16),
+                    -(0.25 * x23 * x30 / x16),
+                    -(g + 0.25 * (x24 * x30 / x16)),
                 ],
                 [
-                    -(l * x33 - 0.5 * x17 - 0.5 * x20) * x4 - x2,
-                    x22 * x33 + x1 * (x17 + x20),
-                    (0.25 * (x34 / f64::powf(x13, 1.5)) - x3 / f64::sqrt(x13)) * x19
+                    -(l * x35 - 0.5 * x17 - 0.5 * x21) * x4 - x2,
+                    x23 * x35 + x1 * (x17 + x21),
+                    (0.25 * (x36 / x33) - x3 / x18) * x20
                         + (zeta
-                            * ((0.5 * (x34 * f64::sqrt(x5) * x14) - f64::sqrt(x5) * x3)
-                                * x12 - 0.5 * (f64::sqrt(x5) * x23 * x32))
-                            - 0.25 * (x34 * k)) * x14,
+                            * ((0.5 * (x36 * x16 * x13) - x16 * x3) * x11
+                                - 0.5 * (x16 * x24 * x34)) - 0.25 * (x36 * k)) * x13,
                 ],
+                [0.5 * x25 * k / x18, 0.5 * x23 * k / x18, 0.5 * x24 * k / x18],
+                [-(x38 * x25), -(x38 * x23), -(x24 * x38)],
                 [
-                    0.5 * x24 * k / f64::sqrt(x13),
-                    0.5 * x22 * k / f64::sqrt(x13),
-                    0.5 * x23 * k / f64::sqrt(x13),
+                    -(0.5 * x16 * x25 * x14),
+                    -(0.5 * x16 * x23 * x14),
+                    -(0.5 * x16 * x24 * x14),
                 ],
-                [-(x36 * x24), -(x36 * x22), -(x23 * x36)],
-                [
-                    -(0.5 * f64::sqrt(x5) * x24 * x15),
-                    -(0.5 * f64::sqrt(x5) * x22 * x15),
-                    -(0.5 * f64::sqrt(x5) * x23 * x15),
-                ],
-                [-(x8 * m1), 0.0, -m2],
+                [-(x7 * m1), 0.0, -m2],
             ],
-            power: -(x16 * x28),
+            power: -(x15 * x29),
             d_power: [
                 0.0,
-                -(x30 * x29),
+                -(x31 * x30),
                 zeta
-                    * ((0.5 * (x4 * f64::sqrt(x5) * u1) + x31 * x14 * x28
-                        + f64::sqrt(x5) * x1 * u2 - f64::sqrt(x5) * u3 * x3) * x12
-                        - x32 * x28) * x14,
+                    * ((0.5 * (x4 * x16 * u1) + x32 * x13 * x29 + x16 * x1 * u2
+                        - x16 * u3 * x3) * x11 - x34 * x29) * x13,
                 0.0,
-                -(x35 * x30),
-                -(x28 * x15),
+                -(x37 * x31),
+                -(x29 * x14),
                 0.0,
             ],
         }
@@ -2536,21 +2459,21 @@ pub mod reduced_volterra {
         let x5 = l * x0;
         let x6 = x5 - x;
         let x7 = x4 * x4 + x6 * x6;
-        let x8 = m2 * k;
+        let x8 = f64::sqrt(x7);
         let x9 = l * u1;
         let x10 = zeta * (1.0 / x7)
             * (2.0 * (x6 * (x9 * x1 - u2)) - 2.0 * (x4 * (x9 * x0 - u3)));
-        let x11 = 0.5 * ((f64::sqrt(x7) - L) * k / f64::sqrt(x7))
-            + 0.5 * (f64::sqrt(x8) * x10);
-        let x12 = 2.0 * x - 2.0 * x5;
-        let x13 = 2.0 * x3 + 2.0 * y;
+        let x11 = f64::sqrt(m2 * k);
+        let x12 = 0.5 * ((x8 - L) * k / x8) + 0.5 * (x11 * x10);
+        let x13 = 2.0 * x - 2.0 * x5;
+        let x14 = 2.0 * x3 + 2.0 * y;
         Assembly {
             qdot: [u1, u2, u3],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x2 * x11 - x0 * g * m1), -(x12 * x11), -x11 * x13 - m2 * g],
+            force: [l * (x2 * x12 - x0 * g * m1), -(x13 * x12), -x12 * x14 - m2 * g],
             power: -(x10
-                * (0.5 * (u2 * f64::sqrt(x8) * x12) - 0.5 * (x9 * x2 * f64::sqrt(x8))
-                    + 0.5 * (f64::sqrt(x8) * u3 * x13))),
+                * (0.5 * (u2 * x11 * x13) - 0.5 * (x9 * x2 * x11)
+                    + 0.5 * (x11 * u3 * x14))),
             checks: [],
         }
     }
@@ -2718,47 +2641,48 @@ pub mod reduced_volterra {
         let x12 = x10 * x0;
         let x13 = 2.0 * (x6 * (x11 - u2)) - 2.0 * (x4 * (x12 - u3));
         let x14 = x9 * x13;
-        let x15 = m2 * k;
-        let x16 = x14 * f64::sqrt(x15);
-        let x17 = (f64::sqrt(x7) - L) * k;
-        let x18 = x17 / f64::sqrt(x7);
-        let x19 = 0.5 * x16 + 0.5 * x18;
-        let x20 = g * m1;
-        let x21 = 2.0 * x - 2.0 * x5;
-        let x22 = 2.0 * x3 + 2.0 * y;
-        let x23 = (0.5 * (u2 * f64::sqrt(x15) * x21) - 0.5 * (x10 * x2 * f64::sqrt(x15)))
-            + 0.5 * (f64::sqrt(x15) * u3 * x22);
-        let x24 = 2.0 * (x * x0) - 2.0 * (y * x1);
-        let x25 = -(x2 * l);
-        let x26 = 2.0 * (x6 * x1) - 2.0 * (x4 * x0);
-        let x27 = (2.0 * x11 - 2.0 * u2 - 2.0 * (x4 * u1)) * x1
+        let x15 = f64::sqrt(m2 * k);
+        let x16 = x14 * x15;
+        let x17 = f64::sqrt(x7);
+        let x18 = (x17 - L) * k;
+        let x19 = x18 / x17;
+        let x20 = 0.5 * x16 + 0.5 * x19;
+        let x21 = g * m1;
+        let x22 = 2.0 * x - 2.0 * x5;
+        let x23 = 2.0 * x3 + 2.0 * y;
+        let x24 = (0.5 * (u2 * x15 * x22) - 0.5 * (x10 * x2 * x15))
+            + 0.5 * (x15 * u3 * x23);
+        let x25 = 2.0 * (x * x0) - 2.0 * (y * x1);
+        let x26 = -(x2 * l);
+        let x27 = 2.0 * (x6 * x1) - 2.0 * (x4 * x0);
+        let x28 = f64::powf(x7, 1.5);
+        let x29 = (2.0 * x11 - 2.0 * u2 - 2.0 * (x4 * u1)) * x1
             + x0 * (2.0 * x12 - 2.0 * (x6 * u1) - 2.0 * u3);
-        let x28 = x8 * x26;
-        let x29 = 0.25 * (x17 * x26 / f64::powf(x7, 1.5))
+        let x30 = x8 * x27;
+        let x31 = 0.25 * (x18 * x27 / x28)
             + x8
-                * (zeta
-                    * (0.5 * (f64::sqrt(x15) * x28 * x13) - 0.5 * (f64::sqrt(x15) * x27))
-                    - 0.25 * (x26 * k));
-        let x30 = x8 * x22;
-        let x31 = f64::sqrt(x15) * x0;
-        let x32 = k * x22;
-        let x33 = x0 / f64::sqrt(x7);
-        let x34 = x9 * l;
-        let x35 = -(x2 * x21);
-        let x36 = 2.0 * u2 - 2.0 * x11;
-        let x37 = x21 * (0.25 * (x17 / f64::powf(x7, 1.5)) + x8 * (0.5 * x16 - 0.25 * k))
-            - 0.5 * (x9 * x36 * f64::sqrt(x15));
-        let x38 = -(x2 * x22);
-        let x39 = 2.0 * u3 - 2.0 * x12;
-        let x40 = x26 * x34;
-        let x41 = x9 * x21;
-        let x42 = -(0.5 * x41 * f64::sqrt(x15) * x22);
-        let x43 = x23 + 0.5 * (f64::sqrt(x15) * x13);
-        let x44 = x9 * x22;
+                * (zeta * (0.5 * (x15 * x30 * x13) - 0.5 * (x15 * x29))
+                    - 0.25 * (x27 * k));
+        let x32 = x8 * x23;
+        let x33 = x15 * x0;
+        let x34 = k * x23;
+        let x35 = x0 / x17;
+        let x36 = x9 * l;
+        let x37 = -(x2 * x22);
+        let x38 = 2.0 * u2 - 2.0 * x11;
+        let x39 = x22 * (0.25 * (x18 / x28) + x8 * (0.5 * x16 - 0.25 * k))
+            - 0.5 * (x9 * x38 * x15);
+        let x40 = -(x2 * x23);
+        let x41 = 2.0 * u3 - 2.0 * x12;
+        let x42 = x27 * x36;
+        let x43 = x9 * x22;
+        let x44 = -(0.5 * x43 * x15 * x23);
+        let x45 = x24 + 0.5 * (x15 * x13);
+        let x46 = x9 * x23;
         Derivatives {
             qdot: [u1, u2, u3],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x2 * x19 - x0 * x20), -(x21 * x19), -x19 * x22 - m2 * g],
+            force: [l * (x2 * x20 - x0 * x21), -(x22 * x20), -x20 * x23 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -2778,74 +2702,57 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [
-                    l * (x25 * x29 - x1 * x20 - x24 * x19),
-                    ((x16 + x18) * x1 + x21 * x29) * l,
+                    l * (x26 * x31 - x1 * x21 - x25 * x20),
+                    ((x16 + x19) * x1 + x22 * x31) * l,
                     ((zeta
-                        * ((0.5 * (f64::sqrt(x15) * x30 * x26) + x31) * x13
-                            - 0.5 * (f64::sqrt(x15) * x27 * x22)) - 0.25 * (x32 * x26))
-                        * x8 + (x33 + 0.25 * (x26 * x22 / f64::powf(x7, 1.5))) * x17) * l,
+                        * ((0.5 * (x15 * x32 * x27) + x33) * x13
+                            - 0.5 * (x15 * x29 * x23)) - 0.25 * (x34 * x27)) * x8
+                        + (x35 + 0.25 * (x27 * x23 / x28)) * x18) * l,
                 ],
                 [
                     l
                         * ((zeta
-                            * ((f64::sqrt(x15) * x1 + 0.5 * (f64::sqrt(x15) * x8 * x35))
-                                * x13 + 0.5 * (x2 * x36 * f64::sqrt(x15)))
-                            - 0.25 * (x35 * k)) * x8
-                            + (x1 / f64::sqrt(x7) + 0.25 * (x35 / f64::powf(x7, 1.5)))
-                                * x17),
-                    x21 * x37 - x16 - x18,
-                    x37 * x22,
+                            * ((x15 * x1 + 0.5 * (x15 * x8 * x37)) * x13
+                                + 0.5 * (x2 * x38 * x15)) - 0.25 * (x37 * k)) * x8
+                            + (x1 / x17 + 0.25 * (x37 / x28)) * x18),
+                    x22 * x39 - x16 - x19,
+                    x39 * x23,
                 ],
                 [
                     l
-                        * ((0.25 * (x38 / f64::powf(x7, 1.5)) + x33) * x17
+                        * ((0.25 * (x40 / x28) + x35) * x18
                             + x8
-                                * (0.25 * (x2 * x32)
+                                * (0.25 * (x2 * x34)
                                     + zeta
-                                        * ((x31 - 0.5 * (x2 * f64::sqrt(x15) * x30)) * x13
-                                            + 0.5 * (x2 * f64::sqrt(x15) * x39)))),
-                    x21
-                        * (0.25 * (x17 * x22 / f64::powf(x7, 1.5))
+                                        * ((x33 - 0.5 * (x2 * x15 * x32)) * x13
+                                            + 0.5 * (x2 * x15 * x41)))),
+                    x22
+                        * (0.25 * (x18 * x23 / x28)
                             + x8
-                                * ((0.5 * (f64::sqrt(x15) * x30 * x13)
-                                    - 0.5 * (f64::sqrt(x15) * x39)) * zeta - 0.25 * x32)),
+                                * ((0.5 * (x15 * x32 * x13) - 0.5 * (x15 * x41)) * zeta
+                                    - 0.25 * x34)),
                     (zeta
-                        * (x13 * (0.5 * (f64::sqrt(x15) * x30 * x22) - f64::sqrt(x15))
-                            - 0.5 * (f64::sqrt(x15) * x39 * x22)) - 0.25 * (x32 * x22))
-                        * x8
-                        + (0.25 * (x22 * x22 / f64::powf(x7, 1.5)) - 1.0 / f64::sqrt(x7))
-                            * x17,
+                        * (x13 * (0.5 * (x15 * x32 * x23) - x15)
+                            - 0.5 * (x15 * x41 * x23)) - 0.25 * (x34 * x23)) * x8
+                        + (0.25 * (x23 * x23 / x28) - 1.0 / x17) * x18,
                 ],
                 [
-                    -(0.5 * f64::sqrt(x15) * x25 * x40),
-                    -(0.5 * f64::sqrt(x15) * x21 * x40),
-                    -(0.5 * f64::sqrt(x15) * x40 * x22),
+                    -(0.5 * x15 * x26 * x42),
+                    -(0.5 * x15 * x22 * x42),
+                    -(0.5 * x15 * x42 * x23),
                 ],
-                [
-                    -(0.5 * f64::sqrt(x15) * x35 * x34),
-                    -(0.5 * x41 * f64::sqrt(x15) * x21),
-                    x42,
-                ],
-                [
-                    -(0.5 * x38 * f64::sqrt(x15) * x34),
-                    x42,
-                    -(0.5 * x44 * f64::sqrt(x15) * x22),
-                ],
+                [-(0.5 * x15 * x37 * x36), -(0.5 * x43 * x15 * x22), x44],
+                [-(0.5 * x40 * x15 * x36), x44, -(0.5 * x46 * x15 * x23)],
             ],
-            power: -(x14 * x23),
+            power: -(x14 * x24),
             d_power: [
-                ((x23 * x28 - 0.5 * (x24 * f64::sqrt(x15) * u1)
-                    + f64::sqrt(x15) * x0 * u3 + u2 * f64::sqrt(x15) * x1) * x13
-                    - x23 * x27) * x34,
-                x9
-                    * ((x11 * f64::sqrt(x15) - u2 * f64::sqrt(x15) + x23 * x21 * x8)
-                        * x13 - x36 * x23),
-                x9
-                    * (x13 * (f64::sqrt(x15) * x12 - f64::sqrt(x15) * u3 + x23 * x30)
-                        - x23 * x39),
-                (0.5 * (x2 * f64::sqrt(x15) * x13) - x23 * x26) * x34,
-                -(x43 * x41),
-                -(x43 * x44),
+                ((x24 * x30 - 0.5 * (x25 * x15 * u1) + x15 * x0 * u3 + u2 * x15 * x1)
+                    * x13 - x24 * x29) * x36,
+                x9 * ((x11 * x15 - u2 * x15 + x24 * x22 * x8) * x13 - x38 * x24),
+                x9 * (x13 * (x15 * x12 - x15 * u3 + x24 * x32) - x24 * x41),
+                (0.5 * (x2 * x15 * x13) - x24 * x27) * x36,
+                -(x45 * x43),
+                -(x45 * x46),
             ],
         }
     }
@@ -2936,48 +2843,48 @@ pub mod reduced_volterra {
         let x1 = f64::sin(th);
         let x2 = f64::cos(th);
         let x3 = 2.0 * (x1 * y) + 2.0 * (x * x2);
-        let x4 = m2 * k;
-        let x5 = l * x1;
-        let x6 = x5 * u1;
-        let x7 = l * x2;
-        let x8 = x7 + y;
-        let x9 = x7 * u1;
-        let x10 = x5 - x;
-        let x11 = 2.0 * ((x9 - u2) * x10) - 2.0 * ((x6 - u3) * x8);
-        let x12 = x8 * x8 + x10 * x10;
-        let x13 = 1.0 / x12;
-        let x14 = x11 * x13;
-        let x15 = zeta * x14;
-        let x16 = f64::sqrt(x4) * x15;
-        let x17 = f64::sqrt(x12) - L;
-        let x18 = x17 * k;
-        let x19 = x18 / f64::sqrt(x12);
-        let x20 = 0.5 * x16 + 0.5 * x19;
-        let x21 = x1 * g * m1;
-        let x22 = 2.0 * x - 2.0 * x5;
-        let x23 = 2.0 * x7 + 2.0 * y;
-        let x24 = x23 * u3;
-        let x25 = -(x3 * l);
-        let x26 = u1 * x25;
-        let x27 = u2 * x22;
-        let x28 = 0.5 * (f64::sqrt(x4) * x24)
-            + (0.5 * (f64::sqrt(x4) * x26) + 0.5 * (f64::sqrt(x4) * x27));
-        let x29 = x15 * k;
-        let x30 = 0.25 * (x26 / f64::sqrt(x4)) + 0.25 * (x24 / f64::sqrt(x4))
-            + 0.25 * (x27 / f64::sqrt(x4));
-        let x31 = 2.0 * (x1 * x10) + 2.0 * (x2 * x8);
-        let x32 = x1 * (2.0 * x9 - 2.0 * u2 - 2.0 * (u1 * x8))
-            + (2.0 * u3 + 2.0 * (x10 * u1) - 2.0 * x6) * x2;
-        let x33 = 0.25 * (x31 * x18 / f64::powf(x12, 1.5))
-            + ((0.5 * (x31 * f64::sqrt(x4) * x14) - 0.5 * (f64::sqrt(x4) * x32)) * zeta
-                - 0.25 * (x31 * k)) * x13;
-        let x34 = x31 * x23;
-        let x35 = m2 * x15;
-        let x36 = 0.5 * (x17 / f64::sqrt(x12)) + 0.25 * (x35 / f64::sqrt(x4));
+        let x4 = l * x1;
+        let x5 = x4 * u1;
+        let x6 = l * x2;
+        let x7 = x6 + y;
+        let x8 = x6 * u1;
+        let x9 = x4 - x;
+        let x10 = 2.0 * ((x8 - u2) * x9) - 2.0 * ((x5 - u3) * x7);
+        let x11 = x7 * x7 + x9 * x9;
+        let x12 = 1.0 / x11;
+        let x13 = x10 * x12;
+        let x14 = zeta * x13;
+        let x15 = f64::sqrt(m2 * k);
+        let x16 = x15 * x14;
+        let x17 = f64::sqrt(x11);
+        let x18 = x17 - L;
+        let x19 = x18 * k;
+        let x20 = x19 / x17;
+        let x21 = 0.5 * x16 + 0.5 * x20;
+        let x22 = x1 * g * m1;
+        let x23 = 2.0 * x - 2.0 * x4;
+        let x24 = 2.0 * x6 + 2.0 * y;
+        let x25 = x24 * u3;
+        let x26 = -(x3 * l);
+        let x27 = u1 * x26;
+        let x28 = u2 * x23;
+        let x29 = 0.5 * (x15 * x25) + (0.5 * (x15 * x27) + 0.5 * (x15 * x28));
+        let x30 = x14 * k;
+        let x31 = 0.25 * (x27 / x15) + 0.25 * (x25 / x15) + 0.25 * (x28 / x15);
+        let x32 = 2.0 * (x1 * x9) + 2.0 * (x2 * x7);
+        let x33 = f64::powf(x11, 1.5);
+        let x34 = x1 * (2.0 * x8 - 2.0 * u2 - 2.0 * (u1 * x7))
+            + (2.0 * u3 + 2.0 * (x9 * u1) - 2.0 * x5) * x2;
+        let x35 = 0.25 * (x32 * x19 / x33)
+            + ((0.5 * (x32 * x15 * x13) - 0.5 * (x15 * x34)) * zeta - 0.25 * (x32 * k))
+                * x12;
+        let x36 = x32 * x24;
+        let x37 = m2 * x14;
+        let x38 = 0.5 * (x18 / x17) + 0.25 * (x37 / x15);
         ParameterDerivatives {
             qdot: [u1, u2, u3],
             matrix: [[x0 * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x3 * x20 - x21), -(x22 * x20), -x23 * x20 - m2 * g],
+            force: [l * (x3 * x21 - x22), -(x23 * x21), -x24 * x21 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -2998,46 +2905,41 @@ pub mod reduced_volterra {
                 [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
             ],
             d_force: [
-                [-(g * x5), 0.0, 0.0],
+                [-(g * x4), 0.0, 0.0],
                 [
-                    -(0.25 * x29 * x25 / f64::sqrt(x4)),
-                    -(0.25 * x29 * x22 / f64::sqrt(x4)),
-                    -(0.25 * (x29 * x23 / f64::sqrt(x4)) + g),
+                    -(0.25 * x30 * x26 / x15),
+                    -(0.25 * x30 * x23 / x15),
+                    -(0.25 * (x30 * x24 / x15) + g),
                 ],
                 [
-                    -x3 * (l * x33 - 0.5 * x16 - 0.5 * x19) - x21,
-                    x1 * (x16 + x19) + x22 * x33,
-                    (0.25 * (x34 / f64::powf(x12, 1.5)) - x2 / f64::sqrt(x12)) * x18
-                        + x13
+                    -x3 * (l * x35 - 0.5 * x16 - 0.5 * x20) - x22,
+                    x1 * (x16 + x20) + x23 * x35,
+                    (0.25 * (x36 / x33) - x2 / x17) * x19
+                        + x12
                             * (zeta
-                                * ((0.5 * (x34 * f64::sqrt(x4) * x13) - f64::sqrt(x4) * x2)
-                                    * x11 - 0.5 * (f64::sqrt(x4) * x32 * x23))
-                                - 0.25 * (x34 * k)),
+                                * ((0.5 * (x36 * x15 * x12) - x15 * x2) * x10
+                                    - 0.5 * (x15 * x34 * x24)) - 0.25 * (x36 * k)),
                 ],
+                [0.5 * x26 * k / x17, 0.5 * x23 * k / x17, 0.5 * x24 * k / x17],
+                [-(x38 * x26), -(x23 * x38), -(x24 * x38)],
                 [
-                    0.5 * x25 * k / f64::sqrt(x12),
-                    0.5 * x22 * k / f64::sqrt(x12),
-                    0.5 * x23 * k / f64::sqrt(x12),
+                    -(0.5 * x15 * x13 * x26),
+                    -(0.5 * x15 * x23 * x13),
+                    -(0.5 * x15 * x24 * x13),
                 ],
-                [-(x36 * x25), -(x22 * x36), -(x23 * x36)],
-                [
-                    -(0.5 * f64::sqrt(x4) * x14 * x25),
-                    -(0.5 * f64::sqrt(x4) * x22 * x14),
-                    -(0.5 * f64::sqrt(x4) * x23 * x14),
-                ],
-                [-(x5 * m1), 0.0, -m2],
+                [-(x4 * m1), 0.0, -m2],
             ],
-            power: -(x28 * x15),
+            power: -(x29 * x14),
             d_power: [
                 0.0,
-                -(x29 * x30),
-                zeta * x13
-                    * (x11
-                        * (0.5 * (x3 * f64::sqrt(x4) * u1) + u2 * f64::sqrt(x4) * x1
-                            - f64::sqrt(x4) * u3 * x2 + x28 * x31 * x13) - x28 * x32),
+                -(x30 * x31),
+                zeta * x12
+                    * (x10
+                        * (0.5 * (x3 * x15 * u1) + u2 * x15 * x1 - x15 * u3 * x2
+                            + x29 * x32 * x12) - x29 * x34),
                 0.0,
-                -(x30 * x35),
-                -(x28 * x14),
+                -(x31 * x37),
+                -(x29 * x13),
                 0.0,
             ],
         }

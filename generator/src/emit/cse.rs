@@ -5,9 +5,33 @@
 //! `let`: those used at least twice, and the compound bases of small integer powers (so
 //! `x^2` becomes `x * x`). The order comes from a depth-first walk in the outputs' order and
 //! the canonical child order, so it never depends on how the expressions were built.
+//!
+//! A root or fractional power inside a product (`a * sqrt(b)`, `c / sqrt(b)`) is a factor of
+//! that product, not a node of its own: the plan counts it as the node `b^(1/2)` (its
+//! [`root_of`]), so that a root read by many products is computed once (the bicycle's Kane
+//! form reads its contact geometry's few roots in most of its products: docs/bicycle.md).
 
+use crate::symbolic::number::Rat;
 use crate::symbolic::{Expr, Node};
 use rustc_hash::{FxHashMap as HashMap, FxHashSet};
+
+/// The power `b^|e|` a product's factor `(b, e)` with a fractional exponent stands for, as a
+/// node of its own; `None` for an integer exponent, or where the product is that power itself.
+pub(super) fn root_of(product: Expr, base: Expr, exponent: &Rat) -> Option<Expr> {
+    if exponent.is_integer() {
+        return None;
+    }
+    let root = Expr::make_mul(Rat::one(), vec![(base, exponent.abs())]);
+    (root != product).then_some(root)
+}
+
+/// The roots a node's factors stand for ([`root_of`]), with their bases.
+fn roots(e: Expr) -> Vec<(Expr, Expr)> {
+    match &*e.node() {
+        Node::Mul { factors, .. } => factors.iter().filter_map(|(b, ex)| root_of(e, *b, ex).map(|r| (*b, r))).collect(),
+        _ => Vec::new(),
+    }
+}
 
 fn is_leaf(e: Expr) -> bool {
     matches!(&*e.node(), Node::Num(_) | Node::Sym(_))
@@ -22,15 +46,29 @@ pub fn plan(outputs: &[Expr]) -> Vec<Expr> {
 /// [`plan`], binding every node of `forced` too (the named intermediates of a recursion,
 /// which later outputs read by name).
 pub fn plan_with(outputs: &[Expr], forced: &FxHashSet<Expr>) -> Vec<Expr> {
-    let order = post_order(outputs);
     let mut uses: HashMap<Expr, usize> = HashMap::default();
     let mut force = forced.clone();
     for e in outputs {
         *uses.entry(*e).or_default() += 1;
     }
-    for &e in &order {
+    // The post-order, each root placed just before the first product that reads it (after its
+    // base, which that product's children precede).
+    let mut order = Vec::new();
+    let mut placed: FxHashSet<Expr> = FxHashSet::default();
+    let mut place = |e: Expr, order: &mut Vec<Expr>, uses: &mut HashMap<Expr, usize>| {
+        if !placed.insert(e) {
+            return;
+        }
+        order.push(e);
+        let roots = roots(e);
         for c in e.children() {
-            *uses.entry(c).or_default() += 1;
+            // A base read through its root is counted once, as the root's child.
+            if !roots.iter().any(|(b, _)| *b == c) {
+                *uses.entry(c).or_default() += 1;
+            }
+        }
+        for (_, r) in roots {
+            *uses.entry(r).or_default() += 1;
         }
         if let Node::Mul { factors, .. } = &*e.node() {
             for (b, ex) in factors {
@@ -40,6 +78,12 @@ pub fn plan_with(outputs: &[Expr], forced: &FxHashSet<Expr>) -> Vec<Expr> {
                 }
             }
         }
+    };
+    for e in post_order(outputs) {
+        for (_, r) in roots(e) {
+            place(r, &mut order, &mut uses);
+        }
+        place(e, &mut order, &mut uses);
     }
     order.into_iter().filter(|e| !is_leaf(*e) && (uses[e] >= 2 || force.contains(e))).collect()
 }
@@ -60,6 +104,23 @@ mod tests {
         let order = post_order(&[e]);
         let pos = |n: Expr| order.iter().position(|o| *o == n).unwrap();
         assert!(pos(base) < pos(base.powi(2)) && pos(base.powi(2)) < pos(e));
+    }
+
+    /// A square root and a fractional power, each read by two products (one dividing by it):
+    /// each is bound once, before its first reader, and its base (read by the root only) is not;
+    /// a root read once stays inline.
+    #[test]
+    fn a_root_read_by_several_products_is_bound_once() {
+        let (x, y, a, c) = (Expr::sym("x"), Expr::sym("y"), Expr::sym("a"), Expr::sym("c"));
+        let b = x + y;
+        let root = b.sqrt();
+        let power = (x - y).pow_rat(&Rat::frac(3, 2));
+        let once = (x * y + 1).sqrt();
+        let outputs = [a * root, c / root, a * power, c * power, a * once];
+        let bound = plan(&outputs);
+        assert_eq!(bound, vec![root, power], "{bound:?}");
+        let order = post_order(&outputs);
+        assert!(!order.contains(&root) && !order.contains(&power), "the roots are factors of the products, not nodes of the outputs");
     }
 
     #[test]

@@ -335,6 +335,22 @@ mod examples {
         assert_eq!(b.lets, 1); // s = sin(x) + x, once, read by both outputs
         assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x) + x;
     }
+    /// A root that several products read (the bicycle's Kane form reads its contact
+    /// geometry's roots in most of its products) is computed once, in its own `let`.
+    #[test]
+    fn a_root_read_by_several_products_is_computed_once() {
+        use crate::emit::function::{Arg, Input, body_with_definitions};
+        use crate::symbolic::Expr;
+        use quote::quote;
+        let (x, a) = (Expr::sym("x"), Expr::sym("a"));
+        let args = [Arg::new("state", quote!(&[f64; 2]))];
+        let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0])), Input::new(a.as_sym().unwrap(), "a", 1, quote!(state[1]))];
+        let root = (x.sin() + 2).sqrt();
+        let outputs = [a * root, x / root, (a + x) * root];
+        let b = body_with_definitions("f", &[], &outputs, &inputs, &args, usize::MAX, &mut Default::default()).unwrap();
+        assert_eq!(b.ops.calls.get("sqrt"), Some(&1), "{:?}", b.ops);
+    }
+
     #[test]
     fn program_ops_example() {
         use crate::emit::function::program_ops;

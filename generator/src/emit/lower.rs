@@ -211,6 +211,9 @@ fn lower_node(
                         let bt = base.expr();
                         target.push(call("powi", vec![bt, syntax::literal(Literal::i32_unsuffixed(n))], ops));
                     }
+                } else if let Some(root) = super::cse::root_of(e, *b, &ex) {
+                    // The root as a node of its own: a `let` where the plan bound it.
+                    target.push(child(root, ops)?);
                 } else if ex == Rat::frac(1, 2) {
                     let bt = child(*b, ops)?.expr();
                     target.push(call("sqrt", vec![bt], ops));
