@@ -406,18 +406,36 @@ def ensemble(
     one at least is 2-D. Returns the states of ``formulation`` at ``t_eval`` (the first time is
     the start), an array (N, len(t_eval), states); with ``return_reached``, also how many output
     times each member reached (a terminal event stops a member early: its later rows are NaN,
-    and a warning says which members stopped). Ctrl-C stops every member (``KeyboardInterrupt``).
+    and a warning says which members stopped). A warning names the members that DOPRI5 or
+    DOP853 found stiff (``method="ros23"`` may be much faster for them). Ctrl-C stops every
+    member (``KeyboardInterrupt``).
     The output (N x len(t_eval) x states numbers) may hold at most ``max_values`` (default 10**8,
     800 MB), checked before anything runs; ``threads`` at most 16 per core."""
-    states, reached = _multibody.ensemble(
+    arrays = _ensemble_arrays(model, t_eval, params, q0, qdot0, formulation, method, rtol, atol, h, threads, max_values)
+    return _ensemble_result(*arrays, return_reached)
+
+
+def _ensemble_arrays(
+    model, t_eval, params=None, q0=None, qdot0=None, formulation=None, method=None, rtol=None, atol=None, h=None, threads=None, max_values=None
+):
+    """The ensemble's states, how many times each member reached, and the time from which
+    each looked stiff (NaN: it did not)."""
+    return _multibody.ensemble(
         model._native, np.asarray(t_eval, dtype=float), params, q0, qdot0, formulation, method, rtol, atol, h, threads, max_values
     )
-    return _ensemble_result(states, reached, return_reached)
 
 
-def _ensemble_result(states, reached, return_reached):
-    """What ``ensemble`` returns; without ``return_reached``, a warning names the members a
-    terminal event stopped early."""
+def _ensemble_result(states, reached, stiff_at, return_reached):
+    """What ``ensemble`` returns; a warning names the members that looked stiff (Hairer's test)
+    and, without ``return_reached``, the members a terminal event stopped early."""
+    stiff = np.flatnonzero(~np.isnan(stiff_at))
+    if stiff.size:
+        first = int(stiff[0])
+        _warnings.warn(
+            f"{stiff.size} member{'s' if stiff.size > 1 else ''} looked stiff: member {first} {_multibody.stiffness_note(float(stiff_at[first]))}: "
+            f'the stiff method may be much faster, method="ros23": members {stiff[:10].tolist()}',
+            stacklevel=3,
+        )
     stopped = np.flatnonzero(reached < states.shape[1])
     if stopped.size and not return_reached:
         _warnings.warn(

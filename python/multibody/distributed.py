@@ -32,8 +32,9 @@ def _members(params, q0, qdot0):
 
 
 def _chunk(model, t_eval, params, q0, qdot0, options):
-    """One task: a chunk of the ensemble, run on the worker."""
-    return multibody.ensemble(model, t_eval, params=params, q0=q0, qdot0=qdot0, return_reached=True, **options)
+    """One task: a chunk of the ensemble, run on the worker: its states, the times each member
+    reached and when each looked stiff (the caller warns, as ``multibody.ensemble`` does)."""
+    return multibody._ensemble_arrays(model, t_eval, params, q0, qdot0, **options)
 
 
 def ensemble(client, model, t_eval, params=None, q0=None, qdot0=None, chunk_size=None, **options):
@@ -73,6 +74,5 @@ def ensemble(client, model, t_eval, params=None, q0=None, qdot0=None, chunk_size
         for s in starts
     ]
     parts = client.gather(futures)
-    states = np.concatenate([p[0] for p in parts])
-    reached = np.concatenate([p[1] for p in parts])
-    return multibody._ensemble_result(states, reached, return_reached)
+    states, reached, stiff_at = (np.concatenate([p[k] for p in parts]) for k in range(3))
+    return multibody._ensemble_result(states, reached, stiff_at, return_reached)

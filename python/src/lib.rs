@@ -648,7 +648,7 @@ fn ensemble<'py>(
     h: Option<f64>,
     threads: Option<usize>,
     max_values: Option<usize>,
-) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray1<u64>>)> {
+) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray1<u64>>, Bound<'py, PyArray1<f64>>)> {
     guarded(|| {
         let kind = model.kind(formulation)?;
         let m = &model.evaluated;
@@ -712,7 +712,9 @@ fn ensemble<'py>(
         })?;
         let shape = (runs.members, runs.times, runs.states);
         let reached: Vec<u64> = runs.reached.iter().map(|&r| r as u64).collect();
-        Ok((Array3::from_shape_vec(shape, runs.data).expect("members x times x states").into_pyarray(py), reached.into_pyarray(py)))
+        // Each member's time from which it looked stiff (NaN: it did not); the wrapper warns.
+        let stiff_at: Vec<f64> = runs.stiff_at.iter().map(|t| t.unwrap_or(f64::NAN)).collect();
+        Ok((Array3::from_shape_vec(shape, runs.data).expect("members x times x states").into_pyarray(py), reached.into_pyarray(py), stiff_at.into_pyarray(py)))
     })
 }
 
@@ -790,6 +792,13 @@ fn _example_text(family: &str, n: usize) -> PyResult<String> {
     Ok(builder.to_ron())
 }
 
+/// What a run that looked stiff from `t` tells the user (the command line's words; the
+/// wrapper names `method="ros23"`).
+#[pyfunction]
+fn stiffness_note(t: f64) -> String {
+    runtime::integrate::stiffness_note(t)
+}
+
 /// The names of the models built into the wheel (`multibody.load(name)` takes them).
 #[pyfunction]
 fn built_in() -> Vec<&'static str> {
@@ -805,6 +814,7 @@ fn _multibody(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(built_in, m)?)?;
     m.add_function(wrap_pyfunction!(_example_text, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add_function(wrap_pyfunction!(stiffness_note, m)?)?;
     m.add("ModelError", m.py().get_type::<ModelError>())?;
     m.add("SimulationError", m.py().get_type::<SimulationError>())?;
     m.add("InternalError", m.py().get_type::<InternalError>())?;

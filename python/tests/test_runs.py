@@ -111,6 +111,25 @@ def test_a_stiff_run_warns_and_names_the_stiff_method():
     assert stiff["t"][-1] == 0.5
 
 
+def stiff_members(m):
+    """The stiff pendulum on a soft spring (k = 100) and on a stiff one (k = 1e8)."""
+    params = np.tile(list(m.params.values()), (2, 1))
+    params[:, list(m.params).index("k")] = [100.0, 1e8]
+    return params
+
+
+def test_an_ensemble_names_the_members_that_looked_stiff():
+    m = multibody.load("stiff_pendulum")
+    t_eval = np.linspace(0.0, 0.2, 3)
+    with pytest.warns(UserWarning, match=r'1 member looked stiff: member 1 looks stiff from t = 0\.0.*method="ros23": members \[1\]'):
+        states = multibody.ensemble(m, t_eval, params=stiff_members(m), formulation="kane", rtol=1e-4, atol=1e-4)
+    assert states.shape[0] == 2 and not np.isnan(states).any()
+    # The soft spring alone: no warning (an error if one is raised).
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        multibody.ensemble(m, t_eval, params=stiff_members(m)[:1], formulation="kane", rtol=1e-4, atol=1e-4)
+
+
 def members(m, n):
     rng = np.random.default_rng(7)
     q0, qd0 = m.initial

@@ -48,6 +48,18 @@ pub struct Trajectories {
     pub data: Vec<f64>,
     /// How many output times each member reached (`times` unless a terminal event stopped it).
     pub reached: Vec<usize>,
+    /// Each member's time from which it looked stiff to DOPRI5 or DOP853 (Hairer's test, as
+    /// [`crate::integrate::Stats::stiff_at`]); `None` where it did not.
+    pub stiff_at: Vec<Option<f64>>,
+}
+
+/// One member's run ([`run_member`]): its states at the output times (NaN after a terminal
+/// event), how many of the times it reached, and when it looked stiff.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemberRun {
+    pub states: Vec<f64>,
+    pub reached: usize,
+    pub stiff_at: Option<f64>,
 }
 
 impl Trajectories {
@@ -84,8 +96,8 @@ pub enum EnsembleError {
     Interrupted,
 }
 
-/// One member run alone: its states at `times` (NaN after a terminal event), and how many
-/// times it reached.
+/// One member run alone: its states at `times` (NaN after a terminal event), how many times
+/// it reached, and when it looked stiff.
 ///
 /// The run starts at `times[0]` from the member's `q0`, `qd0`; the model's events are watched.
 /// It stops with [`EnsembleError::Interrupted`] once `stop` is set (read before every
@@ -98,7 +110,7 @@ pub fn run_member(
     times: &[f64],
     settings: &Settings,
     stop: &AtomicBool,
-) -> Result<(Vec<f64>, usize), EnsembleError> {
+) -> Result<MemberRun, EnsembleError> {
     if stop.load(Ordering::Relaxed) {
         return Err(EnsembleError::Interrupted);
     }
@@ -116,7 +128,7 @@ pub fn run_member(
     let mut states: Vec<f64> = solution.states.iter().flatten().copied().collect();
     let reached = solution.states.len();
     states.resize(times.len() * y0.len(), f64::NAN);
-    Ok((states, reached))
+    Ok(MemberRun { states, reached, stiff_at: solution.stats.stiff_at })
 }
 
 /// The most numbers an ensemble's output holds unless the caller allows more: 10^8, 800 MB
@@ -176,7 +188,7 @@ pub fn ensemble(
     if values > max_values as u128 {
         return Err(EnsembleError::TooLarge { members: members.len(), times: times.len(), states, values, limit: max_values });
     }
-    let all = || -> Vec<Result<(Vec<f64>, usize), EnsembleError>> {
+    let all = || -> Vec<Result<MemberRun, EnsembleError>> {
         members
             .par_iter()
             .enumerate()
@@ -198,12 +210,14 @@ pub fn ensemble(
     }
     let mut data = Vec::with_capacity(members.len() * times.len() * states);
     let mut reached = Vec::with_capacity(members.len());
+    let mut stiff_at = Vec::with_capacity(members.len());
     for result in results {
-        let (member_states, member_reached) = result?;
-        data.extend(member_states);
-        reached.push(member_reached);
+        let run = result?;
+        data.extend(run.states);
+        reached.push(run.reached);
+        stiff_at.push(run.stiff_at);
     }
-    Ok(Trajectories { members: members.len(), times: times.len(), states, data, reached })
+    Ok(Trajectories { members: members.len(), times: times.len(), states, data, reached, stiff_at })
 }
 
 #[cfg(test)]
@@ -286,6 +300,24 @@ mod tests {
             assert_ne!(parallel.member(0), parallel.member(1));
             assert_eq!(parallel.reached, vec![times.len(); members.len()]);
         }
+    }
+
+    /// Each member carries its own stiffness verdict: the stiff pendulum at k = 1e8 looks
+    /// stiff to DOP853 early, the same pendulum on a soft spring (k = 100) does not.
+    #[test]
+    fn each_member_says_whether_it_looked_stiff() {
+        let model = generated::stiff_pendulum::model();
+        let k = model.parameter_index("k").unwrap();
+        let mut calm = Member { params: model.default_params.clone(), q0: vec![0.3; model.coordinates.len()], qd0: vec![0.0; model.coordinates.len()] };
+        let mut stiff = calm.clone();
+        calm.params[k] = 100.0;
+        stiff.params[k] = 1e8;
+        let times = [0.0, 0.1, 0.2];
+        let settings = Settings { rtol: 1e-4, atol: 1e-4, ..Settings::tight(0.2) };
+        let runs =
+            ensemble(&model, FormulationKind::Kane, &[calm, stiff], &times, &settings, Some(2), DEFAULT_MAX_VALUES, &|| {}, &AtomicBool::new(false)).unwrap();
+        assert_eq!(runs.stiff_at[0], None);
+        assert!(runs.stiff_at[1].is_some_and(|t| t < 0.05), "{:?}", runs.stiff_at);
     }
 
     /// A member with the wrong number of values is named; so is one whose run fails.
