@@ -153,6 +153,8 @@ pub fn run(args: &SimulateArgs) -> Result<Option<runtime::integrate::RunError>, 
         "steps": solution.stats.steps,
         "rejected": solution.stats.rejected,
         "rhs_calls": solution.stats.rhs_calls,
+        // DOPRI5's or DOP853's stiffness test (the warning on stderr): when, or null.
+        "stiff_at": solution.stats.stiff_at,
         "stopped_by_event": solution.stopped,
         "stopped_by_error": failed.as_ref().map(|e| e.to_string()),
         "events": run.events.iter().map(|e| serde_json::json!({ "event": e.name, "action": e.action.name(), "t": e.t, "q": e.q, "qdot": e.qdot })).collect::<Vec<_>>(),

@@ -115,5 +115,18 @@ fn the_explicit_pairs_detect_stiffness_and_the_command_line_names_the_stiff_meth
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success() && err.contains("looks stiff from t =") && err.contains("--method ros23"), "{method:?}: {err}");
+        // The run's file says so too, for what reads it.
+        let written = dir.path().join("stiff_pendulum_reduced_volterra.json");
+        let record: serde_json::Value = serde_json::from_slice(&std::fs::read(&written).unwrap()).unwrap();
+        assert!(record["stiff_at"].as_f64().is_some_and(|t| t < 0.1), "{method:?}: {}", record["stiff_at"]);
     }
+    // A calm run's file: null.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_multibody"))
+        .args(["simulate", "tumbling_body", "--t-end", "1", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let record: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path().join("tumbling_body_reduced_volterra.json")).unwrap()).unwrap();
+    assert!(record["stiff_at"].is_null(), "{}", record["stiff_at"]);
 }
