@@ -269,7 +269,7 @@ class Model:
             e.trajectory = None if partial is None else made(*partial)
             raise
         if stiff is not None:
-            _warnings.warn(f"{self.name} {columns[0]}: {stiff}: the stiff method may be much faster, method=\"ros23\"", stacklevel=2)
+            _warnings.warn(f"{self.name} {columns[0]}: {_stiff_advice(stiff)}", stacklevel=2)
         return made(*columns)
 
     def linearize(self, formulation=None, q=None, qdot=None, params=None) -> Linear:
@@ -425,6 +425,12 @@ def _ensemble_arrays(
     )
 
 
+def _stiff_advice(t):
+    """What a run that looked stiff from ``t`` tells the user: the command line's words, then
+    the stiff method as Python names it."""
+    return f'{_multibody.stiffness_note(float(t))}: the stiff method may be much faster, method="ros23"'
+
+
 def _ensemble_result(states, reached, stiff_at, return_reached):
     """What ``ensemble`` returns; a warning names the members that looked stiff (Hairer's test)
     and, without ``return_reached``, the members a terminal event stopped early."""
@@ -432,8 +438,8 @@ def _ensemble_result(states, reached, stiff_at, return_reached):
     if stiff.size:
         first = int(stiff[0])
         _warnings.warn(
-            f"{stiff.size} member{'s' if stiff.size > 1 else ''} looked stiff: member {first} {_multibody.stiffness_note(float(stiff_at[first]))}: "
-            f'the stiff method may be much faster, method="ros23": members {stiff[:10].tolist()}',
+            f"{stiff.size} member{'s' if stiff.size > 1 else ''} looked stiff: member {first} {_stiff_advice(stiff_at[first])}: "
+            f"members {stiff[:10].tolist()}",
             stacklevel=3,
         )
     stopped = np.flatnonzero(reached < states.shape[1])

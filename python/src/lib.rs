@@ -450,7 +450,7 @@ impl Model {
         q: Option<&Bound<'py, PyAny>>,
         qdot: Option<&Bound<'py, PyAny>>,
         t_start: Option<f64>,
-    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>, Option<String>)> {
+    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>, Option<f64>)> {
         guarded(|| {
             let kind = self.kind(formulation)?;
             let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
@@ -485,8 +485,7 @@ impl Model {
             };
             let table = table_of(py, &run);
             // DOPRI5's or DOP853's stiffness test: the wrapper warns, naming the stiff method.
-            let stiff = run.solution.stats.stiff_at.map(runtime::integrate::stiffness_note);
-            Ok((kind.name(), run.columns, table, events_of(run.events), params, stiff))
+            Ok((kind.name(), run.columns, table, events_of(run.events), params, run.solution.stats.stiff_at))
         })
     }
 

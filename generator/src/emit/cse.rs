@@ -55,12 +55,12 @@ pub fn plan_with(outputs: &[Expr], forced: &FxHashSet<Expr>) -> Vec<Expr> {
     // base, which that product's children precede).
     let mut order = Vec::new();
     let mut placed: FxHashSet<Expr> = FxHashSet::default();
-    let mut place = |e: Expr, order: &mut Vec<Expr>, uses: &mut HashMap<Expr, usize>| {
+    // `roots` are `e`'s ([`roots`]), found once by the caller: a root has none of its own.
+    let mut place = |e: Expr, roots: &[(Expr, Expr)], order: &mut Vec<Expr>, uses: &mut HashMap<Expr, usize>| {
         if !placed.insert(e) {
             return;
         }
         order.push(e);
-        let roots = roots(e);
         for c in e.children() {
             // A base read through its root is counted once, as the root's child.
             if !roots.iter().any(|(b, _)| *b == c) {
@@ -68,7 +68,7 @@ pub fn plan_with(outputs: &[Expr], forced: &FxHashSet<Expr>) -> Vec<Expr> {
             }
         }
         for (_, r) in roots {
-            *uses.entry(r).or_default() += 1;
+            *uses.entry(*r).or_default() += 1;
         }
         if let Node::Mul { factors, .. } = &*e.node() {
             for (b, ex) in factors {
@@ -80,10 +80,11 @@ pub fn plan_with(outputs: &[Expr], forced: &FxHashSet<Expr>) -> Vec<Expr> {
         }
     };
     for e in post_order(outputs) {
-        for (_, r) in roots(e) {
-            place(r, &mut order, &mut uses);
+        let roots = roots(e);
+        for (_, r) in &roots {
+            place(*r, &[], &mut order, &mut uses);
         }
-        place(e, &mut order, &mut uses);
+        place(e, &roots, &mut order, &mut uses);
     }
     order.into_iter().filter(|e| !is_leaf(*e) && (uses[e] >= 2 || force.contains(e))).collect()
 }
