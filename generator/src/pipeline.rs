@@ -71,7 +71,7 @@ pub fn evaluate_reporting(model: &Model, options: &Options) -> Result<(seam::Mod
 
 /// [`evaluate_reporting`] with the tapes made kernels by `backend` (the `jit` crate's compiler).
 pub fn evaluate_with_backend(model: &Model, options: &Options, backend: &dyn kernel::Backend) -> Result<(seam::Model, Summary), ModelError> {
-    let options = Options { tapes: true, max_lets_per_function: usize::MAX, ..options.clone() };
+    let options = Options { tapes: true, source: false, max_lets_per_function: usize::MAX, ..options.clone() };
     let generated = generate(model, &options)?;
     let program = generated.program.ok_or_else(|| model.error(ErrorKind::Emission, "emit", "emit", "internal error: no tapes".into(), String::new()))?;
     Ok((Evaluated::model_with(program, backend), generated.summary))
@@ -261,4 +261,32 @@ fn decide_and_emit(
         parts.push(emission.finish());
     }
     Ok(parts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without the source (in-process evaluation), no text and the very tapes the source's
+    /// generation records, instruction for instruction.
+    #[test]
+    fn the_tapes_are_the_same_without_the_source() {
+        let model = crate::model::load("../models/cart_pendulum.ron").unwrap();
+        let with = Options { tapes: true, jacobian: true, ..Options::from_model(&model) };
+        let written = generate(&model, &with).unwrap();
+        let quiet = generate(&model, &Options { source: false, ..with }).unwrap();
+        assert!(written.code.contains("pub mod kane") && quiet.code.is_empty());
+        let (a, b) = (written.program.unwrap().tapes, quiet.program.unwrap().tapes);
+        let mut names: Vec<&String> = a.keys().collect();
+        names.sort();
+        assert!(names.len() > 10 && names.iter().any(|n| n.ends_with("::jacobian")), "{names:?}");
+        assert_eq!(names, {
+            let mut n: Vec<&String> = b.keys().collect();
+            n.sort();
+            n
+        });
+        for name in names {
+            assert_eq!(format!("{:?}", a[name].parts()), format!("{:?}", b[name].parts()), "{name}");
+        }
+    }
 }

@@ -60,14 +60,22 @@ impl Backend for Jit {
 }
 
 /// The most instructions a tape may have to be compiled at once by the best register
-/// allocator. A longer one (a robot's right-hand side) is compiled first by the single-pass
-/// allocator, so that the model runs at once, and again by the best one on a background
-/// thread once the run proves long ([`TIER_UP_CALLS`]), which its kernel then runs: the same
-/// numbers, faster. Measured on the humanoid (talos_reduced on a floating base, `multibody
-/// simulate`, alternately on this project's 2-core machine): ready in 2.1 to 2.3 s of CPU with
-/// the single-pass allocator against 3.1 to 3.3 s with the best one, whose calls are then 1.5
-/// to 2 times faster (`cargo bench --bench robot_calls`).
-pub const TIERED_INSTRUCTIONS: usize = FUNCTION_INSTRUCTIONS;
+/// allocator. A longer one (a robot's right-hand side, a Jacobian of a dozen links) is compiled
+/// first by the single-pass allocator, so that the model runs at once, and again by the best
+/// one on a background thread once the run proves long ([`TIER_UP_CALLS`]), which its kernel
+/// then runs: the same numbers, faster. The best allocator's time per instruction grows with
+/// the function's length, the single pass's does not: on the Jacobians of the pendulum on a
+/// cart at 1 to 24 links (the matrix's `the_pendulum_on_a_cart_at_every_size_to_24`), about 11
+/// microseconds per instruction for tapes of 2,000 to 4,000, 22 for 4,000 to 8,000, 37 for 8,000
+/// to 16,000, against 4 by the single pass. So the bound is [`PIECE_INSTRUCTIONS`], where the
+/// two are a few times apart, not [`FUNCTION_INSTRUCTIONS`]: `multibody compare` on the 24-link
+/// pendulum's file took 0.97 s of CPU with the bound at 16,000 and 0.57 s at 4,000, and 2.4 s
+/// against 2.0 s over 20 s of motion, where the best code takes over (`perf stat -r 3`,
+/// alternately, on this project's 2-core machine). On the humanoid (talos_reduced on a floating
+/// base, `multibody simulate`): ready in 2.1 to 2.3 s of CPU with the single-pass allocator
+/// against 3.1 to 3.3 s with the best one, whose calls are then 1.5 to 2 times faster (`cargo
+/// bench --bench robot_calls`).
+pub const TIERED_INSTRUCTIONS: usize = PIECE_INSTRUCTIONS;
 
 /// How many calls a long tape's kernel runs on its single-pass code before the best allocator
 /// compiles it on the background thread. The best code saves a fraction of a call's time, its

@@ -39,7 +39,7 @@ fn families() -> Vec<Case> {
 /// and by the JIT. `None` where the Jacobians exceed the node budget (the bicycle's: its
 /// linearization differences them, as `load` does).
 fn routes(case: &Case) -> Option<[(&'static str, Model); 2]> {
-    let options = Options { jacobian: true, tapes: true, max_lets_per_function: usize::MAX, ..Options::from_model(&case.model) };
+    let options = Options { jacobian: true, tapes: true, source: false, max_lets_per_function: usize::MAX, ..Options::from_model(&case.model) };
     let generated = match generator::generate(&case.model, &options) {
         Err(e) if e.kind == generator::model::ErrorKind::Budget => return None,
         other => other.unwrap_or_else(|e| panic!("{}: {e}", case.name)),

@@ -71,6 +71,11 @@ pub struct Options {
     /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies and the unrolled solves, for targets that
     /// have the instruction. The tapes are the plain code's.
     pub fma: bool,
+    /// Write the Rust source ([`Generated::code`]). In-process evaluation wants the tapes only
+    /// ([`crate::evaluate_with_backend`] turns it off, and `code` is then empty): parsing,
+    /// splicing and formatting the source was a tenth of the emission of the 24-link pendulum's
+    /// Jacobians, for text nobody read.
+    pub source: bool,
 }
 
 /// The seam crate's path when nothing else is asked for.
@@ -108,6 +113,7 @@ impl Options {
             seam_path: DEFAULT_SEAM_PATH.to_string(),
             tapes: false,
             fma: false,
+            source: true,
         }
     }
 }
@@ -115,7 +121,8 @@ impl Options {
 /// The generated module and what it took.
 #[derive(Clone, Debug)]
 pub struct Generated {
-    /// The Rust source, formatted; identical bytes for identical input.
+    /// The Rust source, formatted; identical bytes for identical input (empty where
+    /// [`Options::source`] is off).
     pub code: String,
     pub summary: Summary,
     /// The functions as tapes, when [`Options::tapes`] asked for them.
