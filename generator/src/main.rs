@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// The symbolic core allocates many small nodes and maps: mimalloc cut scene 2's load, derive
-/// and emit by 15 % against the system allocator (`cargo bench -p generator --bench scaling`).
+/// and emit by 15 % against the system allocator (`cargo bench --bench scaling`).
 /// Built without transparent huge pages (the feature `no_thp`, in the workspace manifest): on
 /// the planar chain of 20 rods in absolute angles the process then peaks at 96 MB instead of
 /// 145 MB, and the kernel no longer stalls it now and then to compact memory for a huge page

@@ -8,7 +8,7 @@
 //!   and 3 in quaternions: the tables and ratios of `docs/attitude.md`);
 //! - the in-process figures: `docs/benchmarks/eval.json` (`cargo bench -p generated --bench eval`);
 //! - the scaling figures: `docs/scaling/ours.json`, `docs/scaling/sympy.json` and the tables of
-//!   `docs/scaling.md` (`cargo bench -p generator --bench scaling -- --sympy`);
+//!   `docs/scaling.md` (`cargo bench --bench scaling -- --sympy`);
 //! - every other table of `docs/benchmarks.md`: `docs/benchmarks/<table>.json`, each holding the
 //!   command that writes it, its columns and its rows (Pinocchio's beside ours:
 //!   `cargo bench -p generator --bench pinocchio`, outside CI);

@@ -2,7 +2,7 @@
 //! a test at the sizes that generate in well under a second: Kane's emitted assembly (what a
 //! right-hand side computes before its solve) against `count_ops(cse([M, F]))` of SymPy's
 //! `KanesMethod` on the same model, recorded in `docs/scaling/sympy.json` by the scaling
-//! benchmark (`cargo bench -p generator --bench scaling -- --sympy`).
+//! benchmark (`cargo bench --bench scaling -- --sympy`).
 
 use generator::emit::{Formulation, Options};
 

@@ -6,10 +6,10 @@
 //! `docs/plots/scaling.svg` (log-log: derive + emit time and assembly operations against n).
 //!
 //! ```sh
-//! cargo bench -p generator --bench scaling                      # default sizes
-//! cargo bench -p generator --bench scaling -- --sympy           # SymPy's KanesMethod beside it
-//! cargo bench -p generator --bench scaling -- --pendulum 5,10,20,50 --floating 2,4,8,20 --planar 5,20 --compile-up-to 20 --out /tmp/x
-//! cargo bench -p generator --bench scaling -- --at-scale        # pendulum n = 100, 200, planar n = 50: docs/scaling/at_scale.json
+//! cargo bench --bench scaling                      # default sizes
+//! cargo bench --bench scaling -- --sympy           # SymPy's KanesMethod beside it
+//! cargo bench --bench scaling -- --pendulum 5,10,20,50 --floating 2,4,8,20 --planar 5,20 --compile-up-to 20 --out /tmp/x
+//! cargo bench --bench scaling -- --at-scale        # pendulum n = 100, 200, planar n = 50: docs/scaling/at_scale.json
 //! ```
 //!
 //! Each size runs in a child process (this program, re-invoked), so peak memory is its own and
@@ -29,9 +29,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-#[path = "support/timing.rs"]
+#[path = "../generator/benches/support/timing.rs"]
 mod timing;
-#[path = "support/point.rs"]
+#[path = "../generator/benches/support/point.rs"]
 mod point;
 use timing::FORMS;
 
@@ -227,7 +227,7 @@ fn at_scale(path: &Path) {
         }));
     }
     let json = serde_json::json!({
-        "command": "cargo bench -p generator --bench scaling -- --at-scale",
+        "command": "cargo bench --bench scaling -- --at-scale",
         "about": "chains at robot scale (the issue Robots, item 3): derive and emit all four formulations with the default settings (max_nodes null; a raised node budget otherwise, to say by how much a model stopped at the default one misses its goals), in fresh processes; the median CPU (both threads), the spread of the runs (largest over smallest CPU), the largest peak memory and the expression nodes built, or the error that stopped the generation",
         "cores": std::thread::available_parallelism().map_or(1, |n| n.get()),
         "records": rows,
@@ -302,7 +302,7 @@ fn keep_best(best: &mut Vec<(String, f64)>, round: Vec<(String, f64)>) {
 }
 
 /// Each formulation's `rhs` evaluated in-process by the JIT, timed as the timing program times
-/// the compiled module (`support/timing.rs`): best of 7 rounds of 200 calls at the model's initial state.
+/// the compiled module (`generator/benches/support/timing.rs`): best of 7 rounds of 200 calls at the model's initial state.
 fn jit_ns_per_call(evaluated: &seam::Model) -> Vec<(String, f64)> {
     let (q0, qd0) = evaluated.initial.clone().expect("the benchmark models have an initial state");
     let params = evaluated.default_params.clone();
@@ -334,7 +334,7 @@ fn list(s: &str) -> Vec<usize> {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
     if args.first().map(String::as_str) == Some("--scene") {
-        let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../models")).join(format!("{}.ron", args[1]));
+        let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/models")).join(format!("{}.ron", args[1]));
         // Timed inside the process from before the model is read, as SymPy's side is timed from
         // before its model is built: neither counts starting the process or loading the library.
         if args.get(2).map(String::as_str) == Some("point") {
@@ -388,7 +388,7 @@ fn main() {
         return;
     }
     if args.first().map(String::as_str) == Some("--at-scale") {
-        at_scale(&PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/scaling/at_scale.json")));
+        at_scale(&PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scaling/at_scale.json")));
         return;
     }
     if args.first().map(String::as_str) == Some("--one") {
@@ -396,7 +396,7 @@ fn main() {
         println!("{}", serde_json::to_string(&measure(kind, n, compile, &work)).unwrap());
         return;
     }
-    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut pendulum = vec![2, 5, 10, 20, 30, 50];
     let mut floating = vec![2, 4, 6, 8, 12, 16, 20];
     let mut planar = vec![5, 10, 20];
@@ -532,7 +532,7 @@ fn main() {
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
             .unwrap_or_default();
         let mut json = serde_json::json!({
-            "about": "SymPy's KanesMethod on the scaling benchmark's models: count_ops(cse([M, F])), written by `cargo bench -p generator --bench scaling -- --sympy` (docs/scaling/sympy_kane.py); tests/it/ops_against_sympy.rs holds our Kane assembly to it",
+            "about": "SymPy's KanesMethod on the scaling benchmark's models: count_ops(cse([M, F])), written by `cargo bench --bench scaling -- --sympy` (docs/scaling/sympy_kane.py); tests/it/ops_against_sympy.rs holds our Kane assembly to it",
             "sympy": version,
         });
         for (kind, p) in &peers {
@@ -776,7 +776,7 @@ fn jit_ratios(r: &Record) -> Vec<f64> {
 fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], compile_up_to: usize, sympy: bool) -> String {
     let (records, peers) = (measured.records, measured.peers);
     let mut md = String::from("# Scaling\n\n");
-    md += "Measured by `cargo bench -p generator --bench scaling";
+    md += "Measured by `cargo bench --bench scaling";
     if sympy {
         md += " -- --sympy";
     }
