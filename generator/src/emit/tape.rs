@@ -68,7 +68,7 @@ impl Slots {
 
 /// Compiles `stmts` (`let NAME = EXPR;`, and the split form's `v[k] = EXPR;`) and the
 /// `outputs` over the arguments laid out by `slots`.
-pub fn compile(stmts: &[syn::Stmt], outputs: &[syn::Expr], slots: &Slots) -> Result<Tape, TapeError> {
+pub fn compile<'s>(stmts: impl IntoIterator<Item = &'s syn::Stmt>, outputs: &[syn::Expr], slots: &Slots) -> Result<Tape, TapeError> {
     let mut c = Compiler { slots, w: Writer::new(), names: HashMap::new() };
     for s in stmts {
         c.stmt(s)?;
