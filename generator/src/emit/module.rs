@@ -751,8 +751,9 @@ impl Emitter<'_> {
             vec![("t", 1), ("params", np), ("q", m), ("qdot", m)]
         };
         let slots = Slots::new(&layout).with_fields(&self.scope.names.parameters);
-        // The statements read where they are (a Jacobian's run to hundreds of thousands of
-        // nodes: cloning them was a tenth of the bicycle's Kane Jacobian's emission).
+        // The statements read where they are: cloning them (a Jacobian's trees run to
+        // hundreds of thousands of nodes) took 6 % of `multibody linearize bicycle
+        // --formulation kane` and 95 of its 570 MB.
         let own = b.stmts.iter().filter(|s| match s {
             // The split form's scratch array and its helpers' calls: the helpers' own
             // statements stand in for them.
